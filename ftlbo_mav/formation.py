@@ -1,0 +1,54 @@
+"""Formation offsets: each UAV's position relative to the group's centroid (paper eqs. 2-4).
+
+A formation is an array of offsets, shape ``(N, 3)`` metres ``[east, north, up]``; UAV n
+flies ``P_n = P_F + offset_n`` (eq. 4). The paper's experiment gives explicit offsets that
+do not satisfy its own equal-radius rule (NOTES 2), so both kinds are supported.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+PLANES = ("horizontal", "vertical")
+
+
+def regular_formation(*, count: int, radius_m: float, plane: str = "horizontal") -> np.ndarray:
+    """N UAVs evenly spaced on a circle of radius ``radius_m`` around the centroid.
+
+    Every UAV is ``radius_m`` from the centroid (eq. 2) and equally far from both its
+    neighbours on the circle (eq. 3); the offsets sum to zero, so the centroid of the
+    UAVs is the planned centroid (eq. 1).
+
+    ``plane="horizontal"``: the circle lies in the east-north plane, UAV 1 due north.
+    ``plane="vertical"``: the circle lies in the east-up plane, UAV 1 on top, like the
+    experiment's triangle.
+
+    Returns shape ``(count, 3)`` metres ENU.
+    """
+    if count < 1:
+        raise ValueError("a formation needs at least one UAV")
+    if radius_m < 0:
+        raise ValueError("the formation radius must not be negative")
+    if plane not in PLANES:
+        raise ValueError(f"plane must be one of {', '.join(PLANES)}")
+    if count == 1:
+        return np.zeros((1, 3))
+    angle = 2.0 * np.pi * np.arange(count) / count
+    along, across = radius_m * np.sin(angle), radius_m * np.cos(angle)
+    zeros = np.zeros(count)
+    if plane == "horizontal":
+        offsets = np.stack([along, across, zeros], axis=1)
+    else:
+        offsets = np.stack([along, zeros, across], axis=1)
+    offsets[np.abs(offsets) < 1e-12] = 0.0
+    return offsets
+
+
+def min_separation(offsets: np.ndarray) -> float:
+    """Smallest 3D distance between two UAVs of the formation, metres (inf for one UAV)."""
+    offsets = np.asarray(offsets, float)
+    if len(offsets) < 2:
+        return float("inf")
+    diff = offsets[:, None, :] - offsets[None, :, :]
+    dist = np.linalg.norm(diff, axis=-1)
+    return float(dist[np.triu_indices(len(offsets), 1)].min())

@@ -1,0 +1,101 @@
+"""Mission items as plain values, and the per-UAV mission built from a planned path.
+
+Numbers are MAVLink's (common.xml): frames ``MAV_FRAME_*`` and commands ``MAV_CMD_*``.
+Coordinates stay in float degrees here; the 1e-7 integer encoding belongs to the link.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+# MAV_FRAME
+FRAME_GLOBAL = 0
+FRAME_MISSION = 2
+FRAME_GLOBAL_RELATIVE_ALT = 3
+FRAME_GLOBAL_RELATIVE_ALT_INT = 6
+
+# MAV_CMD
+CMD_NAV_WAYPOINT = 16
+CMD_NAV_LOITER_UNLIM = 17
+CMD_NAV_RETURN_TO_LAUNCH = 20
+CMD_NAV_LAND = 21
+CMD_NAV_TAKEOFF = 22
+CMD_DO_CHANGE_SPEED = 178
+
+COMMAND_NAMES = {
+    CMD_NAV_WAYPOINT: "WAYPOINT",
+    CMD_NAV_LOITER_UNLIM: "LOITER_UNLIM",
+    CMD_NAV_RETURN_TO_LAUNCH: "RETURN_TO_LAUNCH",
+    CMD_NAV_LAND: "LAND",
+    CMD_NAV_TAKEOFF: "TAKEOFF",
+    CMD_DO_CHANGE_SPEED: "DO_CHANGE_SPEED",
+}
+
+
+@dataclass(frozen=True)
+class MissionItem:
+    """One mission item; ``seq`` is its index, item 0 being home."""
+
+    seq: int
+    command: int
+    frame: int = FRAME_GLOBAL_RELATIVE_ALT
+    lat_deg: float = 0.0
+    lon_deg: float = 0.0
+    alt_m: float = 0.0
+    param1: float = 0.0
+    param2: float = 0.0
+    param3: float = 0.0
+    param4: float = 0.0
+    current: int = 0
+    autocontinue: int = 1
+
+    @property
+    def name(self) -> str:
+        return COMMAND_NAMES.get(self.command, str(self.command))
+
+
+def build_mission(
+    *,
+    home: tuple[float, float],
+    takeoff_alt_m: float,
+    path: Sequence[tuple[float, float, float]],
+    end_action: str = "land",
+    speed_m_s: float | None = None,
+) -> list[MissionItem]:
+    """The mission of one UAV.
+
+    ``home``: ``(lat_deg, lon_deg)`` of the UAV's start on the ground.
+    ``path``: ``(lat_deg, lon_deg, alt_m)`` rows from the start point to the goal, altitudes
+    relative to home.
+
+    Items, in order: 0 home (frame 0, current=1, as Mission Planner writes it),
+    NAV_TAKEOFF to ``takeoff_alt_m``, DO_CHANGE_SPEED when ``speed_m_s`` is given, one
+    NAV_WAYPOINT per path point, then NAV_LAND at the goal, RTL, or NAV_LOITER_UNLIM at the
+    goal for ``end_action`` "land", "rtl" or "loiter".
+    """
+    if len(path) < 2:
+        raise ValueError("a path needs at least a start and a goal")
+    lat0, lon0 = home
+    items: list[tuple] = [
+        dict(command=CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, lat_deg=lat0, lon_deg=lon0, current=1),
+        # Copter ignores a takeoff's lat/lon and climbs where it stands; Mission Planner
+        # writes them as 0 (ArduPilot wiki, "Mission Commands": NAV_TAKEOFF).
+        dict(command=CMD_NAV_TAKEOFF, alt_m=takeoff_alt_m),
+    ]
+    if speed_m_s is not None:
+        # param1 = 1: ground speed; param2: the speed; param3 = -1: throttle unchanged.
+        items.append(dict(command=CMD_DO_CHANGE_SPEED, param1=1.0, param2=speed_m_s, param3=-1.0))
+    items += [
+        dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt) for lat, lon, alt in path
+    ]
+    lat_f, lon_f, alt_f = path[-1]
+    if end_action == "land":
+        items.append(dict(command=CMD_NAV_LAND, lat_deg=lat_f, lon_deg=lon_f, alt_m=0.0))
+    elif end_action == "rtl":
+        items.append(dict(command=CMD_NAV_RETURN_TO_LAUNCH))
+    elif end_action == "loiter":
+        items.append(dict(command=CMD_NAV_LOITER_UNLIM, lat_deg=lat_f, lon_deg=lon_f, alt_m=alt_f))
+    else:
+        raise ValueError(f"unknown end action {end_action!r}")
+    return [MissionItem(seq=i, **fields) for i, fields in enumerate(items)]
