@@ -13,6 +13,10 @@ import click
 
 from . import __version__
 from .errors import FtlboError, ScenarioError
+from .mission.export import write_plan
+from .planning.optimizers import OPTIMIZERS
+from .planning.planner import plan as plan_scenario
+from .scenario import load_scenario
 
 
 def user_errors(func):
@@ -36,3 +40,53 @@ def main() -> None:
 
 
 # Commands are registered below, one module per concern.
+
+
+@main.command()
+@click.argument("scenario", type=click.Path(dir_okay=False, path_type=str))
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for uavN.waypoints and plan.json (created if needed).")
+@click.option("--seed", type=click.IntRange(min=0), help="Random seed (default: the scenario's).")
+@click.option("--iterations", type=click.IntRange(min=1), help="Iterations L.")
+@click.option("--students", type=click.IntRange(min=4), help="Class size (population).")
+@click.option("--waypoints", type=click.IntRange(min=1), help="Free waypoints m per path.")
+@click.option("--algorithm", type=click.Choice(sorted(OPTIMIZERS)), help="Optimizer.")
+@click.option("--allow-infeasible", is_flag=True,
+              help="Write mission files even when the best plan violates a constraint.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
+@user_errors
+def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, allow_infeasible,
+         quiet):
+    """Plan SCENARIO (TOML) and write one Mission Planner mission per UAV."""
+    scn = load_scenario(scenario)
+    settings = scn.planner
+    total = iterations or settings.iterations
+    with click.progressbar(length=total, label="planning", file=sys.stderr,
+                           hidden=quiet) as bar:
+        def progress(it: int, _iterations: int, _best: float) -> None:
+            bar.update(it - bar.pos)
+
+        result = plan_scenario(scn, seed=seed, iterations=iterations, students=students,
+                               waypoints=waypoints, algorithm=algorithm, progress=progress)
+    paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible)
+    click.echo(format_summary(result))
+    for path in paths:
+        click.echo(f"  wrote {path}")
+    if not result.feasible:
+        for line in result.violations:
+            click.echo(f"  violation: {line}", err=True)
+        if not allow_infeasible:
+            click.echo("no mission files written: the best plan is infeasible "
+                       "(see plan.json; --allow-infeasible writes them anyway)", err=True)
+        sys.exit(1)
+
+
+def format_summary(result) -> str:
+    c = result.cost
+    s = result.settings
+    status = "feasible" if result.feasible else f"INFEASIBLE ({len(result.violations)} violations)"
+    return (
+        f"{s.algorithm} seed {s.seed}: {status}; cost {c.total:.2f} = length {c.length:.2f} m"
+        f" + safety {c.safety:.3f} + task {c.task:.3f}; {result.evaluations} evaluations"
+        f" in {result.seconds:.2f} s"
+    )

@@ -1,0 +1,135 @@
+"""The paper's cost (eqs. 5-11), vectorized over a whole population.
+
+All functions take centroid waypoints ``(S, m, 3)`` metres ENU (S students, m waypoints)
+and return per-student arrays ``(S,)``. The path of student s is ``P_s, W_1..W_m, P_f``
+(eq. 6 runs j = 0..m+1, NOTES 4); UAV n flies the same path shifted by its offset (eq. 4).
+
+Terms:
+
+- length (eq. 6): the centroid path's length; every UAV's path has the same length.
+- safety (eqs. 7-9): for every UAV n, every segment j of its own path and every cylinder
+  k, ``V = R_k / d`` with ``d`` the horizontal distance from the cylinder axis to the
+  segment (NOTES 3), infinite when ``d <= R_k`` (``R_k`` includes the clearance). The sum
+  over n, j, k is divided by ``m * K`` as in eq. 9; the UAVs are summed, not averaged,
+  like the task term of eq. 11.
+- task (eqs. 10-11): for every UAV and every waypoint W_1..W_m, the distance of its
+  altitude outside ``[h_min, h_max]``, infinite at or below the ground (NOTES 5).
+
+A UAV's segment against a cylinder is the centroid's segment against the cylinder moved
+by minus the UAV's offset, so the distances are computed once for N*K shifted axes.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .problem import PlanningProblem
+
+
+class CostTerms(NamedTuple):
+    """The three cost terms and their weighted sum, each ``(S,)``."""
+
+    total: np.ndarray
+    length: np.ndarray
+    safety: np.ndarray
+    task: np.ndarray
+
+
+def path_length(paths: np.ndarray) -> np.ndarray:
+    """Length of paths ``(S, P, 3)`` -> ``(S,)`` metres."""
+    seg = np.diff(paths, axis=1)
+    return np.sqrt(np.einsum("spi,spi->sp", seg, seg)).sum(axis=1)
+
+
+def segment_axis_distances(problem: PlanningProblem, paths: np.ndarray) -> np.ndarray:
+    """Horizontal distance of every UAV segment to every cylinder axis.
+
+    ``paths``: centroid paths ``(S, P, 3)``. Returns ``(S, P-1, N, K)`` metres.
+    """
+    S, P, _ = paths.shape
+    N, K = problem.uav_count, len(problem.radii)
+    # Axes seen from the centroid: c_k - offset_n, flattened to N*K points.
+    axes = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(N * K, 2)
+    ax, ay = paths[:, :-1, 0, None], paths[:, :-1, 1, None]  # (S, J, 1)
+    bx, by = paths[:, 1:, 0, None] - ax, paths[:, 1:, 1, None] - ay  # segment vectors
+    cx, cy = axes[:, 0] - ax, axes[:, 1] - ay  # (S, J, NK)
+    seg2 = bx * bx + by * by
+    t = (cx * bx + cy * by) / np.maximum(seg2, 1e-12)
+    np.clip(t, 0.0, 1.0, out=t)
+    dx, dy = cx - t * bx, cy - t * by
+    return np.sqrt(dx * dx + dy * dy).reshape(S, P - 1, N, K)
+
+
+def _safety(problem: PlanningProblem, paths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 9 and the total depth of the violations (0 when clear), each ``(S,)``."""
+    S = paths.shape[0]
+    K = len(problem.radii)
+    if K == 0:
+        return np.zeros(S), np.zeros(S)
+    d = segment_axis_distances(problem, paths)
+    depth = np.maximum(problem.radii - d, 0.0)
+    v = (problem.radii / np.maximum(d, 1e-12)).sum(axis=(1, 2, 3)) / (problem.waypoints * K)
+    inside = (d <= problem.radii).any(axis=(1, 2, 3))
+    v[inside] = np.inf
+    return v, depth.sum(axis=(1, 2, 3))
+
+
+def safety_cost(problem: PlanningProblem, paths: np.ndarray) -> np.ndarray:
+    """Eq. 9 for centroid paths ``(S, P, 3)`` -> ``(S,)`` (infinite on any violation)."""
+    return _safety(problem, paths)[0]
+
+
+def task_cost(problem: PlanningProblem, waypoints: np.ndarray) -> np.ndarray:
+    """Eqs. 10-11 for waypoints ``(S, m, 3)`` -> ``(S,)``."""
+    h = waypoints[:, :, 2, None] + problem.offsets[:, 2]  # (S, m, N)
+    out = np.maximum(problem.h_min - h, 0.0) + np.maximum(h - problem.h_max, 0.0)
+    cost = out.sum(axis=(1, 2))
+    cost[(h <= 0.0).any(axis=(1, 2))] = np.inf
+    return cost
+
+
+def _terms(problem: PlanningProblem, waypoints: np.ndarray) -> tuple[CostTerms, np.ndarray]:
+    waypoints = np.asarray(waypoints, float)
+    paths = problem.full_paths(waypoints)
+    length = path_length(paths)
+    safety, depth = _safety(problem, paths)
+    task = task_cost(problem, waypoints)
+    a, b, g = problem.weights
+    with np.errstate(invalid="ignore"):  # 0 * inf when a weight is zero: the term is off
+        total = a * length + np.where(b == 0, 0.0, b * safety) + np.where(g == 0, 0.0, g * task)
+    if b != 0:
+        depth = depth + np.maximum(-waypoints[:, :, 2, None] - problem.offsets[:, 2], 0).sum(
+            axis=(1, 2)
+        )
+    return CostTerms(total, length, safety, task), depth
+
+
+def cost_terms(problem: PlanningProblem, waypoints: np.ndarray) -> CostTerms:
+    """All terms for waypoints ``(S, m, 3)`` metres ENU."""
+    return _terms(problem, waypoints)[0]
+
+
+INFEASIBLE = 1e9
+"""Search costs at or above this stand for the paper's infinite cost."""
+
+
+def search_cost(problem: PlanningProblem, waypoints: np.ndarray) -> np.ndarray:
+    """The cost the optimizers minimize, ``(S, m, 3) -> (S,)``.
+
+    Equal to the paper's total cost wherever that is finite. Where the paper's cost is
+    infinite (a UAV segment inside a cylinder, a UAV at or below the ground), it is
+    ``INFEASIBLE + depth``, with depth the summed metres by which the violations go in:
+    every violating path still ranks after every clear one, as with an infinite cost, but
+    among violating paths the shallower ranks first, so a class that starts with no clear
+    path at all (likely among many trees) still has a direction to improve in. The
+    paper's random initial class relies on some students being clear; ours need not.
+    """
+    terms, depth = _terms(problem, waypoints)
+    return np.where(np.isfinite(terms.total), terms.total, INFEASIBLE + depth)
+
+
+def total_cost(problem: PlanningProblem, waypoints: np.ndarray) -> np.ndarray:
+    """Weighted sum (eq. 5) for waypoints ``(S, m, 3)`` -> ``(S,)``."""
+    return cost_terms(problem, waypoints).total
