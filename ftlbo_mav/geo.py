@@ -2,10 +2,12 @@
 
 One :class:`LocalFrame` per scenario owns one pyproj transformer: a pipeline from
 geodetic WGS84 coordinates to geocentric Cartesian and then to a topocentric (ENU) frame
-whose origin is the area's south-west corner at home altitude. Altitudes in ftlbo-mav are
-metres above home (MAVLink ``GLOBAL_RELATIVE_ALT``), used as the ellipsoidal height of a
-home placed on the ellipsoid; over a survey area of a few hundred metres this is exact to
-well below a millimetre for the round trip and a few millimetres for the curvature drop.
+whose origin is the area's south-west corner on the ellipsoid.
+
+East and north are the topocentric ones. Up is the altitude above home, as an autopilot
+measures it along the local vertical (MAVLink ``GLOBAL_RELATIVE_ALT``), not the
+topocentric z, which drops with the Earth's curvature by d^2 / 2R (0.8 mm at 100 m from
+the origin): a waypoint planned at 4 m is written as 4 m.
 
 pyproj takes (lon, lat); every ftlbo-mav signature takes ``lat_deg``/``lon_deg`` by keyword.
 """
@@ -16,6 +18,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from pyproj import Transformer
+
+
+_EARTH_RADIUS_M = 6378137.0
 
 
 def _pipeline(*, lat_deg: float, lon_deg: float) -> str:
@@ -43,13 +48,23 @@ class LocalFrame:
         lat, lon, alt = np.broadcast_arrays(
             np.asarray(lat_deg, float), np.asarray(lon_deg, float), np.asarray(alt_m, float)
         )
-        e, n, u = self._transformer.transform(lon, lat, alt)
-        return np.stack([np.asarray(e, float), np.asarray(n, float), np.asarray(u, float)], -1)
+        e, n, _ = self._transform(lon, lat, np.zeros_like(lat))
+        return np.stack([e, n, alt.ravel()], axis=-1).reshape(*lat.shape, 3)
 
     def to_lla(self, enu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """ENU metres, shape ``(..., 3)`` -> ``(lat_deg, lon_deg, alt_m)`` arrays."""
         enu = np.asarray(enu, float)
-        lon, lat, alt = self._transformer.transform(
-            enu[..., 0], enu[..., 1], enu[..., 2], direction="INVERSE"
-        )
-        return np.asarray(lat, float), np.asarray(lon, float), np.asarray(alt, float)
+        shape = enu.shape[:-1]
+        e, n = enu[..., 0], enu[..., 1]
+        # The topocentric z of the ground point under (e, n): the curvature drop.
+        ground = -(e * e + n * n) / (2.0 * _EARTH_RADIUS_M)
+        lon, lat, _ = self._transform(e, n, ground, direction="INVERSE")
+        return lat.reshape(shape), lon.reshape(shape), enu[..., 2].reshape(shape).copy()
+
+    def _transform(self, x, y, z, **kwargs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """pyproj on flat arrays; a single point goes through its scalar path."""
+        x, y, z = (np.ravel(v) for v in (x, y, z))
+        if x.size == 1:
+            out = self._transformer.transform(float(x[0]), float(y[0]), float(z[0]), **kwargs)
+            return tuple(np.array([v], float) for v in out)
+        return self._transformer.transform(x, y, z, **kwargs)

@@ -51,7 +51,7 @@ def _finite(value: float) -> float | None:
 
 def _points(lla) -> list[dict]:
     return [
-        {"lat": round(float(lat), 8), "lon": round(float(lon), 8), "alt": round(float(alt), 4)}
+        {"lat": round(float(lat), 8), "lon": round(float(lon), 8), "alt": round(float(alt), 6)}
         for lat, lon, alt in lla
     ]
 

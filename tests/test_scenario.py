@@ -1,0 +1,104 @@
+"""Scenario reading, and every bad input the issue names: one line, exit 2, nothing written."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from ftlbo_mav.cli import main
+from ftlbo_mav.errors import ScenarioError
+from ftlbo_mav.scenario import load_scenario, parse_scenario
+
+from .conftest import SMALL
+
+
+def test_example_loads_with_the_papers_settings(example_path):
+    s = load_scenario(example_path)
+    assert s.uav_count == 3
+    assert s.planner.students == 100 and s.planner.waypoints == 10
+    assert s.planner.iterations == 150
+    assert (s.min_altitude_m, s.max_altitude_m) == (2.0, 7.0)
+    assert len(s.obstacles) >= 6 and len({c.radius_m for c in s.obstacles}) > 1
+    assert s.corner_b.lat_deg == pytest.approx(12.2331044)  # the 112.23 typo corrected
+
+
+def test_defaults_when_optional_tables_are_missing(small_text):
+    text = small_text.split("[planner]")[0]
+    s = parse_scenario(text)
+    assert s.planner.students == 100 and s.planner.seed == 0
+    assert s.mission.end_action == "land" and s.mission.speed_m_s is None
+
+
+def test_generated_formation(small_text):
+    text = small_text.replace(
+        "offsets = [[0.0, 0.0, 2.0], [3.0, 0.0, -1.0], [-3.0, 0.0, -1.0]]",
+        'count = 5\nradius = 2.0\nplane = "horizontal"',
+    )
+    s = parse_scenario(text)
+    assert s.uav_count == 5
+    assert np.allclose(np.linalg.norm(s.offsets_m, axis=1), 2.0)
+
+
+def _replace(text: str, old: str, new: str) -> str:
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+BAD = {
+    "latitude above 90 (the paper's typo)": (
+        ("corner_b = [12.2331044,", "corner_b = [112.2331044,"), "area.corner_b[0]", "latitude"),
+    "longitude outside [-180, 180]": (
+        ("lon = 109.1145051", "lon = 209.1145051"), "start.lon", "longitude"),
+    "min_altitude >= max_altitude": (
+        ("min_altitude = 2.0", "min_altitude = 7.0"), "area.min_altitude", "below max_altitude"),
+    "start outside the area": (
+        ("lat = 12.2332099", "lat = 12.2339"), "start.lat", "outside the area"),
+    "goal outside the area": (
+        ("lon = 109.1151763", "lon = 109.1153"), "goal.lon", "outside the area"),
+    "start puts a UAV inside an obstacle": (
+        ("lat = 12.2333\nlon = 109.1148", "lat = 12.2332099\nlon = 109.1145340"),
+        "start", "obstacles[0]"),
+    "goal puts a UAV outside the band": (
+        ("alt = 4.0\n[formation]", "alt = 6.0\n[formation]"), "goal.alt", "altitude band"),
+    "non-positive radius": (("radius = 3.0", "radius = 0.0"), "obstacles[0].radius", "> 0"),
+    "unknown key": (("clearance = 1.0", "clearence = 1.0"), "formation.clearence", "unknown key"),
+    "wrong type": (("students = 12", 'students = "twelve"'), "planner.students", "integer"),
+    "missing field": (("max_altitude = 7.0\n", ""), "area.max_altitude", "missing"),
+    "malformed TOML": (("[goal]", "[goal"), "", "malformed TOML"),
+    "waypoints < 1": (("waypoints = 4", "waypoints = 0"), "planner.waypoints", ">= 1"),
+    "students < 4": (("students = 12", "students = 3"), "planner.students", ">= 4"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD), ids=list(BAD))
+def test_bad_input_is_one_clear_line_exit_2_nothing_written(case, tmp_path):
+    (old, new), field, words = BAD[case]
+    path = tmp_path / "bad.toml"
+    path.write_text(_replace(SMALL, old, new))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert info.value.field == field
+    assert words in str(info.value)
+
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["plan", str(path), "-o", str(out)])
+    assert result.exit_code == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert str(path) in lines[0] and field in lines[0] and words in lines[0]
+    assert "Traceback" not in result.output
+    assert not out.exists()
+
+
+def test_missing_file_is_one_line_exit_2(tmp_path):
+    missing = tmp_path / "nope.toml"
+    result = CliRunner().invoke(main, ["plan", str(missing), "-o", str(tmp_path / "out")])
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines() == [f"error: {missing}: no such file"]
+
+
+def test_offsets_and_count_together_are_refused(small_text):
+    text = small_text.replace("clearance = 1.0", "clearance = 1.0\ncount = 3")
+    with pytest.raises(ScenarioError, match="not both"):
+        parse_scenario(text)
