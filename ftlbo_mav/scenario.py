@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -20,8 +20,9 @@ import numpy as np
 from .errors import ScenarioError
 from .formation import PLANES, regular_formation
 from .geo import LocalFrame
+from .mission.gis import read_obstacle_geojson
 
-ALGORITHMS = ("ftlbo", "tlbo", "ga", "theta-pso", "ftlbo-seeded")
+ALGORITHMS = ("ftlbo",)  # every name in planning.optimizers.OPTIMIZERS
 END_ACTIONS = ("land", "rtl", "loiter")
 
 
@@ -295,6 +296,7 @@ def parse_scenario(text: str, *, source: str = "<scenario>", base_dir: Path | No
     form.done()
 
     obstacles = _read_obstacles(root.raw("obstacles", []), source)
+    obstacles_file = root.string("obstacles_file", "")
     planner = _read_planner(root.table("planner", required=False))
     mission = _read_mission(root.table("mission", required=False))
     root.done()
@@ -314,6 +316,11 @@ def parse_scenario(text: str, *, source: str = "<scenario>", base_dir: Path | No
         name=name,
         source=source,
     )
+    if obstacles_file:
+        # Obstacles from a GeoJSON file follow the [[obstacles]] tables, in file order.
+        path = (base_dir if base_dir is not None else Path(".")) / obstacles_file
+        extra = read_obstacle_geojson(path, frame=scenario.frame)
+        scenario = replace(scenario, obstacles=scenario.obstacles + extra)
     _check_geometry(scenario)
     return scenario
 
