@@ -43,37 +43,83 @@ def path_length(paths: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("spi,spi->sp", seg, seg)).sum(axis=1)
 
 
+_CHUNK_ELEMENTS = 1 << 18
+"""Largest ``(N*K, S*J)`` distance block computed at once (2 MiB of float64 per array):
+big populations are evaluated in chunks of students, so memory stays bounded."""
+
+
+def _axes(problem: PlanningProblem) -> np.ndarray:
+    """Cylinder axes seen from the centroid, ``c_k - offset_n``: ``(N*K, 2)`` metres."""
+    N, K = problem.uav_count, len(problem.radii)
+    return (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(N * K, 2)
+
+
+def _axis_distances(problem: PlanningProblem, paths: np.ndarray) -> np.ndarray:
+    """Distances ``(N*K, S*J)``: row ``n*K + k``, column ``s*J + j`` (J = P-1 segments).
+
+    The shifted axes run down the rows and the segments along the columns, so every
+    numpy loop is a long contiguous one over the segments (the hot path of the planner;
+    with axes last, each loop would be only N*K elements long). Temporaries are reused.
+    """
+    axes = _axes(problem)
+    a = paths[:, :-1, :2].reshape(-1, 2)
+    b = paths[:, 1:, :2].reshape(-1, 2) - a
+    ax, ay = a[:, 0], a[:, 1]
+    bx, by = b[:, 0].copy(), b[:, 1].copy()
+    seg2 = bx * bx + by * by
+    np.maximum(seg2, 1e-12, out=seg2)
+    cx = np.subtract(axes[:, 0, None], ax)  # (NK, SJ): axis minus segment start
+    cy = np.subtract(axes[:, 1, None], ay)
+    t = cx * bx
+    tmp = cy * by
+    t += tmp
+    t /= seg2  # position of the closest point along the segment, clipped to it
+    np.clip(t, 0.0, 1.0, out=t)
+    np.multiply(t, bx, out=tmp)
+    cx -= tmp
+    np.multiply(t, by, out=tmp)
+    cy -= tmp
+    cx *= cx
+    cy *= cy
+    cx += cy
+    return np.sqrt(cx, out=cx)
+
+
 def segment_axis_distances(problem: PlanningProblem, paths: np.ndarray) -> np.ndarray:
     """Horizontal distance of every UAV segment to every cylinder axis.
 
     ``paths``: centroid paths ``(S, P, 3)``. Returns ``(S, P-1, N, K)`` metres.
     """
+    paths = np.asarray(paths, float)
     S, P, _ = paths.shape
     N, K = problem.uav_count, len(problem.radii)
-    # Axes seen from the centroid: c_k - offset_n, flattened to N*K points.
-    axes = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(N * K, 2)
-    ax, ay = paths[:, :-1, 0, None], paths[:, :-1, 1, None]  # (S, J, 1)
-    bx, by = paths[:, 1:, 0, None] - ax, paths[:, 1:, 1, None] - ay  # segment vectors
-    cx, cy = axes[:, 0] - ax, axes[:, 1] - ay  # (S, J, NK)
-    seg2 = bx * bx + by * by
-    t = (cx * bx + cy * by) / np.maximum(seg2, 1e-12)
-    np.clip(t, 0.0, 1.0, out=t)
-    dx, dy = cx - t * bx, cy - t * by
-    return np.sqrt(dx * dx + dy * dy).reshape(S, P - 1, N, K)
+    d = _axis_distances(problem, paths)
+    return d.reshape(N, K, S, P - 1).transpose(2, 3, 0, 1)
 
 
 def _safety(problem: PlanningProblem, paths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eq. 9 and the total depth of the violations (0 when clear), each ``(S,)``."""
-    S = paths.shape[0]
+    S, P, _ = paths.shape
     K = len(problem.radii)
     if K == 0:
         return np.zeros(S), np.zeros(S)
-    d = segment_axis_distances(problem, paths)
-    depth = np.maximum(problem.radii - d, 0.0)
-    v = (problem.radii / np.maximum(d, 1e-12)).sum(axis=(1, 2, 3)) / (problem.waypoints * K)
-    inside = (d <= problem.radii).any(axis=(1, 2, 3))
+    J = P - 1
+    d = _axis_distances(problem, paths)  # (NK, S*J)
+    radii = np.tile(problem.radii, problem.uav_count)[:, None]  # (NK, 1)
+    # Sum of R/d over n, j, k; where some d is 0 the student is inside (infinite) anyway.
+    with np.errstate(divide="ignore"):
+        ratio = np.divide(radii, d)
+    v = ratio.sum(axis=0).reshape(S, J).sum(axis=1) / (problem.waypoints * K)
+    # r - d >= 0 exactly when d <= r (IEEE subtraction keeps the sign).
+    np.subtract(radii, d, out=d)
+    deepest = d.max(axis=0).reshape(S, J).max(axis=1)
+    inside = deepest >= 0.0
     v[inside] = np.inf
-    return v, depth.sum(axis=(1, 2, 3))
+    depth = np.zeros(S)
+    if inside.any():
+        over = d.reshape(-1, S, J)[:, inside, :]
+        depth[inside] = np.maximum(over, 0.0).sum(axis=(0, 2))
+    return v, depth
 
 
 def safety_cost(problem: PlanningProblem, paths: np.ndarray) -> np.ndarray:
@@ -92,6 +138,13 @@ def task_cost(problem: PlanningProblem, waypoints: np.ndarray) -> np.ndarray:
 
 def _terms(problem: PlanningProblem, waypoints: np.ndarray) -> tuple[CostTerms, np.ndarray]:
     waypoints = np.asarray(waypoints, float)
+    S = waypoints.shape[0]
+    per_student = (waypoints.shape[1] + 1) * max(problem.uav_count * len(problem.radii), 1)
+    step = max(_CHUNK_ELEMENTS // per_student, 1)
+    if S > step:  # bounded memory for big classes, many UAVs, obstacles or waypoints
+        parts = [_terms(problem, waypoints[i : i + step]) for i in range(0, S, step)]
+        terms = CostTerms(*(np.concatenate([p[0][i] for p in parts]) for i in range(4)))
+        return terms, np.concatenate([p[1] for p in parts])
     paths = problem.full_paths(waypoints)
     length = path_length(paths)
     safety, depth = _safety(problem, paths)
