@@ -58,7 +58,7 @@ def _points(lla) -> list[dict]:
 
 def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> dict:
     """The ``plan.json`` content. ``written``: whether the mission files were written."""
-    s = plan.settings
+    s, sc = plan.settings, plan.scenario
     return {
         "scenario": plan.scenario.name or plan.scenario.source,
         "algorithm": s.algorithm,
@@ -78,6 +78,16 @@ def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> d
         "evaluations": plan.evaluations,
         "history": [_finite(h) for h in plan.history],
         "clearance": plan.scenario.clearance_m,
+        "area": {
+            "corner_a": [sc.corner_a.lat_deg, sc.corner_a.lon_deg],
+            "corner_b": [sc.corner_b.lat_deg, sc.corner_b.lon_deg],
+            "min_altitude": sc.min_altitude_m,
+            "max_altitude": sc.max_altitude_m,
+        },
+        "obstacles": [
+            {"lat": c.lat_deg, "lon": c.lon_deg, "radius": c.radius_m, "name": c.name}
+            for c in sc.obstacles
+        ],
         "centroid": _points(plan.lla(plan.centroid)),
         "uavs": [
             {

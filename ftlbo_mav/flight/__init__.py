@@ -1,0 +1,1 @@
+"""Flying a planned formation: pre-flight, synchronized start, monitoring, reports."""

@@ -1,0 +1,104 @@
+"""A flight record: telemetry samples per vehicle, resampled onto one time grid.
+
+Pure data; writing it out goes through :func:`~ftlbo_mav.mission.files.write_atomic`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..geo import LocalFrame
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One telemetry sample of one vehicle; ``t`` seconds since the recording started."""
+
+    t: float
+    sysid: int
+    lat_deg: float
+    lon_deg: float
+    alt_m: float
+    mode: str
+    armed: bool
+    seq: int
+
+
+class FlightRecord:
+    """Samples in arrival order, with per-vehicle access and a common time grid."""
+
+    def __init__(self, samples: list[Sample] | None = None) -> None:
+        self.samples: list[Sample] = list(samples or [])
+
+    def add(self, sample: Sample) -> None:
+        self.samples.append(sample)
+
+    def of(self, sysid: int) -> list[Sample]:
+        return [s for s in self.samples if s.sysid == sysid]
+
+    def to_csv(self) -> str:
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow([f.name for f in fields(Sample)])
+        for s in self.samples:
+            writer.writerow(
+                [f"{s.t:.3f}", s.sysid, f"{s.lat_deg:.8f}", f"{s.lon_deg:.8f}", f"{s.alt_m:.3f}",
+                 s.mode, int(s.armed), s.seq]
+            )
+        return buf.getvalue()
+
+    @classmethod
+    def from_csv(cls, text: str) -> FlightRecord:
+        rows = list(csv.DictReader(io.StringIO(text)))
+        return cls(
+            [
+                Sample(float(r["t"]), int(r["sysid"]), float(r["lat_deg"]), float(r["lon_deg"]),
+                       float(r["alt_m"]), r["mode"], r["armed"] in ("1", "True"), int(r["seq"]))
+                for r in rows
+            ]
+        )
+
+    def rate_hz(self, sysid: int) -> float:
+        """Mean sample rate of one vehicle."""
+        t = [s.t for s in self.of(sysid)]
+        return (len(t) - 1) / (t[-1] - t[0]) if len(t) > 1 and t[-1] > t[0] else 0.0
+
+    def grid(
+        self, sysids: list[int], frame: LocalFrame, *, rate_hz: float = 10.0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Resample every vehicle onto common times where all have data.
+
+        Returns ``times (T,)``, ``positions (T, N, 3)`` metres ENU in ``frame`` (linear
+        interpolation) and ``seqs (T, N)``, each vehicle's current mission item (the last
+        one reported at or before each time; -1 outside AUTO).
+        """
+        per = [self.of(s) for s in sysids]
+        if any(len(p) < 2 for p in per):
+            return np.zeros(0), np.zeros((0, len(sysids), 3)), np.zeros((0, len(sysids)), int)
+        start = max(p[0].t for p in per)
+        stop = min(p[-1].t for p in per)
+        if stop <= start:
+            return np.zeros(0), np.zeros((0, len(sysids), 3)), np.zeros((0, len(sysids)), int)
+        times = np.arange(start, stop, 1.0 / rate_hz)
+        positions = np.empty((len(times), len(sysids), 3))
+        seqs = np.empty((len(times), len(sysids)), int)
+        for n, samples in enumerate(per):
+            t = np.array([s.t for s in samples])
+            enu = frame.to_enu(
+                lat_deg=[s.lat_deg for s in samples],
+                lon_deg=[s.lon_deg for s in samples],
+                alt_m=[s.alt_m for s in samples],
+            )
+            for axis in range(3):
+                positions[:, n, axis] = np.interp(times, t, enu[:, axis])
+            auto_seq = np.array([s.seq if s.mode == "AUTO" else -1 for s in samples])
+            idx = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 1)
+            seqs[:, n] = auto_seq[idx]
+        return times, positions, seqs
+
+
+__all__ = ["FlightRecord", "Sample"]
