@@ -13,7 +13,7 @@ import click
 
 from . import __version__
 from .errors import FtlboError, ScenarioError
-from .mission.export import write_plan
+from .mission.export import FORMATS, read_plan, write_plan
 from .planning.optimizers import OPTIMIZERS
 from .planning.planner import plan as plan_scenario
 from .scenario import load_scenario
@@ -42,6 +42,21 @@ def main() -> None:
 # Commands are registered below, one module per concern.
 
 
+def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
+    """``--formats geojson,kml,plan`` or ``all`` -> a tuple of FORMATS names."""
+    if not value:
+        return ()
+    names = [v.strip().lower() for v in value.split(",") if v.strip()]
+    if names == ["all"]:
+        return FORMATS
+    unknown = [n for n in names if n not in FORMATS]
+    if unknown:
+        raise click.BadParameter(
+            f"unknown format {unknown[0]!r}; give a comma-separated list of "
+            f"{', '.join(FORMATS)}, or all")
+    return tuple(dict.fromkeys(names))
+
+
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=str))
 @click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -53,10 +68,15 @@ def main() -> None:
 @click.option("--algorithm", type=click.Choice(sorted(OPTIMIZERS)), help="Optimizer.")
 @click.option("--allow-infeasible", is_flag=True,
               help="Write mission files even when the best plan violates a constraint.")
+@click.option("--formats", callback=_parse_formats, metavar="LIST",
+              help="Also write these next to the .waypoints: geojson, kml, plan "
+                   "(QGroundControl), comma-separated, or all.")
+@click.option("--plot", "make_plots", is_flag=True,
+              help="Also draw the plan: PNG figures in the output folder.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
 @user_errors
 def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, allow_infeasible,
-         quiet):
+         formats, make_plots, quiet):
     """Plan SCENARIO (TOML) and write one Mission Planner mission per UAV."""
     scn = load_scenario(scenario)
     settings = scn.planner
@@ -68,7 +88,11 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
 
         result = plan_scenario(scn, seed=seed, iterations=iterations, students=students,
                                waypoints=waypoints, algorithm=algorithm, progress=progress)
-    paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible)
+    paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible, formats=formats)
+    if make_plots:
+        from .plots import write_figures  # matplotlib only when asked: a faster start
+
+        paths += write_figures(result, out_dir)
     click.echo(format_summary(result))
     for path in paths:
         click.echo(f"  wrote {path}")
@@ -90,3 +114,16 @@ def format_summary(result) -> str:
         f" + safety {c.safety:.3f} + task {c.task:.3f}; {result.evaluations} evaluations"
         f" in {result.seconds:.2f} s"
     )
+
+
+@main.command("plot")
+@click.argument("folder", type=click.Path(file_okay=False, path_type=str))
+@click.option("-o", "--output", "out_dir", type=click.Path(file_okay=False),
+              help="Folder for the PNG files (default: FOLDER).")
+@user_errors
+def plot_command(folder, out_dir):
+    """Draw the plan in FOLDER (written by `plan`): 3D view, projections, convergence."""
+    from .plots import write_figures  # matplotlib only when asked: a faster start
+
+    for path in write_figures(read_plan(folder), out_dir or folder):
+        click.echo(f"  wrote {path}")

@@ -1,7 +1,8 @@
 """A plan's outputs: one mission per UAV and the ``plan.json`` summary.
 
-``plan_missions`` and ``plan_document`` are pure; ``write_plan`` is the only function
-here that touches files (through :func:`~ftlbo_mav.mission.files.write_atomic`).
+``plan_missions`` and ``plan_document`` are pure; ``write_plan`` and ``read_plan`` are
+the only functions here that touch files (writing through
+:func:`~ftlbo_mav.mission.files.write_atomic`).
 """
 
 from __future__ import annotations
@@ -11,10 +12,21 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
+from ..errors import MissionFileError
+from ..planning.cost import CostTerms
 from ..planning.planner import Plan
+from ..planning.problem import problem_from_scenario
+from ..scenario import Cylinder, GeoPoint, PlannerSettings, Scenario
 from .files import write_atomic
+from .gis import render_geojson, render_kml
 from .items import MissionItem, build_mission
+from .qgc_plan import render_plan
 from .waypoints import render_waypoints
+
+# Formats written on request next to the .waypoints files (``plan --formats``).
+FORMATS = ("geojson", "kml", "plan")
 
 
 @dataclass(frozen=True)
@@ -101,12 +113,24 @@ def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> d
     }
 
 
-def write_plan(plan: Plan, out_dir: str | Path, *, allow_infeasible: bool = False) -> list[Path]:
+def write_plan(
+    plan: Plan,
+    out_dir: str | Path,
+    *,
+    allow_infeasible: bool = False,
+    formats: tuple[str, ...] = (),
+) -> list[Path]:
     """Write ``plan.json`` and, when feasible (or allowed), ``uavN.waypoints`` per UAV.
 
-    Returns the paths written. An infeasible plan gets its ``plan.json`` (with the
-    violations) but no mission files unless ``allow_infeasible``.
+    ``formats`` (from :data:`FORMATS`) adds ``plan.geojson``, ``plan.kml`` and a
+    QGroundControl ``uavN.plan`` next to each ``uavN.waypoints``. Returns the paths
+    written. An infeasible plan gets its ``plan.json`` (with the violations), GeoJSON and
+    KML, to be looked at, but no mission files (``.waypoints``, ``.plan``) unless
+    ``allow_infeasible``.
     """
+    unknown = sorted(set(formats) - set(FORMATS))
+    if unknown:
+        raise ValueError(f"unknown format {unknown[0]!r}; known: {', '.join(FORMATS)}")
     out_dir = Path(out_dir)
     missions = plan_missions(plan)
     write_missions = plan.feasible or allow_infeasible
@@ -114,6 +138,105 @@ def write_plan(plan: Plan, out_dir: str | Path, *, allow_infeasible: bool = Fals
     if write_missions:
         for m in missions:
             written.append(write_atomic(out_dir / f"{m.name}.waypoints", render_waypoints(m.items)))
+            if "plan" in formats:
+                text = render_plan(m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s)
+                written.append(write_atomic(out_dir / f"{m.name}.plan", text))
+    if "geojson" in formats:
+        written.append(write_atomic(out_dir / "plan.geojson", render_geojson(plan, missions)))
+    if "kml" in formats:
+        written.append(write_atomic(out_dir / "plan.kml", render_kml(plan, missions)))
     doc = plan_document(plan, missions, written=write_missions)
     written.append(write_atomic(out_dir / "plan.json", json.dumps(doc, indent=2) + "\n"))
     return written
+
+
+def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
+    """Rebuild a :class:`Plan` from ``plan.json`` content (the inverse of :func:`plan_document`).
+
+    The scenario is rebuilt from what ``plan.json`` carries: area, band, obstacles,
+    clearance, offsets, and the centroid's first and last points as start and goal. Paths
+    come from the file as written (8 decimals: about a millimetre). The planner weights
+    are not recorded and read as the defaults. Raises :class:`MissionFileError`.
+    """
+    try:
+        area = doc["area"]
+        centroid = doc["centroid"]
+        uavs = doc["uavs"]
+        start, goal = (GeoPoint(p["lat"], p["lon"], p["alt"]) for p in (centroid[0], centroid[-1]))
+        scenario = Scenario(
+            corner_a=GeoPoint(*map(float, area["corner_a"])),
+            corner_b=GeoPoint(*map(float, area["corner_b"])),
+            min_altitude_m=float(area["min_altitude"]),
+            max_altitude_m=float(area["max_altitude"]),
+            start=start,
+            goal=goal,
+            offsets=tuple(tuple(float(v) for v in u["offset"]) for u in uavs),
+            clearance_m=float(doc["clearance"]),
+            obstacles=tuple(
+                Cylinder(float(o["lat"]), float(o["lon"]), float(o["radius"]), o.get("name", ""))
+                for o in doc["obstacles"]
+            ),
+            name=str(doc.get("scenario", "")),
+            source=source,
+        )
+        settings = PlannerSettings(
+            algorithm=doc["algorithm"], students=int(doc["students"]),
+            waypoints=int(doc["waypoints"]), iterations=int(doc["iterations"]),
+            seed=int(doc["seed"]),
+        )
+        frame = scenario.frame
+
+        def enu(points) -> np.ndarray:
+            return frame.to_enu(lat_deg=[p["lat"] for p in points],
+                                lon_deg=[p["lon"] for p in points],
+                                alt_m=[p["alt"] for p in points])
+
+        centroid_enu = enu(centroid)
+        uav_paths = np.stack([enu(u["waypoints"]) for u in uavs])
+        cost = CostTerms(*(_infinite(doc["cost"][k]) for k in CostTerms._fields))
+        history = np.array([_infinite(h) for h in doc["history"]], float)
+        violations = tuple(str(v) for v in doc["violations"])
+        feasible_flag = bool(doc["feasible"])
+        evaluations, seconds = int(doc["evaluations"]), float(doc["seconds"])
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        raise MissionFileError(
+            f"{source}: not a plan.json this version of ftlbo-mav can read (missing or bad "
+            f"{exc}); plan again with `ftlbo-mav plan`"
+        ) from None
+    if len(centroid_enu) != settings.waypoints + 2 or uav_paths.shape != (
+        len(uavs), len(centroid_enu), 3
+    ):
+        raise MissionFileError(f"{source}: the paths do not have waypoints + 2 points each")
+    if feasible_flag == bool(violations):
+        raise MissionFileError(f"{source}: 'feasible' disagrees with 'violations'")
+    return Plan(
+        scenario=scenario,
+        settings=settings,
+        problem=problem_from_scenario(scenario, waypoints=settings.waypoints),
+        centroid=centroid_enu,
+        uav_paths=uav_paths,
+        cost=cost,
+        violations=violations,
+        history=history,
+        evaluations=evaluations,
+        seconds=seconds,
+    )
+
+
+def _infinite(value) -> float:
+    """``null`` in plan.json is an infinite cost."""
+    return math.inf if value is None else float(value)
+
+
+def read_plan(folder: str | Path) -> Plan:
+    """Read ``folder/plan.json`` back into a :class:`Plan`; see :func:`plan_from_document`."""
+    path = Path(folder) / "plan.json"
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise MissionFileError(f"{path}: no such file (run `ftlbo-mav plan` first)") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise MissionFileError(f"{path}: cannot read: {exc}") from None
+    if not isinstance(doc, dict):
+        raise MissionFileError(f"{path}: not a plan.json")
+    return plan_from_document(doc, source=str(path))
