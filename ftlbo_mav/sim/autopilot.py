@@ -1,0 +1,314 @@
+"""The emulated copter's flight: modes, arming, takeoff, missions, landing.
+
+Pure state machine: :meth:`Autopilot.handle` takes a decoded command and returns replies;
+:meth:`Autopilot.advance` moves the copter to a given (emulated) time and returns what
+ArduCopter would announce (MISSION_CURRENT, MISSION_ITEM_REACHED, STATUSTEXT). Positions
+are ENU metres relative to home.
+
+Modelled on ArduCopter wherever ftlbo-mav looks:
+
+- Arming (MAV_CMD_COMPONENT_ARM_DISARM) is refused until the pre-arm checks pass and
+  again until the EKF has a position estimate ("Arm: Need Position Estimate";
+  libraries/AP_Arming/AP_Arming.cpp, ArduCopter/AP_Arming.cpp ``mandatory_gps_checks``).
+- MAV_CMD_NAV_TAKEOFF is accepted in GUIDED when armed (ArduCopter/GCS_Mavlink.cpp
+  ``handle_command_long_packet``, ``Mode::do_user_takeoff``).
+- AUTO runs the mission from the current item; MAV_CMD_MISSION_START switches to AUTO
+  and starts it (ArduCopter/GCS_Mavlink.cpp); MISSION_SET_CURRENT moves the current
+  item (libraries/AP_Mission/AP_Mission.cpp ``set_current_cmd``).
+- Waypoints count as reached inside WPNAV_RADIUS; NAV_LAND flies to the point, descends
+  at LAND_SPEED and disarms on the ground (ArduCopter/mode_land.cpp,
+  ArduCopter/mode_auto.cpp); RTL climbs to RTL_ALT (15 m), returns home and lands
+  (ArduCopter/mode_rtl.cpp); LOITER_UNLIM holds at its point.
+- A copter armed on the ground that does not take off disarms after DISARM_DELAY, 10 s
+  (ArduCopter/motors.cpp ``auto_disarm_check``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from ..mission.items import (
+    CMD_DO_CHANGE_SPEED,
+    CMD_NAV_LAND,
+    CMD_NAV_LOITER_UNLIM,
+    CMD_NAV_RETURN_TO_LAUNCH,
+    CMD_NAV_TAKEOFF,
+    CMD_NAV_WAYPOINT,
+    MissionItem,
+)
+from .physics import FlightLimits, reached, step_towards
+
+# ArduCopter custom modes (ArduCopter/mode.h)
+STABILIZE, AUTO, GUIDED, LOITER, RTL, LAND, BRAKE = 0, 3, 4, 5, 6, 9, 17
+MODE_NAMES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
+              9: "LAND", 16: "POSHOLD", 17: "BRAKE"}
+
+RTL_ALT_M = 15.0
+DISARM_DELAY_S = 10.0
+STEP_S = 0.02
+_WGS84_A = 6378137.0
+_WGS84_E2 = 6.69437999014e-3
+
+
+@dataclass(frozen=True)
+class AutopilotOptions:
+    """``prearm_after_s``: pre-arm checks pass this long after boot;
+    ``position_after_s``: the EKF's position estimate is ready (arming allowed)."""
+
+    prearm_after_s: float = 0.0
+    position_after_s: float = 0.0
+    limits: FlightLimits = field(default_factory=FlightLimits)
+
+
+class LocalTangent:
+    """Home-centred conversion between lat/lon and east/north metres.
+
+    Uses WGS84's meridian and prime-vertical radii of curvature at home: over a few
+    hundred metres this agrees with a full geodetic transform to millimetres.
+    """
+
+    def __init__(self, lat_deg: float, lon_deg: float) -> None:
+        self.lat0, self.lon0 = lat_deg, lon_deg
+        s = math.sin(math.radians(lat_deg))
+        w = math.sqrt(1.0 - _WGS84_E2 * s * s)
+        self.m_per_rad_lat = _WGS84_A * (1.0 - _WGS84_E2) / w**3
+        self.m_per_rad_lon = _WGS84_A / w * math.cos(math.radians(lat_deg))
+
+    def to_en(self, lat_deg: float, lon_deg: float) -> tuple[float, float]:
+        return (math.radians(lon_deg - self.lon0) * self.m_per_rad_lon,
+                math.radians(lat_deg - self.lat0) * self.m_per_rad_lat)
+
+    def to_latlon(self, east: float, north: float) -> tuple[float, float]:
+        return (self.lat0 + math.degrees(north / self.m_per_rad_lat),
+                self.lon0 + math.degrees(east / self.m_per_rad_lon))
+
+
+class Autopilot:
+    """Flight state of one emulated copter."""
+
+    def __init__(self, *, home: tuple[float, float], boot_time: float,
+                 options: AutopilotOptions = AutopilotOptions()) -> None:
+        self.tangent = LocalTangent(*home)
+        self.options = options
+        self.boot_time = boot_time
+        self.time = boot_time
+        self.position = np.zeros(3)
+        self.velocity = np.zeros(3)
+        self.mode = STABILIZE
+        self.armed = False
+        self.mission: list[MissionItem] = []
+        self.current = 0
+        self.speed_m_s: float | None = None
+        self._target: np.ndarray | None = None  # GUIDED / LOITER / mission hold point
+        self._phase = ""  # within a mode: "climb", "return", "descend", "hold"
+        self._armed_on_ground_since: float | None = None
+        self._announced_current = -1
+
+    # -- what the vehicle knows about itself
+    @property
+    def landed(self) -> bool:
+        return self.position[2] <= 0.05 and abs(self.velocity[2]) < 0.1
+
+    def prearm_ok(self, now: float) -> bool:
+        return now - self.boot_time >= self.options.prearm_after_s
+
+    def position_ok(self, now: float) -> bool:
+        return now - self.boot_time >= self.options.position_after_s
+
+    def latlon(self) -> tuple[float, float]:
+        return self.tangent.to_latlon(self.position[0], self.position[1])
+
+    def mode_name(self) -> str:
+        return MODE_NAMES.get(self.mode, str(self.mode))
+
+    # -- commands
+    def set_mission(self, items: list[MissionItem]) -> None:
+        self.mission = list(items)
+        self.current = min(self.current, max(len(self.mission) - 1, 0))
+
+    def set_mode(self, mode: int, now: float) -> bool:
+        """Switch mode; False when ArduCopter would refuse (unknown mode, AUTO without a
+        mission, a position mode before the position estimate)."""
+        if mode not in MODE_NAMES:
+            return False
+        if mode in (AUTO, GUIDED, LOITER, RTL) and not self.position_ok(now):
+            return False
+        if mode == AUTO and len(self.mission) < 2:
+            return False
+        self.mode = mode
+        self._phase = ""
+        self.speed_m_s = self.speed_m_s if mode == AUTO else None
+        if mode in (GUIDED, LOITER, BRAKE):
+            self._target = self.position.copy()
+        elif mode == AUTO:
+            self.current = max(self.current, 1)
+            self._start_item()
+        elif mode == RTL:
+            self._phase, self._target = "climb", None
+        return True
+
+    def arm(self, now: float) -> str | None:
+        """Arm; returns the reason when refused (ArduPilot's STATUSTEXT)."""
+        if not self.prearm_ok(now):
+            return "PreArm: GPS and AHRS not healthy"
+        if not self.position_ok(now):
+            return "Arm: Need Position Estimate"
+        if self.mode not in (GUIDED, LOITER, STABILIZE, AUTO):
+            return "Arm: Mode not armable"
+        self.armed = True
+        self._armed_on_ground_since = now
+        return None
+
+    def disarm(self) -> None:
+        self.armed = False
+        self.velocity[:] = 0.0
+        self._armed_on_ground_since = None
+
+    def takeoff(self, alt_m: float) -> bool:
+        if not self.armed or self.mode != GUIDED or alt_m <= 0:
+            return False
+        self._target = np.array([self.position[0], self.position[1], alt_m])
+        return True
+
+    def set_current(self, seq: int) -> bool:
+        if not 0 <= seq < len(self.mission):
+            return False
+        self.current = max(seq, 1)
+        if self.mode == AUTO:
+            self._start_item()
+        return True
+
+    # -- mission execution
+    def _item(self) -> MissionItem | None:
+        return self.mission[self.current] if 0 < self.current < len(self.mission) else None
+
+    def _item_target(self, item: MissionItem) -> np.ndarray:
+        if item.lat_deg == 0 and item.lon_deg == 0:
+            east, north = self.position[0], self.position[1]
+        else:
+            east, north = self.tangent.to_en(item.lat_deg, item.lon_deg)
+        return np.array([east, north, item.alt_m])
+
+    def _start_item(self) -> None:
+        """Begin the current item; DO_ commands run at once and move on."""
+        self._phase = ""
+        while (item := self._item()) is not None and item.command == CMD_DO_CHANGE_SPEED:
+            self.speed_m_s = item.param2 if item.param2 > 0 else None
+            self.current += 1
+        item = self._item()
+        if item is None:
+            self._target = self.position.copy()
+            self._phase = "done"
+            return
+        if item.command == CMD_NAV_TAKEOFF:
+            self._target = np.array([self.position[0], self.position[1], item.alt_m])
+        elif item.command in (CMD_NAV_WAYPOINT, CMD_NAV_LOITER_UNLIM):
+            self._target = self._item_target(item)
+        elif item.command == CMD_NAV_LAND:
+            target = self._item_target(item)
+            target[2] = self.position[2]
+            self._target, self._phase = target, "return"
+        elif item.command == CMD_NAV_RETURN_TO_LAUNCH:
+            self._phase, self._target = "climb", None
+        else:  # commands the emulator does not fly are skipped, like unsupported ones
+            self.current += 1
+            self._start_item()
+
+    def _next_item(self, out: list) -> None:
+        out.append(R.MAVLink_mission_item_reached_message(self.current))
+        self.current += 1
+        self._start_item()
+
+    # -- time
+    def advance(self, now: float) -> list:
+        """Fly until ``now``; returns announcements."""
+        out: list = []
+        while self.time + STEP_S <= now:
+            self.time += STEP_S
+            self._step(STEP_S, out)
+        if self.mode == AUTO and self.current != self._announced_current:
+            self._announced_current = self.current
+            out.append(R.MAVLink_mission_current_message(self.current))
+        return out
+
+    def _fly(self, target: np.ndarray, dt: float, *, stop: bool = True, speed=None) -> None:
+        self.position, self.velocity = step_towards(
+            self.position, self.velocity, target, dt, self.options.limits, stop=stop,
+            speed_m_s=speed if speed is not None else self.speed_m_s)
+        self.position[2] = max(self.position[2], 0.0)
+
+    def _step(self, dt: float, out: list) -> None:
+        if not self.armed:
+            return
+        limits = self.options.limits
+        if self.mode in (GUIDED, LOITER, BRAKE) and self._target is not None:
+            self._fly(self._target, dt)
+        elif self.mode == LAND or (self.mode in (RTL, AUTO) and self._phase == "descend"):
+            self._descend(dt, out)
+        elif self.mode == RTL or (self.mode == AUTO and self._phase in ("climb", "home")):
+            self._rtl(dt)
+        elif self.mode == AUTO:
+            self._auto(dt, out, limits)
+        if self._armed_on_ground_since is not None and self.landed and self.mode != AUTO:
+            if self.time - self._armed_on_ground_since >= DISARM_DELAY_S and (
+                self._target is None or self._target[2] <= 0.05
+            ):
+                self.disarm()
+        if not self.landed:
+            self._armed_on_ground_since = None
+
+    def _auto(self, dt: float, out: list, limits: FlightLimits) -> None:
+        item = self._item()
+        if item is None or self._target is None:
+            return
+        if item.command == CMD_NAV_TAKEOFF:
+            self._fly(self._target, dt)
+            if abs(self.position[2] - self._target[2]) < 0.1:
+                self._next_item(out)
+        elif item.command == CMD_NAV_WAYPOINT:
+            nxt = self.mission[self.current + 1] if self.current + 1 < len(self.mission) else None
+            through = nxt is not None and nxt.command == CMD_NAV_WAYPOINT
+            self._fly(self._target, dt, stop=not through)
+            if reached(self.position, self._target, limits) if through else (
+                np.linalg.norm(self._target - self.position) < 0.1
+            ):
+                self._next_item(out)
+        elif item.command == CMD_NAV_LOITER_UNLIM:
+            self._fly(self._target, dt)
+        elif item.command == CMD_NAV_LAND and self._phase == "return":
+            self._fly(self._target, dt)
+            if np.linalg.norm(self._target[:2] - self.position[:2]) < 0.1:
+                self._phase = "descend"
+
+    def _rtl(self, dt: float) -> None:
+        if self._phase == "climb":
+            if self._target is None or self._target[2] < RTL_ALT_M - 1e-9:
+                alt = max(self.position[2], RTL_ALT_M)
+                self._target = np.array([self.position[0], self.position[1], alt])
+            self._fly(self._target, dt)
+            if abs(self.position[2] - self._target[2]) < 0.1 and abs(self.velocity[2]) < 0.2:
+                self._phase = "home"
+                self._target = np.array([0.0, 0.0, self._target[2]])
+        elif self._phase == "home":
+            self._fly(self._target, dt)
+            if np.linalg.norm(self._target[:2] - self.position[:2]) < 0.1:
+                self._phase = "descend"
+        else:
+            self._phase = "climb"
+
+    def _descend(self, dt: float, out: list) -> None:
+        land = self.options.limits.land_m_s
+        self.velocity[:2] = 0.0
+        self.velocity[2] = -land
+        self.position[2] = max(self.position[2] - land * dt, 0.0)
+        if self.position[2] <= 0.0:
+            self.velocity[:] = 0.0
+            if self.mode == AUTO and self._item() is not None:
+                out.append(R.MAVLink_mission_item_reached_message(self.current))
+            out.append(R.MAVLink_statustext_message(R.MAV_SEVERITY_INFO, b"Land complete"))
+            self.disarm()
+            self._phase = "landed"
