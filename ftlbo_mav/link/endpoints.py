@@ -1,0 +1,314 @@
+"""Where the vehicles are: connection strings, system id lists, discovery by HEARTBEAT.
+
+A :class:`Link` is one pymavlink connection (``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``,
+a serial port...) with a reader thread that sorts what arrives by the sender's system id.
+One link may carry one vehicle (SITL's TCP ports) or several (a telemetry radio, a
+router's UDP output). :func:`discover` finds which link each requested id speaks on, and
+:meth:`Link.channel` gives the mission protocol the messages of that one vehicle.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import re
+import socket
+import threading
+import time
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+# pymavlink picks MAVLink 1 or 2 from this variable when it loads a dialect; the mission
+# protocol with MISSION_ITEM_INT and signing need MAVLink 2.
+os.environ.setdefault("MAVLINK20", "1")
+
+from pymavlink import mavutil  # noqa: E402
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: E402
+
+from ..errors import FtlboError  # noqa: E402
+
+GCS_SYSID = 255
+GCS_COMPID = mavlink2.MAV_COMP_ID_MISSIONPLANNER  # 190
+FIRST_TCP_PORT = 5760  # SITL instance i listens on 5760 + 10 * i
+
+
+class LinkError(FtlboError):
+    """A link cannot be opened, or a requested vehicle is not on any link."""
+
+
+class BadInput(FtlboError):
+    """A malformed option value (system ids, connection string); exit code 2."""
+
+    bad_input = True
+
+
+def parse_sysids(text: str) -> list[int]:
+    """``"1..3"`` -> ``[1, 2, 3]``; ``"1,2,5"`` -> ``[1, 2, 5]``; ``"4"`` -> ``[4]``.
+
+    Ids are MAVLink system ids 1..254 (255 is the ground station's), without repeats.
+    """
+    text = text.strip()
+    ids: list[int] = []
+    for part in text.split(","):
+        part = part.strip()
+        m = re.fullmatch(r"(\d+)\s*\.\.\s*(\d+)", part)
+        if m:
+            lo, hi = int(m.group(1)), int(m.group(2))
+            if hi < lo:
+                raise BadInput(f"--sysid {text}: range {part} runs backwards")
+            ids.extend(range(lo, hi + 1))
+        elif part.isdigit():
+            ids.append(int(part))
+        else:
+            raise BadInput(f"--sysid {text}: expected a range like 1..3 or a list like 1,2,5")
+    bad = [i for i in ids if not 1 <= i <= 254]
+    if bad:
+        raise BadInput(f"--sysid {text}: system ids are 1..254, got {bad[0]}")
+    if len(set(ids)) != len(ids):
+        raise BadInput(f"--sysid {text}: an id is repeated")
+    return ids
+
+
+def default_urls(count: int) -> list[str]:
+    """SITL's and the emulator's layout: vehicle i on ``tcp:127.0.0.1:5760 + 10*i``."""
+    return [f"tcp:127.0.0.1:{FIRST_TCP_PORT + 10 * i}" for i in range(count)]
+
+
+@dataclass(frozen=True)
+class Heartbeat:
+    """What a vehicle said about itself in its last HEARTBEAT."""
+
+    sysid: int
+    compid: int
+    vehicle_type: int
+    autopilot: int
+    custom_mode: int
+    base_mode: int
+    system_status: int
+    received_at: float
+
+
+def _is_vehicle(msg) -> bool:
+    return msg.type != mavlink2.MAV_TYPE_GCS and msg.autopilot != mavlink2.MAV_AUTOPILOT_INVALID
+
+
+def _open(url: str, *, timeout_s: float):
+    """Open a pymavlink connection, retrying refused TCP connects until ``timeout_s``."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        try:
+            return mavutil.mavlink_connection(
+                url,
+                source_system=GCS_SYSID,
+                source_component=GCS_COMPID,
+                dialect="ardupilotmega",
+                retries=0,  # one connect per call; the loop here retries quietly
+                autoreconnect=False,
+            )
+        except (ConnectionRefusedError, socket.timeout) as exc:
+            if time.monotonic() >= deadline:
+                raise LinkError(f"{url}: cannot connect ({exc.strerror or exc}); is the "
+                                "vehicle (SITL, `ftlbo-mav sim`) running?") from None
+            time.sleep(0.2)
+        except OSError as exc:
+            raise LinkError(f"{url}: cannot open: {exc.strerror or exc}") from None
+        except ValueError as exc:
+            raise BadInput(f"--connect {url}: {exc}") from None
+
+
+class Link:
+    """One MAVLink connection shared by every vehicle that speaks on it.
+
+    A reader thread receives, keeps the last HEARTBEAT of each vehicle and hands each
+    message to the :class:`Channel` of its sender; it also sends a ground-station
+    HEARTBEAT every second (a ``udpout`` peer learns our address from it). Use as a
+    context manager; :meth:`close` stops the thread and closes the connection.
+    """
+
+    def __init__(self, url: str, *, signing_key: bytes | None = None, connect_timeout_s: float = 5.0):
+        self.url = url
+        self._conn = _open(url, timeout_s=connect_timeout_s)
+        if signing_key is not None:
+            # Sign what we send; accept what arrives whether signed or not (a vehicle
+            # with signing enabled signs its replies, one without does not).
+            self._conn.setup_signing(signing_key, sign_outgoing=True,
+                                     allow_unsigned_callback=lambda _mav, _msgid: True)
+        self._send_lock = threading.Lock()
+        self._subs_lock = threading.Lock()
+        self._queues: dict[int, list[queue.SimpleQueue]] = {}
+        self.heartbeats: dict[int, Heartbeat] = {}
+        self._heard = threading.Condition()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
+        self._thread.start()
+
+    # -- lifetime
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        try:
+            self._conn.close()
+        except OSError:
+            pass
+
+    def __enter__(self) -> "Link":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # -- sending and receiving
+    def send(self, msg) -> None:
+        """Send one message (a pymavlink message object) from the ground station's ids."""
+        with self._send_lock:
+            self._conn.mav.send(msg)
+
+    def channel(self, sysid: int) -> "Channel":
+        """The messages of vehicle ``sysid`` on this link, from now on."""
+        return Channel(self, sysid)
+
+    def _subscribe(self, sysid: int, q: queue.SimpleQueue) -> None:
+        with self._subs_lock:
+            self._queues.setdefault(sysid, []).append(q)
+
+    def _unsubscribe(self, sysid: int, q: queue.SimpleQueue) -> None:
+        with self._subs_lock:
+            subs = self._queues.get(sysid, [])
+            if q in subs:
+                subs.remove(q)
+
+    def _run(self) -> None:
+        next_beat = 0.0
+        while not self._stop.is_set():
+            now = time.monotonic()
+            if now >= next_beat:
+                next_beat = now + 1.0
+                try:
+                    self.send(mavlink2.MAVLink_heartbeat_message(
+                        mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0,
+                        mavlink2.MAV_STATE_ACTIVE, 3))
+                except OSError:
+                    pass
+            try:
+                self._conn.select(0.05)
+                while (msg := self._conn.recv_msg()) is not None:
+                    self._dispatch(msg)
+            except (OSError, ValueError):
+                if self._stop.wait(0.1):
+                    return
+
+    def _dispatch(self, msg) -> None:
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            return
+        src = msg.get_srcSystem()
+        if kind == "HEARTBEAT" and _is_vehicle(msg):
+            with self._heard:
+                self.heartbeats[src] = Heartbeat(
+                    sysid=src, compid=msg.get_srcComponent(), vehicle_type=msg.type,
+                    autopilot=msg.autopilot, custom_mode=msg.custom_mode,
+                    base_mode=msg.base_mode, system_status=msg.system_status,
+                    received_at=time.monotonic())
+                self._heard.notify_all()
+        with self._subs_lock:
+            subs = list(self._queues.get(src, ()))
+        for q in subs:
+            q.put(msg)
+
+    def wait_heartbeat(self, sysid: int, *, until: float) -> bool:
+        """Wait until a HEARTBEAT from ``sysid`` has been heard or ``until`` (monotonic)."""
+        with self._heard:
+            while sysid not in self.heartbeats:
+                left = until - time.monotonic()
+                if left <= 0:
+                    return False
+                self._heard.wait(left)
+            return True
+
+
+class Channel:
+    """One vehicle's messages on a link: what the mission protocol talks through.
+
+    ``recv`` returns only messages from ``sysid`` that are addressed to us (or to
+    everyone); ``send`` sends on the link. Close it (or use ``with``) to unsubscribe.
+    """
+
+    def __init__(self, link: Link, sysid: int):
+        self.link = link
+        self.sysid = sysid
+        self.own_sysid = GCS_SYSID
+        self.own_compid = GCS_COMPID
+        self.srtt: float | None = None  # round trip measured by the last transfer
+        self._q: queue.SimpleQueue = queue.SimpleQueue()
+        link._subscribe(sysid, self._q)
+
+    def send(self, msg) -> None:
+        self.link.send(msg)
+
+    def recv(self, timeout_s: float):
+        """The next message for us from this vehicle, or ``None`` after ``timeout_s``."""
+        deadline = time.monotonic() + max(0.0, timeout_s)
+        while True:
+            try:
+                msg = self._q.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                return None
+            target = getattr(msg, "target_system", 0)
+            if target in (0, self.own_sysid):
+                return msg
+
+    def close(self) -> None:
+        self.link._unsubscribe(self.sysid, self._q)
+
+    def __enter__(self) -> "Channel":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def open_links(urls: Sequence[str], *, signing_key: bytes | None = None,
+               connect_timeout_s: float = 5.0) -> list[Link]:
+    """Open every link, closing those already opened if one fails."""
+    links: list[Link] = []
+    try:
+        for url in urls:
+            links.append(Link(url, signing_key=signing_key, connect_timeout_s=connect_timeout_s))
+    except BaseException:
+        for link in links:
+            link.close()
+        raise
+    return links
+
+
+def discover(links: Iterable[Link], sysids: Sequence[int], *,
+             timeout_s: float = 5.0) -> tuple[dict[int, Link], list[int]]:
+    """Which link each requested vehicle speaks on, by its HEARTBEAT system id.
+
+    Returns ``(found, missing)``: ``found[sysid]`` is the first link that heard it;
+    ``missing`` lists the ids not heard within ``timeout_s``. Ids not requested are
+    ignored, so nothing is ever sent to them.
+    """
+    links = list(links)
+    deadline = time.monotonic() + timeout_s
+    found: dict[int, Link] = {}
+    while True:
+        for sysid in sysids:
+            if sysid not in found:
+                for link in links:
+                    if sysid in link.heartbeats:
+                        found[sysid] = link
+                        break
+        missing = [s for s in sysids if s not in found]
+        if not missing or time.monotonic() >= deadline:
+            return found, missing
+        # wait on one link at a time in short slices so any link's heartbeat counts
+        links[0].wait_heartbeat(missing[0], until=min(deadline, time.monotonic() + 0.05))
+
+
+def describe_missing(sysid: int, links: Sequence[Link], timeout_s: float) -> str:
+    heard = sorted({s for link in links for s in link.heartbeats})
+    where = ", ".join(link.url for link in links)
+    also = f" (heard: {', '.join(map(str, heard))})" if heard else " (heard no vehicle at all)"
+    return (f"system id {sysid}: no HEARTBEAT within {timeout_s:g} s on {where}{also}; "
+            "check the id (SYSID_THISMAV) and that the vehicle is on this link")

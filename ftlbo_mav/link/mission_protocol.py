@@ -1,0 +1,453 @@
+"""The MAVLink mission protocol, ground-station side: upload, download, clear.
+
+Each transfer is a small state machine that takes messages and the time and returns the
+messages to send (no sockets here); :func:`run_transfer` drives one over a *channel*,
+anything with ``send(msg)``, ``recv(timeout_s) -> msg | None``, ``sysid``, ``own_sysid``
+and ``own_compid`` (:class:`~ftlbo_mav.link.endpoints.Channel`, or a test double).
+
+What the vehicle side does, as ArduPilot does it (libraries/GCS_MAVLink/
+MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
+
+- It asks for items with MISSION_REQUEST even after MISSION_ITEM_INT answers, re-asks
+  about every second when an item does not come and cancels a stalled upload after 8 s.
+  We answer MISSION_REQUEST and MISSION_REQUEST_INT alike, always with MISSION_ITEM_INT,
+  and answer every request, duplicates and stale ones included.
+- It accepts an item only if its seq is the one it waits for, else ACKs INVALID_SEQUENCE
+  and keeps waiting: that ACK never ends an upload here. When a request seems lost we
+  resend the last requested item early (after a few round-trip times, before the
+  vehicle's 1 s re-request); an INVALID_SEQUENCE answer to that resend means the vehicle
+  already has it and waits for the next one, which we then send.
+- In its first seconds after boot it answers MISSION_COUNT with NO_SPACE: that is "not
+  ready yet" within :attr:`Timing.not_ready_s`, then a clear error.
+- After the last item it ACKs ACCEPTED; a resent last item after a lost ACCEPTED gets
+  ACK ERROR (GCS_Common.cpp handle_mission_item: not receiving). The upload then ends
+  *unconfirmed* and the read-back decides.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from ..errors import FtlboError
+from ..mission.items import MissionItem
+from .codec import MISSION_TYPE_MISSION, decode_item, encode_item
+
+R = mavlink2  # MAV_MISSION_RESULT constants live on the dialect module
+
+RESULT_TEXT = {
+    R.MAV_MISSION_ACCEPTED: "accepted",
+    R.MAV_MISSION_ERROR: "the vehicle reported an error (ArduPilot: an item it could not "
+                         "store, or a request while no transfer was running)",
+    R.MAV_MISSION_UNSUPPORTED_FRAME: "an item's coordinate frame is not supported by the vehicle",
+    R.MAV_MISSION_UNSUPPORTED: "an item's command is not supported by the vehicle",
+    R.MAV_MISSION_NO_SPACE: "the vehicle has no space for this many items",
+    R.MAV_MISSION_INVALID: "an item has an invalid parameter",
+    R.MAV_MISSION_INVALID_PARAM1: "an item's param1 is out of range",
+    R.MAV_MISSION_INVALID_PARAM2: "an item's param2 is out of range",
+    R.MAV_MISSION_INVALID_PARAM3: "an item's param3 is out of range",
+    R.MAV_MISSION_INVALID_PARAM4: "an item's param4 is out of range",
+    R.MAV_MISSION_INVALID_PARAM5_X: "an item's latitude (x) is out of range",
+    R.MAV_MISSION_INVALID_PARAM6_Y: "an item's longitude (y) is out of range",
+    R.MAV_MISSION_INVALID_PARAM7: "an item's altitude (z) is out of range",
+    R.MAV_MISSION_INVALID_SEQUENCE: "an item arrived out of sequence",
+    R.MAV_MISSION_DENIED: "the vehicle denied the transfer (it is busy with another "
+                          "ground station's transfer, or its mission is read-only)",
+    R.MAV_MISSION_OPERATION_CANCELLED: "the vehicle cancelled the transfer (it waited too "
+                                       "long for an item)",
+}
+
+
+def describe_result(code: int) -> str:
+    """A MAV_MISSION_RESULT as a sentence a person understands."""
+    name = R.enums["MAV_MISSION_RESULT"].get(code)
+    label = name.name if name is not None else f"result {code}"
+    return f"{RESULT_TEXT.get(code, 'unknown result code')} ({label})"
+
+
+@dataclass(frozen=True)
+class Timing:
+    """Time-outs and retry budgets of a transfer.
+
+    ``timeout_s`` / ``retries``: a step (MISSION_COUNT answered, the next request, an
+    item) that makes no progress is resent after ``timeout_s``, and fails after
+    ``retries`` resends, i.e. after ``timeout_s * (retries + 1)`` without progress
+    (QGroundControl's defaults are about 1.5 s and 5). Once a round trip has been timed,
+    resends come sooner (every ~4 round trips, at least ``min_resend_s``), within the same
+    time budget: on a fast lossy link a lost message costs a fraction of a second, not
+    1.5 s, and the budget rides out long runs of losses. ``not_ready_s``: how long a
+    vehicle may answer NO_SPACE (booting) or DENIED (busy) before that is final,
+    retrying every ``not_ready_poll_s``.
+    """
+
+    timeout_s: float = 1.5
+    retries: int = 5
+    not_ready_s: float = 15.0
+    not_ready_poll_s: float = 1.0
+    min_resend_s: float = 0.2
+
+    @property
+    def budget_s(self) -> float:
+        """How long a step may go without progress before it fails."""
+        return self.timeout_s * (self.retries + 1)
+
+
+class MissionTransferError(FtlboError):
+    """A transfer failed; names the vehicle and the step."""
+
+    def __init__(self, sysid: int, step: str, problem: str, *, result: int | None = None):
+        self.sysid = sysid
+        self.step = step
+        self.problem = problem
+        self.result = result
+        super().__init__(f"vehicle {sysid}: {step}: {problem}")
+
+
+Progress = Callable[[str, int, int], None]  # (step, done, total)
+
+
+def _quiet(_step: str, _done: int, _total: int) -> None:
+    pass
+
+
+class _Transfer:
+    """Common state: deadline, retry count, outcome."""
+
+    step = "transfer"
+
+    def __init__(self, *, sysid: int, compid: int, own: tuple[int, int], timing: Timing,
+                 progress: Progress | None, srtt: float | None = None):
+        self.sysid, self.compid = sysid, compid
+        self.own_sysid, self.own_compid = own
+        self.timing = timing
+        self.progress = progress or _quiet
+        self.deadline = 0.0
+        self.last_progress = 0.0
+        self.finished = False
+        self.error: MissionTransferError | None = None
+        self.last_result: int | None = None  # last refusal, for the message
+        self.srtt = srtt  # smoothed round-trip time, seconds (None: not timed yet)
+
+    def _fail(self, problem: str, *, result: int | None = None) -> list:
+        self.finished = True
+        self.error = MissionTransferError(self.sysid, self.step, problem, result=result)
+        return []
+
+    def _done(self) -> list:
+        self.finished = True
+        return []
+
+    def _rtt_sample(self, rtt: float) -> None:
+        self.srtt = rtt if self.srtt is None else 0.875 * self.srtt + 0.125 * rtt
+
+    def _resend_s(self) -> float:
+        """When to resend a seemingly lost message: ~4 round trips, within bounds."""
+        if self.srtt is None:
+            return self.timing.timeout_s
+        return min(self.timing.timeout_s, max(self.timing.min_resend_s, 4.0 * self.srtt))
+
+    def _out_of_budget(self, now: float) -> bool:
+        return now - self.last_progress >= self.timing.budget_s - 1e-9
+
+    def _gave_up(self, what: str) -> list:
+        t = self.timing
+        if self.last_result is not None:
+            return self._fail(f"{what} kept failing for {t.budget_s:g} s, last answer: "
+                              f"{describe_result(self.last_result)}", result=self.last_result)
+        return self._fail(f"no answer to {what} within {t.budget_s:g} s ({t.retries} retries "
+                          f"of {t.timeout_s:g} s): is the vehicle still there (link, signing "
+                          "key)?")
+
+    def _ours(self, msg) -> bool:
+        return getattr(msg, "mission_type", MISSION_TYPE_MISSION) == MISSION_TYPE_MISSION
+
+    def start(self, now: float) -> list:
+        raise NotImplementedError
+
+    def on_message(self, msg, now: float) -> list:
+        raise NotImplementedError
+
+    def on_timeout(self, now: float) -> list:
+        raise NotImplementedError
+
+
+class Upload(_Transfer):
+    """MISSION_COUNT, then an item for every request, until ACK ACCEPTED.
+
+    ``acknowledged`` is False when the upload ended without the vehicle's ACCEPTED
+    (see the module notes): only the read-back can then tell. ``highest`` is the highest
+    item the vehicle asked for (-1: it never asked for one).
+    """
+
+    step = "upload"
+
+    def __init__(self, items: Sequence[MissionItem], **kw):
+        super().__init__(**kw)
+        if not items:
+            raise ValueError("an upload needs at least one item")
+        self.items = list(items)
+        self.n = len(self.items)
+        self.highest = -1
+        self.sent_at: dict[int, float] = {}  # first time each item went out
+        self.sends: dict[int, int] = {}      # how often each item went out
+        self.count_sends = 0
+        self.last_sent = False     # the last item went out at least once
+        self.resent = False        # the current step's item was resent
+        self.probing = False       # waiting to see how the vehicle answers a resend
+        self.waiting_ready = False
+        self.acknowledged = False
+        self.started_at = 0.0
+        self.count_sent_at = 0.0
+
+    def _count(self, now: float) -> list:
+        self.count_sent_at = now
+        self.count_sends += 1
+        self.deadline = now + self._resend_s()
+        return [R.MAVLink_mission_count_message(self.sysid, self.compid, self.n,
+                                                MISSION_TYPE_MISSION)]
+
+    def _item(self, seq: int, now: float) -> list:
+        self.sent_at.setdefault(seq, now)
+        self.sends[seq] = self.sends.get(seq, 0) + 1
+        if seq == self.n - 1:
+            self.last_sent = True
+        return [encode_item(self.items[seq], target_system=self.sysid,
+                            target_component=self.compid)]
+
+    def start(self, now: float) -> list:
+        self.started_at = self.last_progress = now
+        self.progress("upload", 0, self.n)
+        return self._count(now)
+
+    def on_message(self, msg, now: float) -> list:
+        kind = msg.get_type()
+        if not self._ours(msg):
+            return []
+        if kind in ("MISSION_REQUEST", "MISSION_REQUEST_INT"):
+            return self._on_request(msg.seq, now)
+        if kind == "MISSION_ACK":
+            return self._on_ack(msg.type, now)
+        return []
+
+    def _on_request(self, seq: int, now: float) -> list:
+        if not 0 <= seq < self.n:
+            return []
+        self.waiting_ready = False
+        if seq > self.highest:  # progress
+            # Karn's rule: time only the answer to something sent exactly once
+            if seq == 0 and self.count_sends == 1:
+                self._rtt_sample(now - self.count_sent_at)
+            elif self.sends.get(seq - 1) == 1:
+                self._rtt_sample(now - self.sent_at[seq - 1])
+            self.highest = seq
+            self.last_progress = now
+            self.resent = self.probing = False
+            self.progress("upload", seq, self.n)
+        if seq == self.highest:
+            self.deadline = now + self._resend_s()
+        return self._item(seq, now)  # every request is answered, stale ones too
+
+    def _on_ack(self, result: int, now: float) -> list:
+        if result == R.MAV_MISSION_ACCEPTED:
+            if not self.last_sent:
+                return []  # a stale ACK from an earlier transfer
+            self.acknowledged = True
+            self.progress("upload", self.n, self.n)
+            return self._done()
+        if result == R.MAV_MISSION_INVALID_SEQUENCE:
+            # A duplicated or stale item reached the vehicle; it goes on waiting
+            # (MissionItemProtocol::handle_mission_item). In answer to our resend it means
+            # the vehicle has that item already and its request for the next was lost.
+            if self.probing and self.highest + 1 < self.n:
+                self.probing = False
+                return self._item(self.highest + 1, now)
+            return []
+        if result == R.MAV_MISSION_ERROR and self.last_sent and self.resent:
+            # Our resent last item reached a vehicle that had finished: ACCEPTED was lost.
+            self.progress("upload", self.n, self.n)
+            return self._done()
+        if result == R.MAV_MISSION_NO_SPACE and self.highest < 0:
+            if now - self.started_at < self.timing.not_ready_s:
+                # ArduPilot answers NO_SPACE in its first seconds after boot: not ready yet.
+                self.waiting_ready = True
+                self.deadline = now + self.timing.not_ready_poll_s
+                return []
+            return self._fail(
+                f"{describe_result(result)} for {self.n} items, for "
+                f"{self.timing.not_ready_s:g} s: the mission is too long for it, or it has "
+                "not finished booting", result=result)
+        where = f" at item {self.highest}" if self.highest >= 0 else ""
+        return self._fail(f"{describe_result(result)}{where}", result=result)
+
+    def on_timeout(self, now: float) -> list:
+        if self.waiting_ready:
+            self.waiting_ready = False
+            self.last_progress = now
+            return self._count(now)
+        if self._out_of_budget(now):
+            if self.highest < 0:
+                return self._gave_up("MISSION_COUNT")
+            return self._gave_up(f"item {self.highest} (no request for the next one)")
+        if self.highest < 0:
+            return self._count(now)
+        self.resent = self.probing = True
+        self.deadline = now + self._resend_s()
+        return self._item(self.highest, now)
+
+
+class Download(_Transfer):
+    """MISSION_REQUEST_LIST, then MISSION_REQUEST_INT for each item, then ACK ACCEPTED."""
+
+    step = "read-back"
+
+    def __init__(self, **kw):
+        super().__init__(**kw)
+        self.count: int | None = None
+        self.items: list[MissionItem] = []
+        self.asked_at = 0.0
+        self.resent = False
+        self.started_at = 0.0
+        self.waiting_ready = False
+
+    def _ask(self, now: float) -> list:
+        self.asked_at = now
+        self.deadline = now + self._resend_s()
+        if self.count is None:
+            return [R.MAVLink_mission_request_list_message(self.sysid, self.compid,
+                                                           MISSION_TYPE_MISSION)]
+        return [R.MAVLink_mission_request_int_message(self.sysid, self.compid, len(self.items),
+                                                      MISSION_TYPE_MISSION)]
+
+    def _finish(self) -> list:
+        self.finished = True
+        return [R.MAVLink_mission_ack_message(self.sysid, self.compid, R.MAV_MISSION_ACCEPTED,
+                                              MISSION_TYPE_MISSION)]
+
+    def _progressed(self, now: float) -> list:
+        if not self.resent:  # Karn's rule
+            self._rtt_sample(now - self.asked_at)
+        self.last_progress = now
+        self.resent = False
+        self.progress("read-back", len(self.items), self.count or 0)
+        if len(self.items) >= (self.count or 0):
+            return self._finish()
+        return self._ask(now)
+
+    def start(self, now: float) -> list:
+        self.started_at = self.last_progress = now
+        return self._ask(now)
+
+    def on_message(self, msg, now: float) -> list:
+        kind = msg.get_type()
+        if not self._ours(msg):
+            return []
+        if kind == "MISSION_COUNT":
+            if self.count is None or (msg.count != self.count and len(self.items) == 0):
+                self.count = msg.count
+                self.waiting_ready = False
+                return self._progressed(now)
+            return []
+        if kind in ("MISSION_ITEM_INT", "MISSION_ITEM"):
+            if self.count is not None and msg.seq == len(self.items) < self.count:
+                self.items.append(decode_item(msg))
+                return self._progressed(now)
+            return []  # a duplicate or stale answer
+        if kind == "MISSION_ACK" and msg.type != R.MAV_MISSION_ACCEPTED:
+            # A read is harmless to repeat, and an ACK here is often stale (ERROR or
+            # INVALID_SEQUENCE for a late duplicate of an uploaded item), so none ends the
+            # read-back: it is kept for the message if the budget runs out. DENIED means
+            # busy receiving an upload (handle_mission_request_list): ask again later.
+            self.last_result = msg.type
+            if msg.type == R.MAV_MISSION_DENIED and now - self.started_at < self.timing.not_ready_s:
+                self.waiting_ready = True
+                self.deadline = now + self.timing.not_ready_poll_s
+        return []
+
+    def on_timeout(self, now: float) -> list:
+        if self.waiting_ready:
+            self.waiting_ready = False
+            self.last_progress = now
+            return self._ask(now)
+        if self._out_of_budget(now):
+            return self._gave_up("MISSION_REQUEST_LIST" if self.count is None
+                                 else f"MISSION_REQUEST_INT {len(self.items)}")
+        self.resent = True
+        return self._ask(now)
+
+
+class Clear(_Transfer):
+    """MISSION_CLEAR_ALL until ACK ACCEPTED."""
+
+    step = "clear"
+
+    def _send(self, now: float) -> list:
+        self.deadline = now + self.timing.timeout_s
+        return [R.MAVLink_mission_clear_all_message(self.sysid, self.compid, MISSION_TYPE_MISSION)]
+
+    def start(self, now: float) -> list:
+        self.last_progress = now
+        return self._send(now)
+
+    def on_message(self, msg, now: float) -> list:
+        if msg.get_type() != "MISSION_ACK" or not self._ours(msg):
+            return []
+        if msg.type == R.MAV_MISSION_ACCEPTED:
+            return self._done()
+        # ERROR: the vehicle is still receiving (an upload it will cancel) or the ACK is
+        # stale; INVALID_SEQUENCE: stale. Clearing is harmless to repeat: keep asking.
+        self.last_result = msg.type
+        return []
+
+    def on_timeout(self, now: float) -> list:
+        if self._out_of_budget(now):
+            return self._gave_up("MISSION_CLEAR_ALL")
+        return self._send(now)
+
+
+def run_transfer(machine: _Transfer, channel, *, clock: Callable[[], float] = time.monotonic):
+    """Drive ``machine`` over ``channel`` until it finishes; raise its error if it failed."""
+    for msg in machine.start(clock()):
+        channel.send(msg)
+    while not machine.finished:
+        msg = channel.recv(max(0.0, machine.deadline - clock()))
+        now = clock()
+        out = machine.on_message(msg, now) if msg is not None else []
+        if not machine.finished and now >= machine.deadline:
+            out = out + machine.on_timeout(now)
+        for m in out:
+            channel.send(m)
+    if getattr(channel, "srtt", None) is None or machine.srtt is not None:
+        channel.srtt = machine.srtt  # the next transfer starts from the measured round trip
+    if machine.error is not None:
+        raise machine.error
+    return machine
+
+
+def _kw(channel, timing: Timing | None, progress: Progress | None, compid: int) -> dict:
+    return dict(sysid=channel.sysid, compid=compid, own=(channel.own_sysid, channel.own_compid),
+                timing=timing or Timing(), progress=progress, srtt=getattr(channel, "srtt", None))
+
+
+def upload_mission(channel, items: Sequence[MissionItem], *, timing: Timing | None = None,
+                   progress: Progress | None = None, compid: int = 1) -> bool:
+    """Upload ``items`` to the vehicle on ``channel``; True when the vehicle ACKed ACCEPTED.
+
+    False means the upload ended without that ACK (it was lost): verify by read-back.
+    Raises :class:`MissionTransferError` when the vehicle refused or stopped answering.
+    """
+    machine = run_transfer(Upload(items, **_kw(channel, timing, progress, compid)), channel)
+    return machine.acknowledged
+
+
+def download_mission(channel, *, timing: Timing | None = None, progress: Progress | None = None,
+                     compid: int = 1) -> list[MissionItem]:
+    """Read the vehicle's mission back (item 0 is what the vehicle says is home)."""
+    return run_transfer(Download(**_kw(channel, timing, progress, compid)), channel).items
+
+
+def clear_mission(channel, *, timing: Timing | None = None, compid: int = 1) -> None:
+    """MISSION_CLEAR_ALL, acknowledged. Confirm with :func:`download_mission`."""
+    run_transfer(Clear(**_kw(channel, timing, None, compid)), channel)

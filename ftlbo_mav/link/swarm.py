@@ -1,0 +1,152 @@
+"""Every vehicle at once: upload, read back, compare; one result per vehicle.
+
+:func:`upload_swarm` opens the links, finds each requested system id by its HEARTBEAT,
+then runs :func:`upload_and_verify` for all found vehicles concurrently (one thread
+each: the protocol waits are blocking queue reads with time-outs). A vehicle that is
+missing or fails never stops the others; each gets a :class:`VehicleResult`.
+"""
+
+from __future__ import annotations
+
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+from ..mission.items import MissionItem
+from .codec import mission_differences
+from .endpoints import describe_missing, discover, open_links
+from .mission_protocol import (
+    MissionTransferError,
+    Timing,
+    Upload,
+    clear_mission,
+    download_mission,
+    run_transfer,
+)
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """Which mission goes to which vehicle: ``uav1`` -> system id 1."""
+
+    name: str
+    sysid: int
+    items: tuple[MissionItem, ...]
+
+
+@dataclass(frozen=True)
+class VehicleResult:
+    name: str
+    sysid: int
+    verified: bool
+    message: str
+    seconds: float
+
+
+# (name, sysid, step, done, total); step is "upload", "read-back", "clear", "verified"
+# or "failed", the last two with the result message in ``ProgressEvent.message``.
+@dataclass(frozen=True)
+class ProgressEvent:
+    name: str
+    sysid: int
+    step: str
+    done: int = 0
+    total: int = 0
+    message: str = ""
+
+
+OnProgress = Callable[[ProgressEvent], None]
+
+
+def _clear_and_confirm(channel, timing: Timing, report: Callable[[str], None]) -> str:
+    """Clear the mission after a failure and say what the vehicle holds now."""
+    report("clear")
+    try:
+        clear_mission(channel, timing=timing)
+        left = download_mission(channel, timing=timing)
+    except MissionTransferError as exc:
+        return (f"clearing its mission failed too ({exc.problem}): it may hold part of "
+                f"a mission; check it with `ftlbo-mav download --sysid {channel.sysid}`")
+    if len(left) <= 1:  # ArduPilot keeps home as item 0
+        return "its mission was cleared (read back: no items): the vehicle now has no mission"
+    return (f"after MISSION_CLEAR_ALL it still reports {len(left)} items: "
+            "do not fly it before checking it by hand")
+
+
+def upload_and_verify(channel, items: Sequence[MissionItem], *, timing: Timing,
+                      progress: Callable[[str, int, int], None] | None = None) -> tuple[bool, str]:
+    """Upload, read back, compare from item 1. ``(True, "verified ...")`` or ``(False, why)``.
+
+    After a failed upload (or a read-back that differs) the vehicle's mission is cleared
+    and the clear confirmed by read-back, so no partial mission is left silently.
+    """
+    progress = progress or (lambda _s, _d, _t: None)
+
+    def report(step: str) -> None:
+        progress(step, 0, 0)
+
+    machine = Upload(items, sysid=channel.sysid, compid=1,
+                     own=(channel.own_sysid, channel.own_compid), timing=timing,
+                     progress=progress, srtt=channel.srtt)
+    try:
+        run_transfer(machine, channel)
+    except MissionTransferError as exc:
+        if machine.highest < 0 and exc.result is None:
+            return False, f"upload failed: {exc.problem}; no item reached the vehicle"
+        return False, f"upload failed: {exc.problem}; " + _clear_and_confirm(channel, timing, report)
+    try:
+        back = download_mission(channel, timing=timing, progress=progress)
+    except MissionTransferError as exc:
+        return False, (f"uploaded, but the read-back failed ({exc.problem}): the mission is "
+                       "NOT verified")
+    problems = mission_differences(items, back)
+    if problems:
+        shown = "; ".join(problems[:3]) + (f"; ... {len(problems) - 3} more" if len(problems) > 3 else "")
+        return False, f"read-back differs: {shown}; " + _clear_and_confirm(channel, timing, report)
+    return True, f"verified ({len(items)} items)"
+
+
+def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
+                 signing_key: bytes | None = None, timing: Timing | None = None,
+                 discover_timeout_s: float = 5.0,
+                 on_progress: OnProgress | None = None) -> list[VehicleResult]:
+    """Upload and verify every assignment concurrently; results in assignment order."""
+    timing = timing or Timing()
+    emit = on_progress or (lambda _e: None)
+    started = time.monotonic()
+    links = open_links(urls, signing_key=signing_key, connect_timeout_s=discover_timeout_s)
+    try:
+        for a in assignments:
+            emit(ProgressEvent(a.name, a.sysid, "discover"))
+        found, missing = discover(links, [a.sysid for a in assignments],
+                                  timeout_s=discover_timeout_s)
+        results: dict[int, VehicleResult] = {}
+        for a in assignments:
+            if a.sysid in missing:
+                msg = describe_missing(a.sysid, links, discover_timeout_s)
+                results[a.sysid] = VehicleResult(a.name, a.sysid, False, msg,
+                                                 time.monotonic() - started)
+                emit(ProgressEvent(a.name, a.sysid, "failed", message=msg))
+
+        def one(a: Assignment) -> VehicleResult:
+            t0 = time.monotonic()
+
+            def progress(step: str, done: int, total: int) -> None:
+                emit(ProgressEvent(a.name, a.sysid, step, done, total))
+
+            with found[a.sysid].channel(a.sysid) as channel:
+                ok, msg = upload_and_verify(channel, a.items, timing=timing, progress=progress)
+            emit(ProgressEvent(a.name, a.sysid, "verified" if ok else "failed",
+                               len(a.items), len(a.items), msg))
+            return VehicleResult(a.name, a.sysid, ok, msg, time.monotonic() - t0)
+
+        todo = [a for a in assignments if a.sysid in found]
+        if todo:
+            with ThreadPoolExecutor(max_workers=len(todo)) as pool:
+                for r in pool.map(one, todo):
+                    results[r.sysid] = r
+        return [results[a.sysid] for a in assignments]
+    finally:
+        for link in links:
+            link.close()

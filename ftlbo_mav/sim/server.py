@@ -1,0 +1,285 @@
+"""Emulated ArduCopters on the network: TCP like SITL, or one shared UDP link.
+
+:class:`Simulator` runs N :class:`~ftlbo_mav.sim.vehicle.Vehicle` s in an asyncio loop
+(in a background thread when used as a context manager; in the foreground for
+``ftlbo-mav sim``). Vehicle i (system id i+1) listens on TCP ``127.0.0.1:5760 + 10*i``
+like SITL's instance i, serves one client at a time and takes the next one after it
+disconnects. With ``udp_out`` all vehicles also speak on one UDP socket that sends to
+that address, as a telemetry radio or a router's UDP output does.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+import time
+from typing import Callable, Sequence
+
+import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from .faults import Faults, FaultyPipe
+from .vehicle import Vehicle, VehicleOptions
+
+TICK_S = 0.02
+
+
+def _signing_timestamp() -> int:
+    """MAVLink signing time: 10 microsecond units since 2015-01-01 (as pymavlink's)."""
+    return int((time.time() - 1420070400) * 100_000)
+
+
+class _Attachment:
+    """One client of one vehicle: its own parser (stream state, signature check) and writer."""
+
+    def __init__(self, write: Callable[[bytes], None], *, sysid: int, key: bytes | None):
+        self.write = write
+        self.parser = mavlink2.MAVLink(None, srcSystem=sysid, srcComponent=1)
+        self.parser.robust_parsing = True  # bad CRC or signature -> BAD_DATA, not an exception
+        if key is not None:
+            # a vehicle that requires signing drops unsigned or wrongly signed messages
+            # (GCS_Signing.cpp GCS_MAVLINK::signature_check / accept_unsigned_callback)
+            self.parser.signing.secret_key = key
+            self.parser.signing.timestamp = _signing_timestamp()
+
+
+class VehicleRunner:
+    """One vehicle between its clients: faults each way, signing, periodic telemetry."""
+
+    def __init__(self, vehicle: Vehicle, *, faults: Faults, signing_key: bytes | None,
+                 rng: np.random.Generator, loop: asyncio.AbstractEventLoop):
+        self.vehicle = vehicle
+        self.faults = faults
+        self.key = signing_key
+        self.loop = loop
+        self.up = FaultyPipe.up(faults, rng)
+        self.down = FaultyPipe.down(faults, rng)
+        self.packer = mavlink2.MAVLink(None, srcSystem=vehicle.sysid, srcComponent=vehicle.compid)
+        if signing_key is not None:
+            self.packer.signing.secret_key = signing_key
+            self.packer.signing.sign_outgoing = True
+            self.packer.signing.timestamp = _signing_timestamp()
+        self.attachments: list[_Attachment] = []
+        self._mission_peer: _Attachment | None = None
+
+    def attach(self, write: Callable[[bytes], None]) -> _Attachment:
+        att = _Attachment(write, sysid=self.vehicle.sysid, key=self.key)
+        self.attachments.append(att)
+        return att
+
+    def detach(self, att: _Attachment) -> None:
+        if att in self.attachments:
+            self.attachments.remove(att)
+
+    def _later(self, delay: float, fn, *args) -> None:
+        if delay > 0:
+            self.loop.call_later(delay, fn, *args)
+        else:
+            fn(*args)
+
+    def feed(self, att: _Attachment, data: bytes) -> None:
+        """Bytes from a client: parse, then each message through the uplink's faults."""
+        if self.faults.silent:
+            return
+        for msg in att.parser.parse_buffer(data) or []:
+            if msg.get_type() == "BAD_DATA":
+                continue
+            for delay, m in self.up.route(msg):
+                self._later(delay, self._handle, att, m)
+
+    def _handle(self, att: _Attachment, msg) -> None:
+        if att not in self.attachments or self.faults.mute:
+            return
+        replies = self.vehicle.handle(msg, self.loop.time())
+        if replies:
+            self._mission_peer = att
+        self._send(att, replies)
+
+    def _send(self, att: _Attachment, msgs: list) -> None:
+        for msg in msgs:
+            buf = bytes(msg.pack(self.packer))
+            self.packer.seq = (self.packer.seq + 1) % 256
+            for delay, b in self.down.route(buf):
+                self._later(delay, self._write, att, b)
+
+    def _write(self, att: _Attachment, data: bytes) -> None:
+        if att in self.attachments:
+            try:
+                att.write(data)
+            except (OSError, RuntimeError):
+                self.detach(att)
+
+    def tick(self) -> None:
+        periodic, replies = self.vehicle.tick(self.loop.time())
+        if self.faults.silent:
+            return
+        for att in list(self.attachments):
+            self._send(att, periodic)
+        if replies and not self.faults.mute and self._mission_peer in self.attachments:
+            self._send(self._mission_peer, replies)
+
+
+class _SharedUdp(asyncio.DatagramProtocol):
+    """One UDP socket for every vehicle, sending to ``target``; what comes back goes to all."""
+
+    def __init__(self, runners: Sequence[VehicleRunner], target: tuple[str, int]):
+        self.runners = runners
+        self.target = target
+        self.atts: list[tuple[VehicleRunner, _Attachment]] = []
+
+    def connection_made(self, transport) -> None:
+        for r in self.runners:
+            self.atts.append((r, r.attach(lambda d, t=transport: t.sendto(d, self.target))))
+
+    def datagram_received(self, data: bytes, addr) -> None:
+        for r, att in self.atts:
+            r.feed(att, data)
+
+    def error_received(self, exc) -> None:  # nobody listening yet: ICMP port unreachable
+        pass
+
+
+class Simulator:
+    """N emulated ArduCopters, system ids ``first_sysid``.., one TCP port each.
+
+    ``homes``: ``(lat_deg, lon_deg, alt_m AMSL)`` per vehicle. ``base_port``: vehicle i
+    listens on ``base_port + 10*i``; ``0`` lets the system choose free ports (tests).
+    ``faults`` / ``options``: one for all vehicles, or one per vehicle. ``seed``: seeds
+    the fault decisions. Use ``with Simulator(...) as sim:`` (background thread) or
+    :meth:`run` (foreground, until interrupted). ``urls`` gives the client connection
+    strings; ``udp_url`` the shared link's, when ``udp_out`` is set.
+    """
+
+    def __init__(self, *, homes: Sequence[tuple[float, float, float]], base_port: int = 5760,
+                 host: str = "127.0.0.1", udp_out: tuple[str, int] | None = None,
+                 faults: Faults | Sequence[Faults] = Faults(),
+                 options: VehicleOptions | Sequence[VehicleOptions] = VehicleOptions(),
+                 signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1):
+        n = len(homes)
+        if n < 1:
+            raise ValueError("at least one vehicle")
+        self.homes = [tuple(h) for h in homes]
+        self.host, self.base_port, self.udp_out = host, base_port, udp_out
+        self.faults = list(faults) if not isinstance(faults, Faults) else [faults] * n
+        self.options = list(options) if not isinstance(options, VehicleOptions) else [options] * n
+        if len(self.faults) != n or len(self.options) != n:
+            raise ValueError("faults and options: one for all vehicles, or one per vehicle")
+        self.signing_key, self.seed, self.first_sysid = signing_key, seed, first_sysid
+        self.ports: list[int] = []
+        self.runners: list[VehicleRunner] = []
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._thread: threading.Thread | None = None
+        self._stopping: asyncio.Event | None = None
+
+    @property
+    def urls(self) -> list[str]:
+        return [f"tcp:{self.host}:{p}" for p in self.ports]
+
+    @property
+    def udp_url(self) -> str | None:
+        return f"udpin:{self.udp_out[0]}:{self.udp_out[1]}" if self.udp_out else None
+
+    @property
+    def vehicles(self) -> list[Vehicle]:
+        return [r.vehicle for r in self.runners]
+
+    async def _main(self, ready: Callable[[], None]) -> None:
+        loop = asyncio.get_running_loop()
+        self._stopping = asyncio.Event()
+        rngs = [np.random.default_rng([self.seed, i]) for i in range(len(self.homes))]
+        now = loop.time()
+        for i, home in enumerate(self.homes):
+            v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
+                        boot_time=now)
+            self.runners.append(VehicleRunner(v, faults=self.faults[i], signing_key=self.signing_key,
+                                              rng=rngs[i], loop=loop))
+        servers = []
+        try:
+            for i, runner in enumerate(self.runners):
+                port = self.base_port + 10 * i if self.base_port else 0
+                server = await asyncio.start_server(self._client_handler(runner), self.host, port)
+                servers.append(server)
+                self.ports.append(server.sockets[0].getsockname()[1])
+            udp = None
+            if self.udp_out:
+                udp, _ = await loop.create_datagram_endpoint(
+                    lambda: _SharedUdp(self.runners, self.udp_out), local_addr=(self.host, 0))
+            ready()
+            while not self._stopping.is_set():
+                for r in self.runners:
+                    r.tick()
+                try:
+                    await asyncio.wait_for(self._stopping.wait(), TICK_S)
+                except asyncio.TimeoutError:
+                    pass
+            if udp is not None:
+                udp.close()
+        finally:
+            for s in servers:
+                s.close()
+            for s in servers:
+                await s.wait_closed()
+
+    def _client_handler(self, runner: VehicleRunner):
+        one_at_a_time = asyncio.Lock()
+
+        async def serve(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+            async with one_at_a_time:  # the next client is served after this one leaves
+                att = runner.attach(writer.write)
+                try:
+                    while data := await reader.read(4096):
+                        runner.feed(att, data)
+                except (ConnectionError, OSError):
+                    pass
+                finally:
+                    runner.detach(att)
+                    writer.close()
+
+        return serve
+
+    # -- background thread (tests, benchmarks)
+    def __enter__(self) -> "Simulator":
+        started = threading.Event()
+        errors: list[BaseException] = []
+
+        def run() -> None:
+            loop = asyncio.new_event_loop()
+            self._loop = loop
+            try:
+                loop.run_until_complete(self._main(started.set))
+            except BaseException as exc:  # reported to the thread that started us
+                errors.append(exc)
+                started.set()
+            finally:
+                loop.close()
+
+        self._thread = threading.Thread(target=run, name="ftlbo-mav sim", daemon=True)
+        self._thread.start()
+        started.wait()
+        if errors:
+            self._thread.join()
+            raise errors[0]
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._loop is not None and self._stopping is not None and self._thread.is_alive():
+            self._loop.call_soon_threadsafe(self._stopping.set)
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+
+    def call(self, fn: Callable[[], object]):
+        """Run ``fn`` in the simulator's loop thread and return its result (inspection)."""
+        fut = asyncio.run_coroutine_threadsafe(_call(fn), self._loop)
+        return fut.result(timeout=5.0)
+
+    # -- foreground (the CLI)
+    def run(self, ready: Callable[[], None] = lambda: None) -> None:
+        """Serve until interrupted (Ctrl-C)."""
+        try:
+            asyncio.run(self._main(ready))
+        except KeyboardInterrupt:
+            pass
+
+
+async def _call(fn):
+    return fn()
