@@ -127,3 +127,11 @@ def plot_command(folder, out_dir):
 
     for path in write_figures(read_plan(folder), out_dir or folder):
         click.echo(f"  wrote {path}")
+
+
+# The MAVLink bridge (ftlbo_mav/link/commands.py): upload, download, sim.
+from .link.commands import download, sim, upload  # noqa: E402
+
+main.add_command(upload)
+main.add_command(download)
+main.add_command(sim)

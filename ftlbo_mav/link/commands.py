@@ -1,0 +1,244 @@
+"""``ftlbo-mav upload``, ``download`` and ``sim``: parse options, call the library, print.
+
+Registered on the main group at the end of :mod:`ftlbo_mav.cli`.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+import threading
+from pathlib import Path
+
+import click
+
+from ..cli import user_errors
+from ..errors import FtlboError
+from ..mission.waypoints import read_waypoints, write_waypoints
+from .endpoints import BadInput, LinkError, default_urls, describe_missing, discover, open_links
+from .endpoints import parse_sysids
+from .mission_protocol import Timing, download_mission
+from .signing import load_key
+from .swarm import Assignment, ProgressEvent, upload_swarm
+
+
+def _urls(values: tuple[str, ...]) -> list[str]:
+    """``--connect`` values; one value may also hold several, separated by spaces."""
+    return [u for v in values for u in v.split()]
+
+
+def _timing(timeout: float, retries: int, ready_timeout: float) -> Timing:
+    return Timing(timeout_s=timeout, retries=retries, not_ready_s=ready_timeout)
+
+
+def mission_files(folder: Path) -> list[Path]:
+    """``uav1.waypoints``, ``uav2.waypoints``, ... in UAV order; gaps are an error."""
+    found = {}
+    for p in folder.glob("uav*.waypoints"):
+        m = re.fullmatch(r"uav(\d+)\.waypoints", p.name)
+        if m:
+            found[int(m.group(1))] = p
+    if not found:
+        raise BadInput(f"{folder}: no uavN.waypoints files (write them with `ftlbo-mav plan`)")
+    numbers = sorted(found)
+    if numbers != list(range(1, len(numbers) + 1)):
+        missing = min(set(range(1, numbers[-1] + 1)) - set(numbers))
+        raise BadInput(f"{folder}: uav{missing}.waypoints is missing (found "
+                       f"{', '.join(found[n].name for n in numbers)})")
+    return [found[n] for n in numbers]
+
+
+class ProgressBoard:
+    """One line per vehicle on stderr: redrawn in place on a terminal, else a line per step."""
+
+    def __init__(self, names: list[tuple[str, int]], *, stream=None):
+        self.stream = stream or sys.stderr
+        self.tty = self.stream.isatty()
+        self.order = [sysid for _, sysid in names]
+        self.lines = {sysid: f"{name} -> sysid {sysid}: waiting" for name, sysid in names}
+        self.names = dict((sysid, name) for name, sysid in names)
+        self.last_step: dict[int, str] = {}
+        self.lock = threading.Lock()
+        if self.tty:
+            self.stream.write("\n".join(self.lines[s] for s in self.order) + "\n")
+
+    def __call__(self, e: ProgressEvent) -> None:
+        if e.step in ("upload", "read-back") and e.total:
+            bar = "#" * int(20 * e.done / e.total)
+            text = f"{e.step:9s} [{bar:20s}] {e.done}/{e.total}"
+        elif e.step in ("verified", "failed"):
+            text = "verified" if e.step == "verified" else "FAILED"
+        else:
+            text = {"discover": "waiting for HEARTBEAT", "clear": "clearing"}.get(e.step, e.step)
+        with self.lock:
+            self.lines[e.sysid] = f"{self.names[e.sysid]} -> sysid {e.sysid}: {text}"
+            if self.tty:
+                up = len(self.order)
+                body = "".join(f"\x1b[2K{self.lines[s]}\n" for s in self.order)
+                self.stream.write(f"\x1b[{up}F{body}")
+                self.stream.flush()
+            elif self.last_step.get(e.sysid) != e.step:
+                self.last_step[e.sysid] = e.step
+                self.stream.write(self.lines[e.sysid] + "\n")
+                self.stream.flush()
+
+
+_timing_options = [
+    click.option("--timeout", type=click.FloatRange(min=0.05), default=1.5, show_default=True,
+                 help="Seconds without an answer before a message is resent."),
+    click.option("--retries", type=click.IntRange(min=0), default=5, show_default=True,
+                 help="Resends of one step before it fails."),
+    click.option("--ready-timeout", type=click.FloatRange(min=0), default=15.0,
+                 show_default=True,
+                 help="Seconds a booting (NO_SPACE) or busy (DENIED) vehicle is waited for."),
+    click.option("--discover-timeout", type=click.FloatRange(min=0.1), default=5.0,
+                 show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT."),
+    click.option("--signing-key", type=click.Path(dir_okay=False),
+                 help="MAVLink 2 signing key file (64 hex digits, or a passphrase)."),
+]
+
+
+def timing_options(func):
+    for option in reversed(_timing_options):
+        func = option(func)
+    return func
+
+
+@click.command()
+@click.argument("mission_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@click.option("--sysid", "sysid_text", required=True,
+              help="Vehicle system ids: a range 1..3 or a list 1,2,5; uav1 goes to the first.")
+@click.option("--connect", "connect", multiple=True, metavar="URL",
+              help="pymavlink connection string; repeat it (or give several separated by "
+                   "spaces) for one link per vehicle. Default: tcp:127.0.0.1:5760 + 10*i.")
+@timing_options
+@user_errors
+def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, discover_timeout,
+           signing_key):
+    """Upload MISSION_DIR/uavN.waypoints to the vehicles, read each back and verify it.
+
+    Exits 0 only when every vehicle's mission read back equal to its file.
+    """
+    sysids = parse_sysids(sysid_text)
+    files = mission_files(mission_dir)
+    if len(files) != len(sysids):
+        raise BadInput(f"{mission_dir} holds {len(files)} missions (uav1..uav{len(files)}) but "
+                       f"--sysid {sysid_text} names {len(sysids)} vehicles")
+    # every file is read before any vehicle is touched
+    missions = [tuple(read_waypoints(f)) for f in files]
+    key = load_key(signing_key) if signing_key else None
+    urls = _urls(connect) or default_urls(len(sysids))
+    assignments = [Assignment(f.stem, s, m) for f, s, m in zip(files, sysids, missions)]
+    board = ProgressBoard([(a.name, a.sysid) for a in assignments])
+    results = upload_swarm(assignments, urls, signing_key=key,
+                           timing=_timing(timeout, retries, ready_timeout),
+                           discover_timeout_s=discover_timeout, on_progress=board)
+    for r in results:
+        status = r.message if r.verified else f"FAILED: {r.message}"
+        click.echo(f"{r.name} -> sysid {r.sysid}: {status}")
+    ok = sum(r.verified for r in results)
+    click.echo(f"{ok}/{len(results)} vehicles verified")
+    if ok != len(results):
+        sys.exit(1)
+
+
+@click.command()
+@click.option("--sysid", type=click.IntRange(1, 254), required=True, help="The vehicle's system id.")
+@click.option("--connect", metavar="URL",
+              help="pymavlink connection string (default: tcp:127.0.0.1:5760 + 10*(sysid-1)).")
+@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="The .waypoints file to write.")
+@timing_options
+@user_errors
+def download(sysid, connect, output, timeout, retries, ready_timeout, discover_timeout,
+             signing_key):
+    """Save the mission a vehicle holds as a Mission Planner .waypoints file."""
+    key = load_key(signing_key) if signing_key else None
+    url = connect or default_urls(sysid)[sysid - 1]
+    links = open_links([url], signing_key=key, connect_timeout_s=discover_timeout)
+    try:
+        found, missing = discover(links, [sysid], timeout_s=discover_timeout)
+        if missing:
+            raise LinkError(describe_missing(sysid, links, discover_timeout))
+        with found[sysid].channel(sysid) as channel:
+            items = download_mission(channel, timing=_timing(timeout, retries, ready_timeout))
+    finally:
+        for link in links:
+            link.close()
+    write_waypoints(output, items)
+    click.echo(f"wrote {output} ({len(items)} items; item 0 is the vehicle's home)")
+
+
+def _endpoint(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    if not host or not port.isdigit():
+        raise BadInput(f"--udp-out {text}: expected HOST:PORT, e.g. 127.0.0.1:14550")
+    return host, int(port)
+
+
+@click.command()
+@click.option("--count", type=click.IntRange(1, 254), default=None,
+              help="Number of vehicles (default: the scenario's UAVs, else 3).")
+@click.option("--scenario", type=click.Path(dir_okay=False),
+              help="Put the homes at each UAV's start position.")
+@click.option("--base-port", type=click.IntRange(0, 65535), default=5760, show_default=True,
+              help="Vehicle i listens on TCP base-port + 10*i (0: any free ports).")
+@click.option("--udp-out", metavar="HOST:PORT",
+              help="Also send every vehicle's traffic to one UDP address (a shared link: "
+                   "connect with udpin:HOST:PORT).")
+@click.option("--loss", type=click.FloatRange(0, 1), default=0.0, help="Packet loss each way.")
+@click.option("--duplicate", type=click.FloatRange(0, 1), default=0.0,
+              help="Fraction of packets duplicated.")
+@click.option("--reorder", type=click.FloatRange(0, 1), default=0.0,
+              help="Fraction of packets held back behind later ones.")
+@click.option("--latency-ms", type=click.FloatRange(min=0), default=0.0, help="One-way delay.")
+@click.option("--boot-delay", type=click.FloatRange(min=0), default=0.0,
+              help="Seconds after start during which uploads get NO_SPACE (like ArduPilot).")
+@click.option("--capacity", type=click.IntRange(min=0), default=700, show_default=True,
+              help="Mission items a vehicle can hold.")
+@click.option("--silent", "silent", multiple=True, type=int, metavar="SYSID",
+              help="This vehicle says nothing at all (repeatable).")
+@click.option("--signing-key", type=click.Path(dir_okay=False),
+              help="Vehicles require MAVLink 2 signing with this key.")
+@click.option("--seed", type=int, default=0, help="Seed of the fault decisions.")
+@user_errors
+def sim(count, scenario, base_port, udp_out, loss, duplicate, reorder, latency_ms, boot_delay,
+        capacity, silent, signing_key, seed):
+    """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
+    from ..scenario import load_scenario
+    from ..sim.faults import Faults
+    from ..sim.homes import default_homes, scenario_homes
+    from ..sim.mission_server import MissionServerOptions
+    from ..sim.server import Simulator
+    from ..sim.vehicle import VehicleOptions
+
+    if scenario:
+        homes = scenario_homes(load_scenario(scenario))
+        if count is not None and count != len(homes):
+            raise BadInput(f"--count {count}, but {scenario} has {len(homes)} UAVs")
+    else:
+        homes = default_homes(count or 3)
+    n = len(homes)
+    link = dict(loss_up=loss, loss_down=loss, duplicate=duplicate, reorder=reorder,
+                latency_s=latency_ms / 1000.0)
+    faults = [Faults(**link, silent=(i + 1) in silent) for i in range(n)]
+    options = VehicleOptions(ready_after_s=boot_delay, mission=MissionServerOptions(
+        capacity=capacity, boot_no_space_s=boot_delay))
+    key = load_key(signing_key) if signing_key else None
+    simulator = Simulator(homes=homes, base_port=base_port,
+                          udp_out=_endpoint(udp_out) if udp_out else None, faults=faults,
+                          options=options, signing_key=key, seed=seed)
+
+    def ready() -> None:
+        for i, (url, home) in enumerate(zip(simulator.urls, homes)):
+            click.echo(f"vehicle sysid {i + 1}: {url}  home {home[0]:.7f}, {home[1]:.7f}, "
+                       f"{home[2]:.1f} m")
+        if simulator.udp_url:
+            click.echo(f"all vehicles also on UDP: connect with {simulator.udp_url}")
+        click.echo("emulating; Ctrl-C to stop")
+
+    try:
+        simulator.run(ready)
+    except OSError as exc:
+        raise FtlboError(f"cannot listen on TCP port {base_port}+: {exc.strerror or exc} "
+                         "(is SITL or another `ftlbo-mav sim` running? try --base-port)") from None
