@@ -166,7 +166,8 @@ def figure_ground(plan: Plan) -> Figure:
             ax.add_patch(Circle(c, r + clearance, fill=False, edgecolor=OBSTACLE_COLOUR,
                                 linestyle=":", linewidth=1.0, zorder=1))
         ax.annotate(str(k + 1), (c[0], c[1] + r + clearance), textcoords="offset points",
-                    xytext=(0, 2), ha="center", va="bottom", fontsize=8, color=OBSTACLE_COLOUR)
+                    xytext=(0, 2), ha="center", va="bottom", fontsize=8, color=OBSTACLE_COLOUR,
+                    zorder=6, bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
     _paths_2d(ax, plan, 0, 1)
     ax.set_xlim(lower[0] - margin, upper[0] + margin)
     ax.set_ylim(lower[1] - margin, upper[1] + margin)
