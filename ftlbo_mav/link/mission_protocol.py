@@ -2,8 +2,9 @@
 
 Each transfer is a small state machine that takes messages and the time and returns the
 messages to send (no sockets here); :func:`run_transfer` drives one over a *channel*,
-anything with ``send(msg)``, ``recv(timeout_s) -> msg | None``, ``sysid``, ``own_sysid``
-and ``own_compid`` (:class:`~ftlbo_mav.link.endpoints.Channel`, or a test double).
+anything with ``send(msg)``, ``recv(timeout_s) -> msg | None``, ``sysid``, ``own_sysid``,
+``own_compid`` and optionally ``clock()`` and ``srtt`` (:class:`~ftlbo_mav.link.endpoints.
+Channel` on a real link, :class:`~ftlbo_mav.sim.loopback.LoopbackChannel` in virtual time).
 
 What the vehicle side does, as ArduPilot does it (libraries/GCS_MAVLink/
 MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
@@ -26,7 +27,9 @@ MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
 
 from __future__ import annotations
 
+import statistics
 import time
+from collections import deque
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
@@ -80,7 +83,9 @@ class Timing:
     time budget: on a fast lossy link a lost message costs a fraction of a second, not
     1.5 s, and the budget rides out long runs of losses. ``not_ready_s``: how long a
     vehicle may answer NO_SPACE (booting) or DENIED (busy) before that is final,
-    retrying every ``not_ready_poll_s``.
+    retrying every ``not_ready_poll_s``. ``first_resend_s``: resend interval before any
+    round trip has been timed (TCP starts at 1 s, RFC 6298; a lost MISSION_COUNT at 30%
+    loss should not eat the budget in 1.5 s steps).
     """
 
     timeout_s: float = 1.5
@@ -88,6 +93,7 @@ class Timing:
     not_ready_s: float = 15.0
     not_ready_poll_s: float = 1.0
     min_resend_s: float = 0.2
+    first_resend_s: float = 0.5
 
     @property
     def budget_s(self) -> float:
@@ -129,7 +135,10 @@ class _Transfer:
         self.finished = False
         self.error: MissionTransferError | None = None
         self.last_result: int | None = None  # last refusal, for the message
-        self.srtt = srtt  # smoothed round-trip time, seconds (None: not timed yet)
+        # round-trip time, seconds (None: not timed yet): the median of recent samples,
+        # since a sample that spans the vehicle's own re-request (1 s later) looks valid
+        self.srtt = srtt
+        self._samples: deque[float] = deque([srtt] if srtt is not None else [], maxlen=9)
 
     def _fail(self, problem: str, *, result: int | None = None) -> list:
         self.finished = True
@@ -141,12 +150,13 @@ class _Transfer:
         return []
 
     def _rtt_sample(self, rtt: float) -> None:
-        self.srtt = rtt if self.srtt is None else 0.875 * self.srtt + 0.125 * rtt
+        self._samples.append(rtt)
+        self.srtt = statistics.median(self._samples)
 
     def _resend_s(self) -> float:
         """When to resend a seemingly lost message: ~4 round trips, within bounds."""
         if self.srtt is None:
-            return self.timing.timeout_s
+            return min(self.timing.timeout_s, self.timing.first_resend_s)
         return min(self.timing.timeout_s, max(self.timing.min_resend_s, 4.0 * self.srtt))
 
     def _out_of_budget(self, now: float) -> bool:
@@ -265,8 +275,10 @@ class Upload(_Transfer):
                 self.probing = False
                 return self._item(self.highest + 1, now)
             return []
-        if result == R.MAV_MISSION_ERROR and self.last_sent and self.resent:
-            # Our resent last item reached a vehicle that had finished: ACCEPTED was lost.
+        if result == R.MAV_MISSION_ERROR and self.last_sent:
+            # A (resent or duplicated) last item reached a vehicle that had finished
+            # (GCS_Common.cpp handle_mission_item: not receiving -> ERROR): ACCEPTED was
+            # lost. Or the last item could not be stored: the read-back tells which.
             self.progress("upload", self.n, self.n)
             return self._done()
         if result == R.MAV_MISSION_NO_SPACE and self.highest < 0:
@@ -407,8 +419,13 @@ class Clear(_Transfer):
         return self._send(now)
 
 
-def run_transfer(machine: _Transfer, channel, *, clock: Callable[[], float] = time.monotonic):
-    """Drive ``machine`` over ``channel`` until it finishes; raise its error if it failed."""
+def run_transfer(machine: _Transfer, channel):
+    """Drive ``machine`` over ``channel`` until it finishes; raise its error if it failed.
+
+    Time is the channel's ``clock()`` when it has one (virtual time in tests), else
+    :func:`time.monotonic`.
+    """
+    clock = getattr(channel, "clock", time.monotonic)
     for msg in machine.start(clock()):
         channel.send(msg)
     while not machine.finished:
