@@ -22,7 +22,9 @@ from .formation import PLANES, regular_formation
 from .geo import LocalFrame
 from .mission.gis import read_obstacle_geojson
 
-ALGORITHMS = ("ftlbo",)  # every name in planning.optimizers.OPTIMIZERS
+ALGORITHMS = ("ftlbo-seeded", "ftlbo", "tlbo", "ga", "theta-pso")
+"""Every name in planning.optimizers.OPTIMIZERS; the first is the default. ``ftlbo`` is
+the paper's FTLBO; ``ftlbo-seeded`` is FTLBO from geometric seed routes (docs/planning.md)."""
 END_ACTIONS = ("land", "rtl", "loiter")
 
 
@@ -56,9 +58,10 @@ class Weights:
 
 @dataclass(frozen=True)
 class PlannerSettings:
-    """Optimizer settings; the defaults are the paper's experiment."""
+    """Optimizer settings; the defaults are the paper's experiment, except the algorithm:
+    the seeded FTLBO (near-optimal paths, same budget) rather than the paper's FTLBO."""
 
-    algorithm: str = "ftlbo"
+    algorithm: str = ALGORITHMS[0]
     students: int = 100
     waypoints: int = 10
     iterations: int = 150
@@ -366,7 +369,7 @@ def _read_obstacles(rows: Any, source: str) -> tuple[Cylinder, ...]:
 def _read_planner(t: _Table | None) -> PlannerSettings:
     if t is None:
         return PlannerSettings()
-    algorithm = t.string("algorithm", "ftlbo", choices=ALGORITHMS)
+    algorithm = t.string("algorithm", ALGORITHMS[0], choices=ALGORITHMS)
     students = t.integer("students", 100, lo=4)
     waypoints = t.integer("waypoints", 10, lo=1)
     iterations = t.integer("iterations", 150, lo=1)

@@ -88,6 +88,10 @@ def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> d
         },
         "seconds": round(plan.seconds, 4),
         "evaluations": plan.evaluations,
+        "lower_bound_length": (
+            None if plan.lower_bound_length is None else round(plan.lower_bound_length, 4)
+        ),
+        "length_ratio": None if plan.length_ratio is None else round(plan.length_ratio, 6),
         "history": [_finite(h) for h in plan.history],
         "clearance": plan.scenario.clearance_m,
         "area": {
@@ -198,6 +202,8 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         violations = tuple(str(v) for v in doc["violations"])
         feasible_flag = bool(doc["feasible"])
         evaluations, seconds = int(doc["evaluations"]), float(doc["seconds"])
+        bound = doc.get("lower_bound_length")
+        bound = None if bound is None else float(bound)
     except (KeyError, TypeError, ValueError, IndexError) as exc:
         raise MissionFileError(
             f"{source}: not a plan.json this version of ftlbo-mav can read (missing or bad "
@@ -220,6 +226,7 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         history=history,
         evaluations=evaluations,
         seconds=seconds,
+        lower_bound_length=bound,
     )
 
 

@@ -7,12 +7,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from typing import Callable
 
 import numpy as np
 
 from ..scenario import PlannerSettings, Scenario
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
+from .geometric import lower_bound, seed_waypoints, shortest_route
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import Progress
 from .problem import PlanningProblem, problem_from_scenario
@@ -36,10 +38,20 @@ class Plan:
     history: np.ndarray
     evaluations: int
     seconds: float
+    lower_bound_length: float | None = None
+    """Metres no feasible centroid path can beat (:func:`.geometric.lower_bound`);
+    ``None`` when no route exists for the formation."""
 
     @property
     def feasible(self) -> bool:
         return not self.violations
+
+    @property
+    def length_ratio(self) -> float | None:
+        """Centroid length over the lower bound (1.0 is the best possible)."""
+        if not self.lower_bound_length:
+            return None
+        return float(self.cost.length / self.lower_bound_length)
 
     def lla(self, enu: np.ndarray) -> np.ndarray:
         """ENU ``(..., 3)`` -> ``(..., 3)`` rows of (lat_deg, lon_deg, alt_m above home)."""
@@ -56,8 +68,13 @@ def plan(
     students: int | None = None,
     waypoints: int | None = None,
     progress: Progress | None = None,
+    notice: Callable[[str], None] | None = None,
 ) -> Plan:
-    """Plan the centroid path for ``scenario``; keyword arguments override its ``[planner]``."""
+    """Plan the centroid path for ``scenario``; keyword arguments override its ``[planner]``.
+
+    ``notice(line)`` is called before optimizing when no route exists (the formation
+    cannot pass between the obstacles inside the area); the plan is still attempted.
+    """
     settings = scenario.planner
     overrides = {
         "algorithm": algorithm,
@@ -72,7 +89,14 @@ def plan(
             f"unknown algorithm {settings.algorithm!r}; known: {', '.join(sorted(OPTIMIZERS))}"
         )
     problem = problem_from_scenario(scenario, waypoints=settings.waypoints)
-    return solve(problem, scenario, settings, progress=progress)
+    return solve(problem, scenario, settings, progress=progress, notice=notice)
+
+
+NO_ROUTE = (
+    "no route: the formation cannot pass between the obstacles inside the area with the "
+    "clearance; every plan will be infeasible (widen the area, reduce the clearance or the "
+    "formation)"
+)
 
 
 def solve(
@@ -81,8 +105,13 @@ def solve(
     settings: PlannerSettings,
     *,
     progress: Progress | None = None,
+    notice: Callable[[str], None] | None = None,
 ) -> Plan:
     """Run ``settings.algorithm`` on ``problem`` and package the result."""
+    route = shortest_route(problem)
+    bound = lower_bound(problem, route)
+    if route is None and notice is not None:
+        notice(NO_ROUTE)
     m = problem.waypoints
     lower, upper = problem.bounds()
 
@@ -91,13 +120,19 @@ def solve(
 
     objective = Objective(cost, lower, upper)
     rng = np.random.default_rng(settings.seed)
+    optimizer = OPTIMIZERS[settings.algorithm]
     t0 = time.perf_counter()
-    result = OPTIMIZERS[settings.algorithm](
+    extra = {}
+    if getattr(optimizer, "wants_seeds", False):  # timed: seeding is part of the planner
+        seeds = seed_waypoints(problem) if route is not None else np.zeros((0, m, 3))
+        extra["seeds"] = seeds.reshape(len(seeds), 3 * m)
+    result = optimizer(
         objective,
         students=settings.students,
         iterations=settings.iterations,
         rng=rng,
         progress=progress,
+        **extra,
     )
     seconds = time.perf_counter() - t0
     best = result.x.reshape(1, m, 3)
@@ -114,4 +149,5 @@ def solve(
         history=np.where(result.history >= INFEASIBLE, np.inf, result.history),
         evaluations=result.evaluations,
         seconds=seconds,
+        lower_bound_length=bound,
     )

@@ -75,3 +75,64 @@ def greedy(x_old, f_old, x_new, f_new):
     """Keep each new candidate only if it is strictly better (TLBO's acceptance)."""
     better = f_new < f_old
     return np.where(better[:, None], x_new, x_old), np.where(better, f_new, f_old)
+
+
+def evaluation_budget(students: int, iterations: int) -> int:
+    """FTLBO's evaluations for a run: the budget every algorithm gets in a comparison.
+
+    The initial class, then per iteration the teacher phase (``students``), one chaotic
+    mutant and the learner phase (``students``).
+    """
+    return students + iterations * (2 * students + 1)
+
+
+class BudgetTracker:
+    """Stops an optimizer at FTLBO's budget and records its history on FTLBO's clock.
+
+    Algorithms spend different numbers of evaluations per own iteration (TLBO 2S, a GA or
+    PSO S), so a comparison counts in *FTLBO iterations*: iteration ``i`` ends when
+    ``students + i * (2 * students + 1)`` evaluations are spent. ``record(best)`` is
+    called after every evaluated batch; the best cost so far is written into every
+    checkpoint the batch reached (a batch crossing a checkpoint is credited to it, so the
+    history is at most one batch ahead of the clock), and ``progress`` is called once per
+    checkpoint.
+    """
+
+    def __init__(
+        self,
+        objective: Objective,
+        *,
+        students: int,
+        iterations: int,
+        progress: Progress | None = None,
+    ) -> None:
+        self.objective = objective
+        self.iterations = iterations
+        self.budget = objective.evaluations + evaluation_budget(students, iterations)
+        start = objective.evaluations + students
+        self.checkpoints = start + (2 * students + 1) * np.arange(1, iterations + 1)
+        self.history = np.full(iterations, np.inf)
+        self.progress = progress
+        self._next = 0
+
+    @property
+    def remaining(self) -> int:
+        """Evaluations left in the budget."""
+        return max(self.budget - self.objective.evaluations, 0)
+
+    def record(self, best: float) -> None:
+        spent = self.objective.evaluations
+        while self._next < self.iterations and spent >= self.checkpoints[self._next]:
+            self.history[self._next] = best
+            self._next += 1
+            if self.progress is not None:
+                self.progress(self._next, self.iterations, float(best))
+
+    def finish(self, best: float) -> np.ndarray:
+        """Fill checkpoints not reached (only if the budget was left unspent); the history."""
+        while self._next < self.iterations:
+            self.history[self._next] = best
+            self._next += 1
+            if self.progress is not None:
+                self.progress(self._next, self.iterations, float(best))
+        return self.history

@@ -32,6 +32,9 @@ import numpy as np
 
 from .base import Objective, OptimizerResult, Progress, greedy
 
+STALL_TOLERANCE = 1e-6
+"""Relative improvement below which an iteration window counts as stalled (``patience``)."""
+
 # Fixed points and short cycles of the logistic map that a random start must avoid.
 _LOGISTIC_TRAPS = (0.0, 0.25, 0.5, 0.75, 1.0)
 
@@ -97,10 +100,25 @@ def ftlbo(
     iterations: int,
     rng: np.random.Generator,
     progress: Progress | None = None,
+    initial: np.ndarray | None = None,
+    patience: int | None = None,
 ) -> OptimizerResult:
-    """Minimize ``objective`` with FTLBO; budget ``students + iterations * (2 * students + 1)``."""
+    """Minimize ``objective`` with FTLBO; budget ``students + iterations * (2 * students + 1)``.
+
+    ``initial``: optional ``(I, D)`` students (``I <= students``) that replace the first
+    random ones of the initial class (clipped to the bounds); the paper's FTLBO starts
+    from random students only.
+
+    ``patience``: stop early once the best cost has improved by less than
+    ``STALL_TOLERANCE`` (relative) over the last ``patience`` iterations; the history's
+    remaining iterations then repeat the final best. ``None`` (the paper) spends the
+    whole budget.
+    """
     budget = students + iterations * (2 * students + 1)
     x = objective.random(rng, students)
+    if initial is not None:
+        initial = objective.clip(np.atleast_2d(np.asarray(initial, float)))[:students]
+        x[: len(initial)] = initial
     f = objective(x)
     chaos = _chaos_seed(rng)
     history = np.empty(iterations)
@@ -128,5 +146,14 @@ def ftlbo(
         history[it] = f.min()
         if progress is not None:
             progress(it + 1, iterations, float(history[it]))
+        if (
+            patience is not None
+            and it >= patience
+            and history[it] >= history[it - patience] - STALL_TOLERANCE * abs(history[it])
+        ):
+            history[it + 1 :] = history[it]
+            if progress is not None and it + 1 < iterations:
+                progress(iterations, iterations, float(history[it]))
+            break
     best = int(np.argmin(f))
     return OptimizerResult(x[best].copy(), float(f[best]), history, objective.evaluations)

@@ -1,0 +1,481 @@
+"""Shortest horizontal routes around the formation-inflated obstacles: bound and seeds.
+
+A formation whose centroid follows a path keeps UAV ``n`` at ``centroid + offset_n``.
+UAV ``n`` clears cylinder ``k`` when its horizontal distance to the axis exceeds
+``R_k + clearance``; in centroid coordinates that is the centroid staying outside the disc
+of radius ``R_k + clearance`` centred at ``c_k - offset_n``. The obstacle the *centroid*
+must avoid is therefore, for every cylinder, the union of N such discs (one per UAV), and
+every UAV stays inside the area when the centroid stays inside the area shrunk by the
+formation's extent (:meth:`PlanningProblem.bounds`).
+
+The shortest centroid path in that free space (a rectangle minus discs) is a taut string:
+straight segments tangent to the discs and arcs along them, never bending at the
+rectangle's sides or where two discs cross (those corners point away from the free
+space). It is found exactly by Dijkstra on the tangent visibility graph: start, goal, the
+tangent points of every start/goal-to-disc tangent and of every inner and outer
+bitangent between two discs, joined by the tangent segments that enter no disc and stay
+in the rectangle, and by the arcs between neighbouring tangent points on a disc that
+enter no other disc and stay in the rectangle.
+
+- :func:`shortest_route` -> :class:`Route` or ``None`` when the formation cannot pass;
+- :func:`lower_bound` -> the shortest length any feasible centroid path can have;
+- :func:`seed_waypoints` -> routes resampled to ``m`` waypoints, for the seeded planner.
+
+All arrays are metres ENU; angles in radians, counter-clockwise from east.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .problem import PlanningProblem
+
+_TOL = 1e-9
+_TWO_PI = 2.0 * math.pi
+_EDGE_CHUNK = 1 << 16  # segments checked against all discs at once (bounded memory)
+
+
+@dataclass(frozen=True)
+class Discs:
+    """The centroid's obstacles: ``centres (C, 2)``, ``radii (C,)``, ``cylinder (C,)`` and
+    ``uav (C,)`` (which cylinder and which UAV each disc stands for, 0-based)."""
+
+    centres: np.ndarray
+    radii: np.ndarray
+    cylinder: np.ndarray
+    uav: np.ndarray
+
+
+@dataclass(frozen=True)
+class Arc:
+    """An arc of disc ``disc`` from angle ``start`` sweeping ``sweep`` (signed, ccw > 0)."""
+
+    disc: int
+    start: float
+    sweep: float
+
+
+@dataclass(frozen=True)
+class Route:
+    """A horizontal centroid route from start to goal.
+
+    ``length``: metres. ``nodes``: ``(Q, 2)`` the graph nodes passed (start, tangent
+    points, goal). ``arcs``: for each of the ``Q-1`` legs, the :class:`Arc` followed or
+    ``None`` for a straight segment. ``discs``: the discs the route was computed for.
+    """
+
+    length: float
+    nodes: np.ndarray
+    arcs: tuple[Arc | None, ...]
+    discs: Discs
+
+    def polyline(self, *, step_rad: float = 0.05) -> np.ndarray:
+        """The route as a dense polyline ``(P, 2)``, arcs sampled every ``step_rad``."""
+        points = [self.nodes[0]]
+        for i, arc in enumerate(self.arcs):
+            if arc is not None:
+                c, r = self.discs.centres[arc.disc], self.discs.radii[arc.disc]
+                count = max(int(abs(arc.sweep) / step_rad), 1)
+                angles = arc.start + arc.sweep * np.arange(1, count) / count
+                points.extend(c + r * np.column_stack([np.cos(angles), np.sin(angles)]))
+            points.append(self.nodes[i + 1])
+        return np.array(points)
+
+
+def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
+    """One disc per (UAV, cylinder): centre ``c_k - offset_n``, radius ``R_k + clearance``.
+
+    ``margin`` (metres) is added to every radius. Duplicates (UAVs stacked at one
+    horizontal offset) and discs inside another disc are dropped: they change nothing.
+    """
+    N, K = problem.uav_count, len(problem.radii)
+    if K == 0:
+        empty = np.zeros(0, int)
+        return Discs(np.zeros((0, 2)), np.zeros(0), empty, empty)
+    centres = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(-1, 2)
+    radii = np.tile(problem.radii + margin, N)
+    cylinder = np.tile(np.arange(K), N)
+    uav = np.repeat(np.arange(N), K)
+    dist = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
+    # disc i inside disc j (for equal discs keep the first one)
+    inside = dist + radii[:, None] <= radii[None, :] + _TOL
+    np.fill_diagonal(inside, False)
+    equal = np.triu(inside & inside.T, 1)  # equal discs: drop the later one only
+    drop = (inside & ~inside.T).any(axis=1) | equal.any(axis=0)
+    keep = ~drop
+    return Discs(centres[keep], radii[keep], cylinder[keep], uav[keep])
+
+
+def _centroid_rectangle(problem: PlanningProblem) -> tuple[np.ndarray, np.ndarray]:
+    lower, upper = problem.bounds()
+    return lower[0, :2], upper[0, :2]
+
+
+def _segment_clear(p: np.ndarray, q: np.ndarray, discs: Discs) -> np.ndarray:
+    """For segments ``p -> q`` (each ``(E, 2)``): True where no disc interior is entered."""
+    clear = np.ones(len(p), bool)
+    if len(discs.radii) == 0:
+        return clear
+    step = max(_EDGE_CHUNK // len(discs.radii), 1)
+    for i in range(0, len(p), step):
+        a, b = p[i : i + step, None, :], q[i : i + step, None, :]
+        ab = b - a
+        ac = discs.centres[None, :, :] - a
+        seg2 = np.maximum((ab * ab).sum(-1), 1e-18)
+        t = np.clip((ac * ab).sum(-1) / seg2, 0.0, 1.0)
+        d = np.hypot(*(ac - t[..., None] * ab).transpose(2, 0, 1))
+        clear[i : i + step] = (d >= discs.radii * (1 - _TOL) - _TOL).all(axis=1)
+    return clear
+
+
+def _in_rectangle(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    tol = _TOL * (1 + np.abs(upper - lower))
+    return ((points >= lower - tol) & (points <= upper + tol)).all(axis=-1)
+
+
+def _forbidden_intervals(discs: Discs, lower, upper) -> list[list[tuple[float, float]]]:
+    """Per disc, angular intervals ``(centre, half_width)`` of its circle that lie inside
+    another disc or outside the rectangle (open intervals)."""
+    C = len(discs.radii)
+    out: list[list[tuple[float, float]]] = [[] for _ in range(C)]
+    for i in range(C):
+        ci, ri = discs.centres[i], discs.radii[i]
+        for j in range(C):
+            if j == i:
+                continue
+            v = discs.centres[j] - ci
+            d = math.hypot(*v)
+            rj = discs.radii[j]
+            if d >= ri + rj or d + rj <= ri:
+                continue  # apart, or j inside i: j does not cover i's circle
+            if d + ri <= rj:
+                out[i].append((0.0, math.pi))  # i's whole circle inside j
+                continue
+            cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
+            out[i].append((math.atan2(v[1], v[0]), math.acos(min(max(cos_a, -1.0), 1.0))))
+        for normal_angle, h in (
+            (math.pi, ci[0] - lower[0]),
+            (0.0, upper[0] - ci[0]),
+            (-0.5 * math.pi, ci[1] - lower[1]),
+            (0.5 * math.pi, upper[1] - ci[1]),
+        ):
+            if h >= ri:
+                continue
+            if h <= -ri:
+                out[i].append((0.0, math.pi))
+                continue
+            out[i].append((normal_angle, math.acos(h / ri)))
+    return out
+
+
+def _arc_free(start: float, sweep: float, intervals) -> bool:
+    """Whether the ccw arc ``(start, start + sweep)`` misses every forbidden interval."""
+    for centre, half in intervals:
+        if half >= math.pi:
+            return False
+        s = (centre - half - start) % _TWO_PI
+        if s < sweep - 1e-9 or s + 2 * half > _TWO_PI + 1e-9:
+            return False
+    return True
+
+
+def _point_tangents(p: np.ndarray, discs: Discs):
+    """Tangent points from ``p (2,)`` to every disc it is outside of: (disc, angle) pairs."""
+    v = p - discs.centres
+    d = np.hypot(v[:, 0], v[:, 1])
+    ok = d > discs.radii
+    phi = np.arctan2(v[:, 1], v[:, 0])
+    alpha = np.arccos(np.clip(discs.radii / np.where(ok, d, 1.0), -1, 1))
+    idx = np.nonzero(ok)[0]
+    return np.concatenate([idx, idx]), np.concatenate([phi[idx] + alpha[idx], phi[idx] - alpha[idx]])
+
+
+def _bitangents(discs: Discs):
+    """Inner and outer bitangents of every disc pair: (disc_i, angle_i, disc_j, angle_j)."""
+    C = len(discs.radii)
+    i, j = np.triu_indices(C, 1)
+    v = discs.centres[j] - discs.centres[i]
+    d = np.hypot(v[:, 0], v[:, 1])
+    phi = np.arctan2(v[:, 1], v[:, 0])
+    ri, rj = discs.radii[i], discs.radii[j]
+    parts = []
+    outer = d > np.abs(ri - rj) + _TOL
+    a = np.arccos(np.clip((ri - rj) / np.where(outer, d, 1.0), -1, 1))
+    for sign in (1.0, -1.0):
+        ang = phi + sign * a
+        parts.append((i[outer], ang[outer], j[outer], ang[outer]))
+    inner = d > ri + rj + _TOL
+    a = np.arccos(np.clip((ri + rj) / np.where(inner, d, 1.0), -1, 1))
+    for sign in (1.0, -1.0):
+        ang = phi + sign * a
+        parts.append((i[inner], ang[inner], j[inner], ang[inner] + math.pi))
+    return tuple(np.concatenate(p) for p in zip(*parts))
+
+
+def _on_circle(discs: Discs, disc: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    return discs.centres[disc] + discs.radii[disc, None] * np.column_stack(
+        [np.cos(angle), np.sin(angle)]
+    )
+
+
+class _Graph:
+    """The tangent visibility graph of one problem (built once, searched twice)."""
+
+    def __init__(self, problem: PlanningProblem, discs: Discs) -> None:
+        lower, upper = _centroid_rectangle(problem)
+        self.discs = discs
+        start, goal = problem.start[:2].astype(float), problem.goal[:2].astype(float)
+        # Tangent points: (disc, angle) per end of each candidate segment.
+        seg_p, seg_q = [], []  # node keys: -1 start, -2 goal, else index into tangent list
+        t_disc, t_angle = [], []
+
+        def add_tangents(disc, angle):
+            base = sum(len(a) for a in t_angle)
+            t_disc.append(np.asarray(disc, int))
+            t_angle.append(np.asarray(angle, float))
+            return base + np.arange(len(disc))
+
+        for key, p in ((-1, start), (-2, goal)):
+            disc, angle = _point_tangents(p, discs)
+            ids = add_tangents(disc, angle)
+            seg_p.append(np.full(len(ids), key))
+            seg_q.append(ids)
+        if len(discs.radii) > 1:
+            di, ai, dj, aj = _bitangents(discs)
+            seg_p.append(add_tangents(di, ai))
+            seg_q.append(add_tangents(dj, aj))
+        seg_p.append(np.array([-1]))
+        seg_q.append(np.array([-2]))
+        t_disc = np.concatenate(t_disc) if t_disc else np.zeros(0, int)
+        t_angle = np.concatenate(t_angle) if t_angle else np.zeros(0)
+        t_point = _on_circle(discs, t_disc, t_angle) if len(t_disc) else np.zeros((0, 2))
+        seg_p, seg_q = np.concatenate(seg_p), np.concatenate(seg_q)
+
+        def coords(keys):
+            out = t_point[np.maximum(keys, 0)] if len(t_point) else np.zeros((len(keys), 2))
+            out = out.copy()
+            out[keys == -1] = start
+            out[keys == -2] = goal
+            return out
+
+        p, q = coords(seg_p), coords(seg_q)
+        ok = _in_rectangle(p, lower, upper) & _in_rectangle(q, lower, upper)
+        ok[ok] = _segment_clear(p[ok], q[ok], discs)
+        seg_p, seg_q, p, q = seg_p[ok], seg_q[ok], p[ok], q[ok]
+
+        # Nodes: 0 start, 1 goal, then every tangent point used by a valid segment.
+        used = np.unique(np.concatenate([seg_p, seg_q]))
+        used = used[used >= 0]
+        node_of = np.full(len(t_disc) + 2, -1)
+        node_of[used] = 2 + np.arange(len(used))
+        node_of[-1], node_of[-2] = 0, 1  # keys -1 and -2 index the end of the array
+        self.points = np.vstack([start, goal, t_point[used]]) if len(used) else np.vstack(
+            [start, goal])
+        self.node_disc = np.concatenate([[-1, -1], t_disc[used]]).astype(int)
+        self.node_angle = np.concatenate([[0.0, 0.0], t_angle[used] % _TWO_PI])
+        edges: list[list[tuple[int, float, Arc | None]]] = [[] for _ in range(len(self.points))]
+        lengths = np.hypot(*(q - p).T)
+        for a, b, w in zip(node_of[seg_p], node_of[seg_q], lengths):
+            edges[a].append((b, float(w), None))
+            edges[b].append((a, float(w), None))
+
+        # Arcs between neighbouring tangent points on each disc.
+        forbidden = _forbidden_intervals(discs, lower, upper)
+        order = np.lexsort((self.node_angle, self.node_disc))
+        order = order[self.node_disc[order] >= 0]
+        for disc in np.unique(self.node_disc[order]):
+            on = order[self.node_disc[order] == disc]
+            if len(on) < 2:
+                continue
+            r = float(discs.radii[disc])
+            for a, b in zip(on, np.roll(on, -1)):
+                sweep = (self.node_angle[b] - self.node_angle[a]) % _TWO_PI
+                if sweep <= 1e-12:  # the same point twice: a zero-length link
+                    edges[a].append((int(b), 0.0, None))
+                    edges[b].append((int(a), 0.0, None))
+                    continue
+                if not _arc_free(float(self.node_angle[a]), sweep, forbidden[disc]):
+                    continue
+                start_a = float(self.node_angle[a])
+                edges[a].append((int(b), r * sweep, Arc(int(disc), start_a, sweep)))
+                edges[b].append((int(a), r * sweep, Arc(int(disc), start_a + sweep, -sweep)))
+        self.edges = edges
+
+    def dijkstra(self, source: int) -> tuple[np.ndarray, np.ndarray, list]:
+        n = len(self.points)
+        dist = np.full(n, np.inf)
+        prev = np.full(n, -1)
+        via: list[Arc | None] = [None] * n
+        dist[source] = 0.0
+        heap = [(0.0, source)]
+        done = np.zeros(n, bool)
+        while heap:
+            d, u = heapq.heappop(heap)
+            if done[u]:
+                continue
+            done[u] = True
+            for v, w, arc in self.edges[u]:
+                nd = d + w
+                if nd < dist[v] - 1e-12:
+                    dist[v], prev[v], via[v] = nd, u, arc
+                    heapq.heappush(heap, (nd, v))
+        return dist, prev, via
+
+    def route(self, nodes: list[int], arcs: list[Arc | None], length: float) -> Route:
+        return Route(float(length), self.points[nodes], tuple(arcs), self.discs)
+
+
+def _walk(prev, via, end: int) -> tuple[list[int], list[Arc | None]]:
+    """Nodes from the search's source to ``end`` and the arcs of the legs."""
+    nodes, arcs = [end], []
+    while prev[nodes[-1]] >= 0:
+        arcs.append(via[nodes[-1]])
+        nodes.append(int(prev[nodes[-1]]))
+    return nodes[::-1], arcs[::-1]
+
+
+def _reverse(arc: Arc | None) -> Arc | None:
+    return None if arc is None else Arc(arc.disc, arc.start + arc.sweep, -arc.sweep)
+
+
+def shortest_routes(
+    problem: PlanningProblem, *, count: int = 1, margin: float = 0.0, spread: float = 0.25
+) -> list[Route]:
+    """Up to ``count`` short routes, the shortest first; ``[]`` when no route exists.
+
+    The first is the exact shortest route. The others are the shortest routes through
+    other graph nodes (start->node->goal, from one search from each end), kept when they
+    pass a different sequence of discs and are at most ``1 + spread`` times longer:
+    alternatives around the trees for seeding, not a ranked list of all routes.
+    """
+    graph = _Graph(problem, formation_discs(problem, margin=margin))
+    from_start, prev_s, via_s = graph.dijkstra(0)
+    if not np.isfinite(from_start[1]):
+        return []
+    nodes, arcs = _walk(prev_s, via_s, 1)
+    routes = [graph.route(nodes, arcs, from_start[1])]
+    if count <= 1:
+        return routes
+    from_goal, prev_g, via_g = graph.dijkstra(1)
+    through = from_start + from_goal
+    seen = {tuple(graph.node_disc[nodes])}
+    for v in np.argsort(through):
+        if len(routes) >= count or through[v] > (1 + spread) * from_start[1]:
+            break
+        head_nodes, head_arcs = _walk(prev_s, via_s, int(v))
+        tail_nodes, tail_arcs = _walk(prev_g, via_g, int(v))
+        all_nodes = head_nodes + tail_nodes[::-1][1:]
+        key = tuple(graph.node_disc[all_nodes])
+        if key in seen:
+            continue
+        seen.add(key)
+        all_arcs = head_arcs + [_reverse(a) for a in tail_arcs[::-1]]
+        routes.append(graph.route(all_nodes, all_arcs, through[v]))
+    return routes
+
+
+def shortest_route(problem: PlanningProblem, *, margin: float = 0.0) -> Route | None:
+    """The shortest horizontal centroid route, or ``None`` when the formation cannot pass."""
+    routes = shortest_routes(problem, margin=margin)
+    return routes[0] if routes else None
+
+
+def lower_bound(problem: PlanningProblem, route: Route | None = None) -> float | None:
+    """No feasible centroid path is shorter than this (metres); ``None``: no route exists.
+
+    The shortest horizontal route, lifted by the start-goal altitude difference
+    (``sqrt(L^2 + dz^2)``, the shortest 3D curve over it; equal to ``L`` when start and
+    goal are at one altitude). Feasible paths keep a clearance strictly greater than the
+    radii, so they are strictly longer; a plan can only approach the bound.
+    """
+    route = route if route is not None else shortest_route(problem)
+    if route is None:
+        return None
+    dz = float(problem.goal[2] - problem.start[2])
+    return math.hypot(route.length, dz)
+
+
+def _arc_vertices(arc: Arc, radius: float, count: int) -> np.ndarray:
+    """``count`` vertices of the polygon circumscribed about the arc, ``(count, 2)``
+    relative to the disc centre: its sides are tangent to the circle of ``radius``."""
+    half = abs(arc.sweep) / (2 * count)
+    angles = arc.start + arc.sweep * (2 * np.arange(count) + 1) / (2 * count)
+    return radius / math.cos(half) * np.column_stack([np.cos(angles), np.sin(angles)])
+
+
+def _excess(radius: float, sweep: float, count: int) -> float:
+    """Extra length of ``count`` circumscribed sides over the arc itself."""
+    if count == 0:
+        return math.inf
+    half = abs(sweep) / (2 * count)
+    if half >= 0.5 * math.pi - 1e-3:
+        return math.inf
+    return radius * (2 * count * math.tan(half) - abs(sweep))
+
+
+def route_waypoints(problem: PlanningProblem, route: Route, waypoints: int) -> np.ndarray:
+    """``route`` as ``waypoints`` centroid waypoints ``(m, 3)`` (the polyline's vertices).
+
+    Each arc becomes vertices of a polygon circumscribed about it, whose sides are
+    tangent to the disc, so the polyline stays outside the discs the route was computed
+    for. Vertices go where they shorten the polyline most (each added vertex to the arc
+    whose excess length it cuts most); a route with more arcs than waypoints keeps the
+    widest arcs and cuts the others' corners. With no arc (a straight route) the
+    waypoints are evenly spaced. Altitudes go linearly from start to goal along the
+    route, inside the bounds.
+    """
+    m = waypoints
+    start, goal = problem.start, problem.goal
+    arcs = [(i, a) for i, a in enumerate(route.arcs) if a is not None and abs(a.sweep) > 1e-9]
+    if not arcs:
+        line = route.polyline()
+        xy = _resample(line, m)
+    else:
+        arcs.sort(key=lambda ia: -abs(ia[1].sweep))
+        arcs = arcs[:m]
+        radii = [float(route.discs.radii[a.disc]) for _, a in arcs]
+        counts = [1] * len(arcs)
+        for _ in range(m - len(arcs)):
+            gains = [
+                _excess(r, a.sweep, k) - _excess(r, a.sweep, k + 1)
+                for (_, a), r, k in zip(arcs, radii, counts)
+            ]
+            gains = [g if not math.isnan(g) else math.inf for g in gains]
+            counts[int(np.argmax(gains))] += 1
+        pieces = sorted(zip(arcs, radii, counts), key=lambda x: x[0][0])
+        xy = np.vstack([
+            route.discs.centres[a.disc] + _arc_vertices(a, r, k) for (_, a), r, k in pieces
+        ])
+    full = np.vstack([start[:2], xy, goal[:2]])
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(full, axis=0).T))])
+    frac = along[1:-1] / max(along[-1], 1e-12)
+    z = start[2] + frac * (goal[2] - start[2])
+    lower, upper = problem.bounds()
+    return np.clip(np.column_stack([xy, z]), lower, upper)
+
+
+def _resample(line: np.ndarray, count: int) -> np.ndarray:
+    """``count`` points evenly spaced strictly inside the polyline ``(P, 2)``."""
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+    s = along[-1] * np.arange(1, count + 1) / (count + 1)
+    return np.column_stack([np.interp(s, along, line[:, 0]), np.interp(s, along, line[:, 1])])
+
+
+def seed_margin(problem: PlanningProblem) -> float:
+    """Radius margin for seed routes (metres): feasibility needs *more* than the radius."""
+    scale = float(problem.radii.max()) if len(problem.radii) else 1.0
+    return 1e-3 * scale + 1e-3
+
+
+def seed_waypoints(problem: PlanningProblem, *, count: int = 4) -> np.ndarray:
+    """Waypoints ``(R, m, 3)`` of up to ``count`` short routes around slightly widened
+    discs (:func:`seed_margin`), shortest first; ``(0, m, 3)`` when no route exists."""
+    routes = shortest_routes(problem, count=count, margin=seed_margin(problem))
+    m = problem.waypoints
+    if not routes:
+        return np.zeros((0, m, 3))
+    return np.stack([route_waypoints(problem, r, m) for r in routes])

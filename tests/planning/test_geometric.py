@@ -1,0 +1,139 @@
+"""Tangent visibility graph: exact lengths by hand, formation inflation, area, no route."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ftlbo_mav.planning.feasibility import violations
+from ftlbo_mav.planning.geometric import (
+    formation_discs,
+    lower_bound,
+    seed_waypoints,
+    shortest_route,
+    shortest_routes,
+)
+from ftlbo_mav.planning.problem import PlanningProblem, problem_from_scenario
+from ftlbo_mav.scenario import load_scenario
+
+from ..conftest import EXAMPLE
+
+
+def field(**overrides) -> PlanningProblem:
+    values = dict(
+        start=np.array([-20.0, 0.0, 4.0]),
+        goal=np.array([20.0, 0.0, 4.0]),
+        offsets=np.zeros((1, 3)),
+        centres=np.array([[0.0, 0.0]]),
+        radii=np.array([5.0]),
+        h_min=2.0,
+        h_max=7.0,
+        area_lower=np.array([-30.0, -30.0]),
+        area_upper=np.array([30.0, 30.0]),
+        waypoints=6,
+        weights=np.ones(3),
+    )
+    values.update(overrides)
+    return PlanningProblem(**values)
+
+
+def around_one_disc(a: float, r: float) -> float:
+    """Start and goal at distance a on either side of a disc of radius r."""
+    return 2 * math.sqrt(a * a - r * r) + r * (math.pi - 2 * math.acos(r / a))
+
+
+def outside_all(problem: PlanningProblem, points: np.ndarray) -> bool:
+    discs = formation_discs(problem)
+    d = np.hypot(*(points[:, None, :] - discs.centres[None]).transpose(2, 0, 1))
+    return bool(np.all(d >= discs.radii - 1e-6))
+
+
+def test_around_one_disc_by_hand():
+    problem = field()
+    route = shortest_route(problem)
+    assert route.length == pytest.approx(around_one_disc(20.0, 5.0), rel=1e-12)
+    assert outside_all(problem, route.polyline())
+
+
+def test_straight_when_nothing_is_in_the_way():
+    problem = field(centres=np.array([[0.0, 15.0]]))
+    assert lower_bound(problem) == pytest.approx(40.0)
+    problem = field(centres=np.zeros((0, 2)), radii=np.zeros(0))
+    assert lower_bound(problem) == pytest.approx(40.0)
+
+
+def test_the_altitude_difference_lifts_the_bound():
+    problem = field(goal=np.array([20.0, 0.0, 7.0]))
+    assert lower_bound(problem) == pytest.approx(math.hypot(around_one_disc(20.0, 5.0), 3.0))
+
+
+def test_every_uavs_offset_inflates_the_obstacle():
+    # Two UAVs 2 m north and south of the centroid: the centroid must clear a capsule of
+    # two discs centred 2 m south and north of the axis. Going north around it is the
+    # one-disc detour around the northern disc seen from points 2 m south of its centre.
+    offsets = np.array([[0.0, 2.0, 0.0], [0.0, -2.0, 0.0]])
+    problem = field(offsets=offsets)
+    discs = formation_discs(problem)
+    assert sorted(map(tuple, discs.centres)) == [(0.0, -2.0), (0.0, 2.0)]
+    route = shortest_route(problem)
+    assert route.length > around_one_disc(20.0, 5.0) + 1.0
+    assert outside_all(problem, route.polyline())
+    # brute-force check of the length: the detour over the top disc
+    a = math.hypot(20.0, 2.0)
+    tangent = math.sqrt(a * a - 25.0)
+    phi = math.atan2(2.0, 20.0)  # start and goal lie phi below the top disc's centre
+    arc = math.pi + 2 * phi - 2 * math.acos(5.0 / a)
+    assert route.length == pytest.approx(2 * tangent + 5.0 * arc, rel=1e-12)
+
+
+def test_the_area_keeps_every_uav_inside():
+    # A corridor 12 m high; the disc leaves 7 m to the south wall, less north: with UAVs
+    # 3 m north and south of the centroid only the south side fits (7 - 3 > 0).
+    problem = field(
+        centres=np.array([[0.0, 1.0]]), radii=np.array([4.0]),
+        area_lower=np.array([-30.0, -10.0]), area_upper=np.array([30.0, 6.0]),
+        offsets=np.array([[0.0, 3.0, 0.0], [0.0, -3.0, 0.0]]),
+    )
+    route = shortest_route(problem)
+    assert route is not None
+    poly = route.polyline()
+    lower, upper = problem.bounds()
+    assert np.all(poly >= lower[0, :2] - 1e-9) and np.all(poly <= upper[0, :2] + 1e-9)
+    assert poly[:, 1].min() < -1.0  # went south
+    # Shrink the corridor: no side fits, no route.
+    blocked = field(
+        centres=np.array([[0.0, 1.0]]), radii=np.array([4.0]),
+        area_lower=np.array([-30.0, -5.0]), area_upper=np.array([30.0, 6.0]),
+        offsets=np.array([[0.0, 3.0, 0.0], [0.0, -3.0, 0.0]]),
+    )
+    assert shortest_route(blocked) is None
+    assert lower_bound(blocked) is None
+
+
+def test_a_row_of_touching_discs_blocks_and_a_gap_lets_through():
+    xs = np.arange(-30.0, 31.0, 6.0)
+    wall = np.column_stack([np.zeros_like(xs), xs])  # a north-south wall at east = 0
+    closed = field(centres=wall, radii=np.full(len(xs), 3.2))
+    assert shortest_route(closed) is None
+    gap = field(centres=wall[np.abs(xs - 6.0) > 1], radii=np.full(len(xs) - 1, 3.2))
+    route = shortest_route(gap)
+    assert route is not None and outside_all(gap, route.polyline())
+
+
+def test_example_bound_routes_and_seeds():
+    problem = problem_from_scenario(load_scenario(EXAMPLE))
+    routes = shortest_routes(problem, count=4)
+    bound = lower_bound(problem, routes[0])
+    straight = float(np.linalg.norm(problem.goal - problem.start))
+    assert straight < bound < 1.1 * straight
+    assert [r.length for r in routes] == sorted(r.length for r in routes)
+    for route in routes:
+        assert outside_all(problem, route.polyline())
+    seeds = seed_waypoints(problem)
+    assert seeds.shape[1:] == (problem.waypoints, 3)
+    best = problem.full_paths(seeds[:1])[0]
+    assert violations(problem, best) == []  # the shortest seed route is flyable
+    length = np.linalg.norm(np.diff(best, axis=0), axis=1).sum()
+    assert bound < length < 1.001 * bound

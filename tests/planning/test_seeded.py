@@ -1,0 +1,99 @@
+"""The seeded FTLBO default planner: near the bound, feasible, deterministic, no route."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ftlbo_mav.planning.optimizers import DEFAULT_ALGORITHM, OPTIMIZERS, Objective
+from ftlbo_mav.planning.optimizers.seeded import ftlbo_seeded, seeded_class
+from ftlbo_mav.planning.planner import NO_ROUTE, plan
+from ftlbo_mav.scenario import ALGORITHMS, PlannerSettings, load_scenario, parse_scenario
+
+from ..conftest import EXAMPLE, SMALL
+
+
+def test_the_seeded_planner_is_the_default_and_every_algorithm_is_accepted():
+    assert PlannerSettings().algorithm == DEFAULT_ALGORITHM == "ftlbo-seeded"
+    assert set(ALGORITHMS) == set(OPTIMIZERS)
+    assert parse_scenario(SMALL).planner.algorithm == DEFAULT_ALGORITHM
+
+
+def test_seeded_class_keeps_the_shortest_route_and_perturbs_copies():
+    seeds = np.arange(12.0).reshape(2, 6)
+    students = seeded_class(seeds, 6, np.random.default_rng(0))
+    assert np.array_equal(students[0], seeds[0])
+    assert np.allclose(students[1:3], seeds[0], atol=2.0) and not np.array_equal(
+        students[1], seeds[0])
+    assert np.allclose(students[3:], seeds[1], atol=2.0)
+
+
+def test_same_seed_same_result_and_plain_ftlbo_without_seeds():
+    def objective():
+        return Objective(lambda x: ((x - 1) ** 2).sum(axis=1), -np.ones(6) * 5, np.ones(6) * 5)
+
+    seeds = np.ones((1, 6)) * 0.9
+    a, b = (ftlbo_seeded(objective(), students=10, iterations=20, rng=np.random.default_rng(2),
+                         seeds=seeds) for _ in range(2))
+    assert np.array_equal(a.x, b.x) and np.array_equal(a.history, b.history)
+    assert a.history[0] <= 6 * 0.01 + 1e-12  # the seed is in the first class
+    plain = ftlbo_seeded(objective(), students=10, iterations=20, rng=np.random.default_rng(2))
+    assert plain.history[0] > a.history[0]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_example_default_plan_is_feasible_and_within_one_percent_of_the_bound(seed):
+    scenario = load_scenario(EXAMPLE)
+    result = plan(scenario, algorithm=DEFAULT_ALGORITHM, seed=seed)
+    assert result.feasible, result.violations
+    assert result.lower_bound_length is not None
+    assert 1.0 < result.length_ratio < 1.01
+    assert result.evaluations <= 100 + 150 * 201  # early stop: never more than the budget
+    assert result.history.shape == (150,)
+
+
+def test_same_seed_same_plan():
+    scenario = load_scenario(EXAMPLE)
+    a, b = (plan(scenario, algorithm=DEFAULT_ALGORITHM, seed=4, iterations=40) for _ in range(2))
+    assert np.array_equal(a.centroid, b.centroid)
+
+
+BLOCKED = SMALL.replace("radius = 3.0", "radius = 27.5")  # covers the area north-south
+
+
+def test_no_route_is_said_in_one_line_before_optimizing():
+    scenario = parse_scenario(BLOCKED)
+    lines = []
+    result = plan(scenario, notice=lines.append)
+    assert lines == [NO_ROUTE] and "\n" not in NO_ROUTE
+    assert result.lower_bound_length is None and result.length_ratio is None
+
+
+@pytest.mark.slow
+def test_example_thirty_seeds_median_within_one_percent_all_feasible():
+    scenario = load_scenario(EXAMPLE)
+    plans = [plan(scenario, algorithm=DEFAULT_ALGORITHM, seed=s) for s in range(30)]
+    assert all(p.feasible for p in plans)
+    assert np.median([p.length_ratio for p in plans]) < 1.01
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("trial", range(6))
+def test_random_fields_no_feasible_plan_beats_the_bound(trial):
+    rng = np.random.default_rng(100 + trial)
+    trees = "\n".join(
+        f"[[obstacles]]\nlat = {12.2331044 + rng.uniform(0.00005, 0.0004):.7f}\n"
+        f"lon = {109.1144313 + rng.uniform(0.0001, 0.0007):.7f}\nradius = {rng.uniform(1, 3):.2f}"
+        for _ in range(6)
+    )
+    text = SMALL.split("[[obstacles]]")[0] + trees + "\n[planner]\nseed = 0\n"
+    try:
+        scenario = parse_scenario(text)
+    except Exception:  # a tree on the start or goal: not a valid field
+        pytest.skip("random tree on the start or goal")
+    for algorithm in ("ftlbo", DEFAULT_ALGORITHM):
+        result = plan(scenario, algorithm=algorithm, iterations=60)
+        if result.lower_bound_length is None:
+            assert not result.feasible
+        elif result.feasible:
+            assert result.cost.length > result.lower_bound_length
