@@ -100,7 +100,7 @@ class MissionServer:
         if getattr(msg, "mission_type", MISSION) != MISSION:
             # only the waypoint protocol is emulated (GCS_MAVLINK: no protocol -> UNSUPPORTED)
             return self._ack(sender, R.MAV_MISSION_UNSUPPORTED)
-        return _HANDLERS[kind](self, msg, sender, now)
+        return getattr(self, _HANDLERS[kind])(msg, sender, now)
 
     def _count(self, msg, sender, now) -> list:  # handle_mission_count
         if self.receiving and sender != self.dest:
@@ -189,11 +189,11 @@ class MissionServer:
 
 
 _HANDLERS = {
-    "MISSION_COUNT": MissionServer._count,
-    "MISSION_ITEM_INT": MissionServer._item,
-    "MISSION_ITEM": MissionServer._item,
-    "MISSION_REQUEST_LIST": MissionServer._request_list,
-    "MISSION_REQUEST_INT": MissionServer._read,
-    "MISSION_REQUEST": MissionServer._read,
-    "MISSION_CLEAR_ALL": MissionServer._clear,
+    "MISSION_COUNT": "_count",
+    "MISSION_ITEM_INT": "_item",
+    "MISSION_ITEM": "_item",
+    "MISSION_REQUEST_LIST": "_request_list",
+    "MISSION_REQUEST_INT": "_read",
+    "MISSION_REQUEST": "_read",
+    "MISSION_CLEAR_ALL": "_clear",
 }

@@ -1,0 +1,59 @@
+"""Items <-> MISSION_ITEM_INT and the comparison behind `verified`."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from hypothesis import given
+from hypothesis import strategies as st
+
+from ftlbo_mav.link.codec import (
+    decode_item,
+    encode_item,
+    item_differences,
+    mission_differences,
+    same_frame,
+)
+from ftlbo_mav.mission.items import MissionItem
+from tests.link.support import make_mission
+
+lat = st.floats(-90, 90, allow_nan=False)
+lon = st.floats(-180, 180, allow_nan=False)
+alt = st.floats(-500, 10_000, allow_nan=False)
+
+
+@given(lat, lon, alt, st.sampled_from([0, 3, 6, 10]), st.integers(0, 65535))
+def test_encode_decode_round_trip_compares_equal(la, lo, al, frame, command):
+    item = MissionItem(seq=3, command=command, frame=frame, lat_deg=la, lon_deg=lo, alt_m=al,
+                       param1=1.5, param2=-2.0, param3=0.25, param4=float("nan"))
+    msg = encode_item(item, target_system=1, target_component=1)
+    assert msg.x == round(la * 1e7) and msg.y == round(lo * 1e7)
+    back = decode_item(msg)
+    assert item_differences(item, back) == []
+
+
+def test_coordinates_compare_after_the_1e7_integer_encoding():
+    item = MissionItem(seq=1, command=16, lat_deg=12.23320990, lon_deg=109.11453270)
+    assert item_differences(item, replace(item, lat_deg=12.2332099049)) == []
+    (diff,) = item_differences(item, replace(item, lat_deg=12.2332100))
+    assert diff.startswith("lat 12.2332100, expected 12.2332099")
+
+
+def test_frame_6_equals_frame_3_and_5_equals_0_but_not_across():
+    assert same_frame(6, 3) and same_frame(3, 6) and same_frame(5, 0) and same_frame(11, 10)
+    assert not same_frame(3, 0) and not same_frame(6, 10)
+
+
+def test_altitude_is_compared_to_the_centimetre_and_params_as_float32():
+    item = MissionItem(seq=1, command=16, alt_m=20.37, param2=0.1)
+    assert item_differences(item, replace(item, alt_m=20.37499, param2=0.10000001)) == []
+    assert item_differences(item, replace(item, alt_m=20.40)) == ["alt 20.40 m, expected 20.37 m"]
+
+
+def test_item_zero_is_not_compared_but_length_and_every_other_item_are():
+    items = make_mission()
+    vehicle_home = replace(items[0], lat_deg=-35.0, lon_deg=149.0, alt_m=584.0)
+    assert mission_differences(items, [vehicle_home] + items[1:]) == []
+    assert mission_differences(items, items[:10]) == ["read back 10 items, sent 15"]
+    wrong = items[:4] + [replace(items[4], command=21)] + items[5:]
+    assert mission_differences(items, wrong) == ["item 4: command 21, expected 16"]
