@@ -65,7 +65,9 @@ def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
 @click.option("--iterations", type=click.IntRange(min=1), help="Iterations L.")
 @click.option("--students", type=click.IntRange(min=4), help="Class size (population).")
 @click.option("--waypoints", type=click.IntRange(min=1), help="Free waypoints m per path.")
-@click.option("--algorithm", type=click.Choice(sorted(OPTIMIZERS)), help="Optimizer.")
+@click.option("--algorithm", type=click.Choice(sorted(OPTIMIZERS)),
+              help="Optimizer (default: the scenario's [planner] algorithm, else "
+                   "ftlbo-seeded; ftlbo is the paper's).")
 @click.option("--allow-infeasible", is_flag=True,
               help="Write mission files even when the best plan violates a constraint.")
 @click.option("--formats", callback=_parse_formats, metavar="LIST",
@@ -87,7 +89,8 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
             bar.update(it - bar.pos)
 
         result = plan_scenario(scn, seed=seed, iterations=iterations, students=students,
-                               waypoints=waypoints, algorithm=algorithm, progress=progress)
+                               waypoints=waypoints, algorithm=algorithm, progress=progress,
+                               notice=lambda line: click.echo(line, err=True))
     paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible, formats=formats)
     if make_plots:
         from .plots import write_figures  # matplotlib only when asked: a faster start
@@ -113,6 +116,11 @@ def format_summary(result) -> str:
         f"{s.algorithm} seed {s.seed}: {status}; cost {c.total:.2f} = length {c.length:.2f} m"
         f" + safety {c.safety:.3f} + task {c.task:.3f}; {result.evaluations} evaluations"
         f" in {result.seconds:.2f} s"
+        + (
+            f"; lower bound {result.lower_bound_length:.2f} m (length x{result.length_ratio:.4f})"
+            if result.lower_bound_length is not None
+            else "; no route: no lower bound"
+        )
     )
 
 
