@@ -83,6 +83,17 @@ def _obstacles(plan: Plan) -> tuple[np.ndarray, np.ndarray]:
     return plan.scenario.obstacles_enu()
 
 
+def _extent(plan: Plan, *, margin: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Horizontal limits ``(2,)``, ``(2,)``: the area and every obstacle with its clearance."""
+    lower, upper = plan.problem.area_lower.copy(), plan.problem.area_upper.copy()
+    centres, radii = _obstacles(plan)
+    if len(radii):
+        reach = (radii + plan.scenario.clearance_m)[:, None]
+        lower = np.minimum(lower, (centres - reach).min(axis=0))
+        upper = np.maximum(upper, (centres + reach).max(axis=0))
+    return lower - margin, upper + margin
+
+
 # --------------------------------------------------------------------------- 3D
 
 
@@ -149,11 +160,11 @@ def figure_ground(plan: Plan) -> Figure:
     """Ground projection (x-y): area, obstacles with clearance, paths, formation."""
     p = plan.problem
     lower, upper = p.area_lower, p.area_upper
-    margin = 2.0
-    # Equal axes: size the figure to the area so that it fills the figure; the legend
-    # takes about 2.6 in on the right, titles and labels about 1.4 in.
-    aspect = (upper[1] - lower[1] + 2 * margin) / (upper[0] - lower[0] + 2 * margin)
-    fig = _new_figure(10.0, float(np.clip(7.2 * aspect + 1.4, 4.0, 11.0)))
+    view_lo, view_hi = _extent(plan)
+    # Equal axes: size the figure to the view so that the map fills it; the legend
+    # takes about 3 in on the right, the y labels 0.8 in, titles and labels 1.5 in.
+    aspect = (view_hi[1] - view_lo[1]) / (view_hi[0] - view_lo[0])
+    fig = _new_figure(10.0, float(np.clip(6.2 * aspect + 1.5, 4.0, 11.0)))
     ax = fig.add_subplot()
     ax.add_patch(Rectangle(lower, *(upper - lower), facecolor=AREA_COLOUR, edgecolor="0.3",
                            linewidth=1.2, zorder=0))
@@ -169,15 +180,15 @@ def figure_ground(plan: Plan) -> Figure:
                     xytext=(0, 2), ha="center", va="bottom", fontsize=8, color=OBSTACLE_COLOUR,
                     zorder=6, bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
     _paths_2d(ax, plan, 0, 1)
-    ax.set_xlim(lower[0] - margin, upper[0] + margin)
-    ax.set_ylim(lower[1] - margin, upper[1] + margin)
+    ax.set_xlim(view_lo[0], view_hi[0])
+    ax.set_ylim(view_lo[1], view_hi[1])
     ax.set_aspect("equal")
     ax.set_xlabel("east (m)")
     ax.set_ylabel("north (m)")
     ax.grid(True, linewidth=0.4, alpha=0.5)
     ax.set_title(_title(plan, "ground projection (x-y)"), color=_status_colour(plan))
-    ax.legend(handles=_legend_handles(plan, ground=True), loc="upper left", fontsize=8,
-              bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+    fig.legend(handles=_legend_handles(plan, ground=True), loc="outside right upper",
+               fontsize=8)
     return fig
 
 
@@ -208,8 +219,8 @@ def figure_vertical(plan: Plan) -> Figure:
     p = plan.problem
     centres, radii = _obstacles(plan)
     top = p.h_max + 1.5
+    view_lo, view_hi = _extent(plan)
     for ax, i, label in ((axes[0], 0, "east"), (axes[1], 1, "north")):
-        lo, hi = p.area_lower[i], p.area_upper[i]
         for k, (c, r) in enumerate(zip(centres, radii)):
             ax.add_patch(Rectangle((c[i] - r, 0.0), 2 * r, top, facecolor=OBSTACLE_COLOUR,
                                    alpha=0.35, edgecolor="none", zorder=1))
@@ -223,7 +234,7 @@ def figure_vertical(plan: Plan) -> Figure:
                         xytext=(4, 0), textcoords="offset points", va="center", fontsize=8,
                         color="#c00000")
         _paths_2d(ax, plan, i, 2)
-        ax.set_xlim(lo - 2.0, hi + 2.0)
+        ax.set_xlim(view_lo[i], view_hi[i])
         ax.set_ylim(0.0, top)
         ax.set_xlabel(f"{label} (m)")
         ax.set_ylabel("up (m)")
@@ -232,7 +243,7 @@ def figure_vertical(plan: Plan) -> Figure:
                      f"{'south' if i == 0 else 'east'}", fontsize=10)
     fig.suptitle(_title(plan, "vertical projections"), color=_status_colour(plan))
     axes[0].legend(handles=_legend_handles(plan, ground=False), loc="upper left", fontsize=8,
-                   bbox_to_anchor=(1.08, 1.0), borderaxespad=0)
+                   bbox_to_anchor=(1.13, 1.0), borderaxespad=0)
     return fig
 
 
@@ -256,6 +267,7 @@ def figure_convergence(plan: Plan) -> Figure:
     else:
         ax.text(0.5, 0.5, "no feasible path in any iteration", transform=ax.transAxes,
                 ha="center", fontsize=11, color="#c00000")
+        ax.set_yticks([])
     if not finite.all():
         n = int((~finite).sum())
         ax.text(0.98, 0.95, f"{n} iteration{'s' if n > 1 else ''} without a feasible path "

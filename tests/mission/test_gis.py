@@ -293,3 +293,12 @@ def test_obstacle_from_file_is_checked_against_start(tmp_path):
     path.write_text('obstacles_file = "t.geojson"\n' + SMALL)
     with pytest.raises(ScenarioError, match=r"start: puts UAV 1 .* obstacles\[1\]"):
         load_scenario(path)
+
+
+def test_shipped_gis_example_has_the_same_trees_as_the_toml_example(example_path):
+    toml = load_scenario(example_path)
+    gis = load_scenario(example_path.with_name("nha-trang-orchard-gis.toml"))
+    assert gis.obstacles_enu()[0].shape == toml.obstacles_enu()[0].shape == (7, 2)
+    for got, ref in zip(gis.obstacles, toml.obstacles, strict=True):
+        assert abs(got.lat_deg - ref.lat_deg) <= DEG and abs(got.lon_deg - ref.lon_deg) <= DEG
+        assert got.radius_m == pytest.approx(ref.radius_m, abs=1e-3)
