@@ -99,7 +99,7 @@ def _extent(plan: Plan, *, margin: float = 2.0) -> tuple[np.ndarray, np.ndarray]
 
 def figure_3d(plan: Plan) -> Figure:
     """3D view: cylinders, the centroid and every UAV path, the formation at each waypoint."""
-    fig = _new_figure(10.0, 7.5)
+    fig = _new_figure(10.0, 7.0)
     ax = fig.add_subplot(projection="3d")
     p = plan.problem
     top = p.h_max + 1.0
@@ -119,11 +119,12 @@ def figure_3d(plan: Plan) -> Figure:
     x0, y0, x1, y1 = lower[0], lower[1], upper[0], upper[1]
     ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], 0.0, color="0.3", linewidth=1.0)
     _paths_3d(ax, plan)
-    ax.set_xlim(lower[0], upper[0])
-    ax.set_ylim(lower[1], upper[1])
+    view_lo, view_hi = _extent(plan, margin=0.0)
+    ax.set_xlim(view_lo[0], view_hi[0])
+    ax.set_ylim(view_lo[1], view_hi[1])
     ax.set_zlim(0, top)
-    span = max(upper - lower)
-    ax.set_box_aspect((upper[0] - lower[0], upper[1] - lower[1], 0.3 * span), zoom=0.92)
+    size = view_hi - view_lo
+    ax.set_box_aspect((size[0], size[1], 0.3 * max(size)), zoom=0.92)
     ax.view_init(elev=28, azim=-62)
     ax.set_xlabel("east (m)")
     ax.set_ylabel("north (m)")

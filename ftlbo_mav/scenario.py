@@ -320,7 +320,9 @@ def parse_scenario(text: str, *, source: str = "<scenario>", base_dir: Path | No
         source=source,
     )
     if obstacles_file:
-        # Obstacles from a GeoJSON file follow the [[obstacles]] tables, in file order.
+        # obstacles_file (optional): a GeoJSON file of obstacles, relative to the scenario
+        # file: Points with a `radius` in metres, Polygons -> their smallest enclosing
+        # circle (docs/outputs.md). They follow the [[obstacles]] tables, in file order.
         path = (base_dir if base_dir is not None else Path(".")) / obstacles_file
         extra = read_obstacle_geojson(path, frame=scenario.frame)
         scenario = replace(scenario, obstacles=scenario.obstacles + extra)
