@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from ..errors import FtlboError
+from ..errors import FtlboError, MissionFileError
 from ..mission.waypoints import read_waypoints, write_waypoints
 from .endpoints import BadInput, LinkError, default_urls, describe_missing, discover, open_links
 from .endpoints import parse_sysids
@@ -137,8 +137,10 @@ def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, di
     if len(files) != len(sysids):
         raise BadInput(f"{mission_dir} holds {len(files)} missions (uav1..uav{len(files)}) but "
                        f"--sysid {sysid_text} names {len(sysids)} vehicles")
-    # every file is read before any vehicle is touched
-    missions = [tuple(read_waypoints(f)) for f in files]
+    try:  # every file is read before any vehicle is touched
+        missions = [tuple(read_waypoints(f)) for f in files]
+    except MissionFileError as exc:
+        raise BadInput(f"{exc}; no vehicle was contacted") from None
     key = load_key(signing_key) if signing_key else None
     urls = _urls(connect) or default_urls(len(sysids))
     assignments = [Assignment(f.stem, s, m) for f, s, m in zip(files, sysids, missions)]

@@ -1,0 +1,63 @@
+"""One test code path, two back ends: the emulator, or ArduPilot SITL when ARDUPILOT_SITL
+names an ``arducopter`` binary. Tests ask for vehicles through :func:`vehicles`; the ones
+that need fault injection say so and are skipped on SITL.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import pytest
+
+from ftlbo_mav.sim.faults import Faults
+from ftlbo_mav.sim.homes import default_homes
+from ftlbo_mav.sim.server import Simulator
+from ftlbo_mav.sim.vehicle import VehicleOptions
+
+SITL_BINARY = os.environ.get("ARDUPILOT_SITL")
+BACKEND = "sitl" if SITL_BINARY else "emulator"
+FAST = VehicleOptions(heartbeat_s=0.2)  # quicker discovery; protocol timings stay ArduPilot's
+
+
+@dataclass
+class Fleet:
+    """Running vehicles: ``urls[i]`` reaches system id i+1; ``sim`` is the emulator, if any."""
+
+    urls: list[str]
+    sim: Simulator | None = None
+    udp_url: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def missions(self) -> list[list]:
+        """What each emulated vehicle stores (emulator only)."""
+        return self.sim.call(lambda: [list(v.missions.items) for v in self.sim.vehicles])
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextmanager
+def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
+             shared_link: bool = False, seed: int = 0):
+    """``count`` vehicles, system ids 1..count, ready for uploads."""
+    emulator_only = faults is not None or options is not None or signing_key or shared_link
+    if BACKEND == "sitl":
+        if emulator_only:
+            pytest.skip("needs the emulator's fault injection")
+        from sitl import SitlSwarm
+
+        with SitlSwarm(binary=SITL_BINARY, homes=default_homes(count)) as swarm:
+            yield Fleet(urls=swarm.urls)
+        return
+    udp_out = ("127.0.0.1", free_udp_port()) if shared_link else None
+    with Simulator(homes=default_homes(count), base_port=0, udp_out=udp_out,
+                   faults=faults if faults is not None else Faults(),
+                   options=options if options is not None else FAST,
+                   signing_key=signing_key, seed=seed) as sim:
+        yield Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url)

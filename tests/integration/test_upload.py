@@ -1,0 +1,168 @@
+"""Issue 4's acceptance tests: `ftlbo-mav upload` and `download` against real links.
+
+Run against the emulator, or ArduPilot SITL when ARDUPILOT_SITL is set (tests that need
+fault injection are skipped there). All addresses are loopback.
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+import pytest
+from click.testing import CliRunner
+
+from ftlbo_mav.cli import main
+from ftlbo_mav.link.codec import mission_differences
+from ftlbo_mav.mission.waypoints import read_waypoints
+from ftlbo_mav.sim.faults import Faults
+from ftlbo_mav.sim.mission_server import MissionServerOptions
+from ftlbo_mav.sim.vehicle import VehicleOptions
+from tests.integration.fleet import FAST, vehicles
+from tests.link.support import write_missions
+
+pytestmark = pytest.mark.sitl
+
+
+def run(*args):
+    result = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+    return result.exit_code, result.output
+
+
+def connect(urls):
+    return [x for u in urls for x in ("--connect", u)]
+
+
+def verified_lines(output):
+    return [line for line in output.splitlines() if line.endswith("verified (15 items)")]
+
+
+def test_three_vehicles_three_missions_one_command(tmp_path):
+    missions = write_missions(tmp_path, 3)
+    with vehicles(3) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..3", *connect(fleet.urls))
+        assert code == 0, out
+        assert len(verified_lines(out)) == 3 and "3/3 vehicles verified" in out
+        for k, url in enumerate(fleet.urls):
+            dest = tmp_path / f"back{k + 1}.waypoints"
+            code, out = run("download", "--sysid", k + 1, "--connect", url, "-o", dest)
+            assert code == 0, out
+            assert mission_differences(missions[k], read_waypoints(dest)) == []
+
+
+def test_the_same_over_one_shared_link(tmp_path):
+    write_missions(tmp_path, 3)
+    with vehicles(3, shared_link=True) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..3", "--connect", fleet.udp_url)
+        assert code == 0, out
+        assert len(verified_lines(out)) == 3
+
+
+def test_thirty_percent_loss_each_way_duplicates_and_reordering(tmp_path):
+    write_missions(tmp_path, 3)
+    faults = Faults(loss_up=0.3, loss_down=0.3, duplicate=0.05, reorder=0.05)
+    with vehicles(3, faults=faults, seed=11) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..3", *connect(fleet.urls))
+        assert code == 0, out
+        assert len(verified_lines(out)) == 3
+
+
+def test_a_vehicle_that_never_answers_is_named_and_the_others_verified(tmp_path):
+    write_missions(tmp_path, 3)
+    faults = [Faults(), Faults(silent=True), Faults()]
+    with vehicles(3, faults=faults) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..3", "--discover-timeout", "1",
+                        *connect(fleet.urls))
+    assert code == 1
+    assert "uav2 -> sysid 2: FAILED: system id 2: no HEARTBEAT within 1 s" in out
+    assert len(verified_lines(out)) == 2 and "2/3 vehicles verified" in out
+
+
+def test_a_vehicle_that_stops_answering_the_mission_protocol(tmp_path):
+    write_missions(tmp_path, 3)
+    faults = [Faults(), Faults(), Faults(mute=True)]
+    with vehicles(3, faults=faults) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..3", "--timeout", "0.3",
+                        "--retries", "2", *connect(fleet.urls))
+    assert code == 1
+    assert ("uav3 -> sysid 3: FAILED: upload failed: no answer to MISSION_COUNT within 0.9 s"
+            in out)
+    assert len(verified_lines(out)) == 2
+
+
+def test_a_vehicle_that_rejects_with_no_space(tmp_path):
+    write_missions(tmp_path, 2)
+    small = VehicleOptions(heartbeat_s=FAST.heartbeat_s,
+                           mission=MissionServerOptions(capacity=10))
+    with vehicles(2, options=[FAST, small]) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1,2", "--ready-timeout", "0.5",
+                        *connect(fleet.urls))
+        assert fleet.missions()[1] == []
+    assert code == 1
+    assert "uav2 -> sysid 2: FAILED: upload failed: the vehicle has no space" in out
+    assert "MAV_MISSION_NO_SPACE" in out and len(verified_lines(out)) == 1
+
+
+def test_no_space_while_booting_is_waited_out(tmp_path):
+    write_missions(tmp_path, 2)
+    booting = VehicleOptions(heartbeat_s=FAST.heartbeat_s,
+                             mission=MissionServerOptions(boot_no_space_s=1.0))
+    with vehicles(2, options=booting) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..2", *connect(fleet.urls))
+    assert code == 0, out
+
+
+@pytest.fixture
+def keys(tmp_path):
+    right, wrong = tmp_path / "right.key", tmp_path / "wrong.key"
+    right.write_text("orchard survey key\n")
+    wrong.write_text("not the key\n")
+    return right, wrong, hashlib.sha256(b"orchard survey key").digest()
+
+
+def test_signing_required_accepts_the_signed_upload(tmp_path, keys):
+    right, _wrong, secret = keys
+    write_missions(tmp_path, 2)
+    with vehicles(2, signing_key=secret) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..2", "--signing-key", right,
+                        *connect(fleet.urls))
+    assert code == 0, out
+
+
+@pytest.mark.parametrize("which", ["wrong", "unsigned"])
+def test_signing_required_ignores_wrong_or_missing_signatures(tmp_path, keys, which):
+    right, wrong, secret = keys
+    write_missions(tmp_path, 2)
+    key_args = ["--signing-key", wrong] if which == "wrong" else []
+    with vehicles(2, signing_key=secret) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..2", "--timeout", "0.3",
+                        "--retries", "2", *key_args, *connect(fleet.urls))
+        assert fleet.missions() == [[], []]
+    assert code == 1
+    for sysid in (1, 2):
+        assert (f"uav{sysid} -> sysid {sysid}: FAILED: upload failed: no answer to "
+                f"MISSION_COUNT within 0.9 s") in out
+    assert "signing key" in out
+
+
+def test_a_mission_file_that_does_not_parse_stops_before_any_vehicle(tmp_path):
+    write_missions(tmp_path, 3)
+    (tmp_path / "uav2.waypoints").write_text("QGC WPL 110\n0\t1\t0\t16\tnot a number\n")
+    # nothing listens on the given port: any attempt to connect would be a different error
+    code, out = run("upload", tmp_path, "--sysid", "1..3", "--connect", "tcp:127.0.0.1:9")
+    assert code == 2
+    assert out.strip().startswith("error:") and "uav2.waypoints: line 2" in out
+
+
+def test_file_count_must_match_the_ids(tmp_path):
+    write_missions(tmp_path, 3)
+    code, out = run("upload", tmp_path, "--sysid", "1,2", "--connect", "tcp:127.0.0.1:9")
+    assert code == 2 and "holds 3 missions" in out and "names 2 vehicles" in out
+
+
+def test_nothing_goes_to_ids_not_asked_for(tmp_path):
+    write_missions(tmp_path, 2)
+    with vehicles(3, shared_link=True) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1,3", "--connect", fleet.udp_url)
+        stored = fleet.missions()
+    assert code == 0, out
+    assert len(stored[0]) == 15 and stored[1] == [] and len(stored[2]) == 15
