@@ -135,7 +135,8 @@ def _area_ring(plan: Plan) -> list[tuple[float, float]]:
     s = plan.scenario
     lat = sorted([s.corner_a.lat_deg, s.corner_b.lat_deg])
     lon = sorted([s.corner_a.lon_deg, s.corner_b.lon_deg])
-    return [(lat[0], lon[0]), (lat[0], lon[1]), (lat[1], lon[1]), (lat[1], lon[0]), (lat[0], lon[0])]
+    corners = [(lat[0], lon[0]), (lat[0], lon[1]), (lat[1], lon[1]), (lat[1], lon[0])]
+    return corners + corners[:1]
 
 
 def _obstacle_rings(plan: Plan) -> list[np.ndarray]:
@@ -160,7 +161,8 @@ def geojson_document(plan: Plan, missions: Sequence[UavMission]) -> dict:
     s = plan.scenario
     features = [
         _feature(
-            {"type": "Polygon", "coordinates": [[_position(lat, lon) for lat, lon in _area_ring(plan)]]},
+            {"type": "Polygon",
+             "coordinates": [[_position(lat, lon) for lat, lon in _area_ring(plan)]]},
             kind="area",
             name=s.name,
             min_altitude_m=s.min_altitude_m,
@@ -256,7 +258,9 @@ def _kml_line(folder: ET.Element, name: str, style: str, rows) -> None:
     _sub(line, "coordinates", _kml_coords(rows))
 
 
-def _kml_polygon(folder: ET.Element, name: str, style: str, rows, *, height_m: float | None) -> None:
+def _kml_polygon(
+    folder: ET.Element, name: str, style: str, rows, *, height_m: float | None
+) -> None:
     """A ground polygon, or with ``height_m`` a prism extruded down to the ground."""
     pm = _sub(folder, "Placemark")
     _sub(pm, "name", name)
@@ -343,7 +347,8 @@ def parse_obstacle_geojson(text: str, *, frame: LocalFrame, source: str) -> tupl
     if crs is not None:
         name = crs.get("properties", {}).get("name") if isinstance(crs, dict) else None
         if name not in _WGS84_CRS:
-            raise ScenarioError(source, "crs", f"must be WGS84 longitude/latitude (CRS84), got {name!r}")
+            raise ScenarioError(
+                source, "crs", f"must be WGS84 longitude/latitude (CRS84), got {name!r}")
     if doc.get("type") == "FeatureCollection":
         features = doc.get("features")
         if not isinstance(features, list):

@@ -76,7 +76,9 @@ def _simple_item(it: MissionItem) -> dict:
         "params": [it.param1, it.param2, it.param3, it.param4, it.lat_deg, it.lon_deg, it.alt_m],
     }
     if it.command in _NAV_COMMANDS:
-        item.update(Altitude=it.alt_m, AltitudeMode=ALTITUDE_MODE_RELATIVE, AMSLAltAboveTerrain=None)
+        item.update(
+            Altitude=it.alt_m, AltitudeMode=ALTITUDE_MODE_RELATIVE, AMSLAltAboveTerrain=None
+        )
     return item
 
 
