@@ -143,3 +143,42 @@ from .link.commands import download, sim, upload  # noqa: E402
 main.add_command(upload)
 main.add_command(download)
 main.add_command(sim)
+
+
+# The comparison of algorithms over seeds (ftlbo_mav/compare.py).
+@main.command("compare")
+@click.argument("scenario", type=click.Path(dir_okay=False, path_type=str))
+@click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
+              help="Folder for table.md, table.csv, compare.json, convergence.png.")
+@click.option("--runs", type=click.IntRange(min=1), default=30, show_default=True,
+              help="Seeds 0..RUNS-1 per algorithm.")
+@click.option("--algorithms", default="ftlbo,tlbo,ga,theta-pso,ftlbo-seeded", show_default=True,
+              help="Comma-separated algorithm names (ftlbo,tlbo,ga,theta-pso is the paper's set).")
+@click.option("--processes", type=click.IntRange(min=1),
+              help="Worker processes (default: the number of cores).")
+@click.option("--iterations", type=click.IntRange(min=1), help="Iterations L (default: scenario's).")
+@click.option("--students", type=click.IntRange(min=4), help="Class size (default: scenario's).")
+@click.option("--waypoints", type=click.IntRange(min=1), help="Waypoints m (default: scenario's).")
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
+@user_errors
+def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, students,
+                    waypoints, quiet):
+    """Run several algorithms over many seeds on SCENARIO: table, figure and JSON."""
+    from .compare import compare, table_markdown, write_comparison
+    from .planning.optimizers import OPTIMIZERS as known
+
+    names = [a.strip() for a in algorithms.split(",") if a.strip()]
+    bad = [a for a in names if a not in known]
+    if bad or not names:
+        raise click.BadParameter(
+            f"unknown algorithm {bad[0]!r}; known: {', '.join(known)}" if bad
+            else "give at least one algorithm", param_hint="--algorithms")
+    scn = load_scenario(scenario)
+    with click.progressbar(length=runs * len(names), label="comparing", file=sys.stderr,
+                           hidden=quiet) as bar:
+        result = compare(scn, algorithms=names, runs=runs, processes=processes,
+                         iterations=iterations, students=students, waypoints=waypoints,
+                         progress=lambda _run: bar.update(1))
+    click.echo(table_markdown(result), nl=False)
+    for path in write_comparison(result, out_dir):
+        click.echo(f"  wrote {path}")
