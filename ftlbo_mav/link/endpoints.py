@@ -137,6 +137,8 @@ class Link:
         self._subs_lock = threading.Lock()
         self._queues: dict[int, list[queue.SimpleQueue]] = {}
         self.heartbeats: dict[int, Heartbeat] = {}
+        # per system id: last GPS fix type and whether pre-arm checks pass
+        self.readiness: dict[int, dict] = {}
         self._heard = threading.Condition()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
@@ -210,6 +212,11 @@ class Link:
                     base_mode=msg.base_mode, system_status=msg.system_status,
                     received_at=time.monotonic())
                 self._heard.notify_all()
+        elif kind == "GPS_RAW_INT":
+            self.readiness.setdefault(src, {})["gps_fix"] = msg.fix_type
+        elif kind == "SYS_STATUS":
+            self.readiness.setdefault(src, {})["prearm"] = bool(
+                msg.onboard_control_sensors_health & mavlink2.MAV_SYS_STATUS_PREARM_CHECK)
         with self._subs_lock:
             subs = list(self._queues.get(src, ()))
         for q in subs:
@@ -304,6 +311,31 @@ def discover(links: Iterable[Link], sysids: Sequence[int], *,
             return found, missing
         # wait on one link at a time in short slices so any link's heartbeat counts
         links[0].wait_heartbeat(missing[0], until=min(deadline, time.monotonic() + 0.05))
+
+
+def is_ready(link: Link, sysid: int) -> bool:
+    """A 3D GPS fix (GPS_RAW_INT) and passing pre-arm checks (SYS_STATUS health bit)."""
+    state = link.readiness.get(sysid, {})
+    return state.get("gps_fix", 0) >= mavlink2.GPS_FIX_TYPE_3D_FIX and state.get("prearm", False)
+
+
+def wait_ready(links: Sequence[Link], sysids: Sequence[int], *, timeout_s: float) -> None:
+    """Wait until every vehicle has a GPS fix and is ready to arm; LinkError naming the
+    ones that are not after ``timeout_s``. (ArduPilot streams GPS_RAW_INT and SYS_STATUS
+    when SRn_EXT_STAT is set, as ``sitl/`` does.)"""
+    found, missing = discover(links, sysids, timeout_s=timeout_s)
+    deadline = time.monotonic() + timeout_s
+    while True:
+        waiting = [s for s in sysids if s not in missing and not is_ready(found[s], s)]
+        if not waiting and not missing:
+            return
+        if missing or time.monotonic() >= deadline:
+            what = [f"{s} (no HEARTBEAT)" for s in missing] + [
+                f"{s} (GPS fix {found[s].readiness.get(s, {}).get('gps_fix', 'unknown')}, "
+                f"pre-arm {'ok' if found[s].readiness.get(s, {}).get('prearm') else 'failing'})"
+                for s in waiting]
+            raise LinkError(f"not ready after {timeout_s:g} s: system id {', '.join(what)}")
+        time.sleep(0.1)
 
 
 def describe_missing(sysid: int, links: Sequence[Link], timeout_s: float) -> str:

@@ -1,0 +1,117 @@
+"""Start N ArduCopter SITL instances, wait until each is ready, stop them all on exit.
+
+Instance i runs in its own working directory (its eeprom.bin, logs), with ``--instance i``
+so it listens on TCP 5760 + 10*i, ``--home`` at its UAV's start and a defaults file that
+sets SYSID_THISMAV = i + 1 and the telemetry streams the readiness check reads. The
+binary is ``ARDUPILOT_SITL`` (a built ``arducopter``, e.g. ``build/sitl/bin/arducopter``);
+add ArduPilot's ``Tools/autotest/default_params/copter.parm`` with ``defaults=`` (or
+``ARDUPILOT_SITL_DEFAULTS``) for the same parameters sim_vehicle.py uses.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Sequence
+
+from ftlbo_mav.link.endpoints import default_urls, open_links, wait_ready
+
+IDENTITY_PARAMS = """\
+SYSID_THISMAV {sysid}
+# streams on SERIAL0 (TCP 5760 + 10*i): SYS_STATUS and GPS_RAW_INT (EXT_STAT),
+# GLOBAL_POSITION_INT (POSITION), so a ground station can tell the copter is ready
+SR0_EXT_STAT 2
+SR0_POSITION 2
+SR0_EXTRA3 1
+"""
+
+
+def sitl_command(binary: str | Path, *, instance: int, home: tuple[float, float, float],
+                 defaults: Sequence[Path], model: str = "quad", speedup: float = 1.0) -> list[str]:
+    """The command line of one SITL instance (libraries/AP_HAL_SITL/SITL_cmdline.cpp)."""
+    lat, lon, alt = home
+    return [
+        str(binary), "--model", model, "--speedup", f"{speedup:g}",
+        "--instance", str(instance), f"--home={lat:.7f},{lon:.7f},{alt:.2f},0",
+        "--defaults", ",".join(str(p) for p in defaults),
+        "--wipe",  # start from the defaults, with no mission left from an earlier run
+    ]
+
+
+class SitlSwarm:
+    """N ArduCopter SITL processes; ``urls[i]`` reaches system id i+1.
+
+    ``with SitlSwarm(binary=..., homes=[...]) as swarm:`` starts every instance, waits up to
+    ``ready_timeout_s`` until each has a 3D GPS fix and passes its pre-arm checks, and on
+    exit stops every process (SIGTERM, then SIGKILL) and removes the working directories
+    it created.
+    """
+
+    def __init__(self, *, binary: str | Path | None = None,
+                 homes: Sequence[tuple[float, float, float]], workdir: str | Path | None = None,
+                 defaults: Sequence[str | Path] = (), model: str = "quad", speedup: float = 1.0,
+                 ready_timeout_s: float = 180.0):
+        binary = binary or os.environ.get("ARDUPILOT_SITL")
+        if not binary:
+            raise ValueError("no SITL binary: pass binary= or set ARDUPILOT_SITL")
+        self.binary = Path(binary)
+        self.homes = list(homes)
+        env_defaults = os.environ.get("ARDUPILOT_SITL_DEFAULTS", "")
+        self.defaults = [Path(p) for p in defaults] + [
+            Path(p) for p in env_defaults.split(",") if p]
+        self.model, self.speedup = model, speedup
+        self.ready_timeout_s = ready_timeout_s
+        self._workdir = Path(workdir) if workdir else None
+        self._own_workdir = workdir is None
+        self.processes: list[subprocess.Popen] = []
+        self.urls = default_urls(len(self.homes))
+
+    def __enter__(self) -> "SitlSwarm":
+        if self._workdir is None:
+            self._workdir = Path(tempfile.mkdtemp(prefix="ftlbo-sitl-"))
+        try:
+            for i, home in enumerate(self.homes):
+                run_dir = self._workdir / f"instance{i}"
+                run_dir.mkdir(parents=True, exist_ok=True)
+                identity = run_dir / "identity.parm"
+                identity.write_text(IDENTITY_PARAMS.format(sysid=i + 1))
+                cmd = sitl_command(self.binary, instance=i, home=home,
+                                   defaults=[*self.defaults, identity], model=self.model,
+                                   speedup=self.speedup)
+                log = open(run_dir / "sitl.log", "wb")
+                try:
+                    self.processes.append(subprocess.Popen(
+                        cmd, cwd=run_dir, stdout=log, stderr=subprocess.STDOUT,
+                        stdin=subprocess.DEVNULL, start_new_session=True))
+                finally:
+                    log.close()
+            links = open_links(self.urls, connect_timeout_s=30.0)
+            try:
+                wait_ready(links, list(range(1, len(self.homes) + 1)),
+                           timeout_s=self.ready_timeout_s)
+            finally:
+                for link in links:
+                    link.close()  # SITL takes the next client once this one has left
+        except BaseException:
+            self.__exit__(None, None, None)
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for p in self.processes:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        for p in self.processes:
+            try:
+                p.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+        self.processes.clear()
+        if self._own_workdir and self._workdir is not None:
+            shutil.rmtree(self._workdir, ignore_errors=True)
+            self._workdir = None
