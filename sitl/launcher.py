@@ -15,8 +15,9 @@ import shutil
 import signal
 import subprocess
 import tempfile
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Sequence
+from typing import Self
 
 from ftlbo_mav.link.endpoints import default_urls, open_links, wait_ready
 
@@ -70,7 +71,7 @@ class SitlSwarm:
         self.processes: list[subprocess.Popen] = []
         self.urls = default_urls(len(self.homes))
 
-    def __enter__(self) -> "SitlSwarm":
+    def __enter__(self) -> Self:
         if self._workdir is None:
             self._workdir = Path(tempfile.mkdtemp(prefix="ftlbo-sitl-"))
         try:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import struct
-from typing import Sequence
+from collections.abc import Sequence
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -30,7 +30,7 @@ PARAM_TOLERANCE = 1e-4
 
 
 def degrees_to_e7(deg: float) -> int:
-    return int(round(deg * 1e7))
+    return round(deg * 1e7)
 
 
 def encode_item(item: MissionItem, *, target_system: int, target_component: int):

@@ -15,8 +15,15 @@ import click
 
 from ..errors import FtlboError, MissionFileError
 from ..mission.waypoints import read_waypoints, write_waypoints
-from .endpoints import BadInput, LinkError, default_urls, describe_missing, discover, open_links
-from .endpoints import parse_sysids
+from .endpoints import (
+    BadInput,
+    LinkError,
+    default_urls,
+    describe_missing,
+    discover,
+    open_links,
+    parse_sysids,
+)
 from .mission_protocol import Timing, download_mission
 from .signing import load_key
 from .swarm import Assignment, ProgressEvent, upload_swarm
@@ -69,7 +76,7 @@ class ProgressBoard:
         self.tty = self.stream.isatty()
         self.order = [sysid for _, sysid in names]
         self.lines = {sysid: f"{name} -> sysid {sysid}: waiting" for name, sysid in names}
-        self.names = dict((sysid, name) for name, sysid in names)
+        self.names = {sysid: name for name, sysid in names}
         self.last_step: dict[int, str] = {}
         self.lock = threading.Lock()
         if self.tty:
@@ -234,8 +241,8 @@ def sim(count, scenario, base_port, udp_out, loss, duplicate, reorder, latency_m
     else:
         homes = default_homes(count or 3)
     n = len(homes)
-    link = dict(loss_up=loss, loss_down=loss, duplicate=duplicate, reorder=reorder,
-                latency_s=latency_ms / 1000.0)
+    link = {"loss_up": loss, "loss_down": loss, "duplicate": duplicate, "reorder": reorder,
+            "latency_s": latency_ms / 1000.0}
     faults = [Faults(**link, silent=(i + 1) in silent) for i in range(n)]
     options = VehicleOptions(ready_after_s=boot_delay, mission=MissionServerOptions(
         capacity=capacity, boot_no_space_s=boot_delay))

@@ -12,20 +12,21 @@ from __future__ import annotations
 import os
 import queue
 import re
-import socket
 import threading
 import time
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Iterable, Sequence
 
 # pymavlink picks MAVLink 1 or 2 from this variable when it loads a dialect; the mission
 # protocol with MISSION_ITEM_INT and signing need MAVLink 2.
 os.environ.setdefault("MAVLINK20", "1")
 
-from pymavlink import mavutil  # noqa: E402
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2  # noqa: E402
+from typing import Self
 
-from ..errors import FtlboError  # noqa: E402
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+from ..errors import FtlboError
 
 GCS_SYSID = 255
 GCS_COMPID = mavlink2.MAV_COMP_ID_MISSIONPLANNER  # 190
@@ -105,7 +106,7 @@ def _open(url: str, *, timeout_s: float):
                 retries=0,  # one connect per call; the loop here retries quietly
                 autoreconnect=False,
             )
-        except (ConnectionRefusedError, socket.timeout) as exc:
+        except (TimeoutError, ConnectionRefusedError) as exc:
             if time.monotonic() >= deadline:
                 raise LinkError(f"{url}: cannot connect ({exc.strerror or exc}); is the "
                                 "vehicle (SITL, `ftlbo-mav sim`) running?") from None
@@ -153,7 +154,7 @@ class Link:
         except OSError:
             pass
 
-    def __enter__(self) -> "Link":
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -165,7 +166,7 @@ class Link:
         with self._send_lock:
             self._conn.mav.send(msg)
 
-    def channel(self, sysid: int) -> "Channel":
+    def channel(self, sysid: int) -> Channel:
         """The messages of vehicle ``sysid`` on this link, from now on."""
         return Channel(self, sysid)
 
@@ -267,7 +268,7 @@ class Channel:
     def close(self) -> None:
         self.link._unsubscribe(self.sysid, self._q)
 
-    def __enter__(self) -> "Channel":
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc) -> None:

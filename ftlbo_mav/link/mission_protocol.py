@@ -30,8 +30,8 @@ from __future__ import annotations
 import statistics
 import time
 from collections import deque
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Callable, Sequence
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
@@ -444,8 +444,8 @@ def run_transfer(machine: _Transfer, channel):
 
 
 def _kw(channel, timing: Timing | None, progress: Progress | None, compid: int) -> dict:
-    return dict(sysid=channel.sysid, compid=compid, own=(channel.own_sysid, channel.own_compid),
-                timing=timing or Timing(), progress=progress, srtt=getattr(channel, "srtt", None))
+    return {"sysid": channel.sysid, "compid": compid, "own": (channel.own_sysid, channel.own_compid),
+                "timing": timing or Timing(), "progress": progress, "srtt": getattr(channel, "srtt", None)}
 
 
 def upload_mission(channel, items: Sequence[MissionItem], *, timing: Timing | None = None,

@@ -9,9 +9,9 @@ missing or fails never stops the others; each gets a :class:`VehicleResult`.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Callable, Sequence
 
 from ..mission.items import MissionItem
 from .codec import mission_differences

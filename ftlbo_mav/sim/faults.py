@@ -63,12 +63,12 @@ class FaultyPipe:
         self.rng = rng
 
     @classmethod
-    def up(cls, faults: Faults, rng: np.random.Generator) -> "FaultyPipe":
+    def up(cls, faults: Faults, rng: np.random.Generator) -> FaultyPipe:
         return cls(loss=faults.loss_up, duplicate=faults.duplicate, reorder=faults.reorder,
                    latency_s=faults.latency_s, rng=rng)
 
     @classmethod
-    def down(cls, faults: Faults, rng: np.random.Generator) -> "FaultyPipe":
+    def down(cls, faults: Faults, rng: np.random.Generator) -> FaultyPipe:
         return cls(loss=faults.loss_down, duplicate=faults.duplicate, reorder=faults.reorder,
                    latency_s=faults.latency_s, rng=rng)
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+from typing import Self
 
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -26,7 +27,7 @@ TICK_S = 0.02      # how often the vehicle's timers run
 class LoopbackChannel:
     """The ground station's end of an in-memory link to ``vehicle``."""
 
-    def __init__(self, vehicle: Vehicle, *, faults: Faults = Faults(),
+    def __init__(self, vehicle: Vehicle, *, faults: Faults | None = None,
                  rng: np.random.Generator | None = None, own_sysid: int = 255,
                  own_compid: int = 190):
         rng = rng if rng is not None else np.random.default_rng(0)
@@ -34,6 +35,7 @@ class LoopbackChannel:
         self.sysid = vehicle.sysid
         self.own_sysid, self.own_compid = own_sysid, own_compid
         self.srtt: float | None = None
+        faults = faults if faults is not None else Faults()
         self.faults = faults
         self.up = FaultyPipe.up(faults, rng)
         self.down = FaultyPipe.down(faults, rng)
@@ -99,7 +101,7 @@ class LoopbackChannel:
     def close(self) -> None:
         pass
 
-    def __enter__(self) -> "LoopbackChannel":
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -51,7 +51,7 @@ class StoredItem:
 
 def _store(msg) -> StoredItem:
     if msg.get_type() == "MISSION_ITEM":  # AP_Mission::convert_MISSION_ITEM_to_MISSION_ITEM_INT
-        x, y = int(round(msg.x * 1e7)), int(round(msg.y * 1e7))
+        x, y = round(msg.x * 1e7), round(msg.y * 1e7)
     else:
         x, y = msg.x, msg.y
     return StoredItem(
@@ -157,7 +157,7 @@ class MissionServer:
         if seq == 0:  # slot 0 is always the current home (AP_Mission::read_cmd_from_storage)
             lat, lon, alt = self.home
             it = StoredItem(R.MAV_CMD_NAV_WAYPOINT, R.MAV_FRAME_GLOBAL, 0, 0, 0, 0,
-                            int(round(lat * 1e7)), int(round(lon * 1e7)), alt)
+                            round(lat * 1e7), round(lon * 1e7), alt)
         else:
             it = self.items[seq]
         if msg.get_type() == "MISSION_REQUEST":  # answered with a float MISSION_ITEM

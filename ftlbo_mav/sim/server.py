@@ -13,7 +13,8 @@ from __future__ import annotations
 import asyncio
 import threading
 import time
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
+from typing import Self
 
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
@@ -152,14 +153,16 @@ class Simulator:
 
     def __init__(self, *, homes: Sequence[tuple[float, float, float]], base_port: int = 5760,
                  host: str = "127.0.0.1", udp_out: tuple[str, int] | None = None,
-                 faults: Faults | Sequence[Faults] = Faults(),
-                 options: VehicleOptions | Sequence[VehicleOptions] = VehicleOptions(),
+                 faults: Faults | Sequence[Faults] | None = None,
+                 options: VehicleOptions | Sequence[VehicleOptions] | None = None,
                  signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1):
         n = len(homes)
         if n < 1:
             raise ValueError("at least one vehicle")
         self.homes = [tuple(h) for h in homes]
         self.host, self.base_port, self.udp_out = host, base_port, udp_out
+        faults = Faults() if faults is None else faults
+        options = VehicleOptions() if options is None else options
         self.faults = list(faults) if not isinstance(faults, Faults) else [faults] * n
         self.options = list(options) if not isinstance(options, VehicleOptions) else [options] * n
         if len(self.faults) != n or len(self.options) != n:
@@ -210,7 +213,7 @@ class Simulator:
                     r.tick()
                 try:
                     await asyncio.wait_for(self._stopping.wait(), TICK_S)
-                except asyncio.TimeoutError:
+                except TimeoutError:
                     pass
             if udp is not None:
                 udp.close()
@@ -238,7 +241,7 @@ class Simulator:
         return serve
 
     # -- background thread (tests, benchmarks)
-    def __enter__(self) -> "Simulator":
+    def __enter__(self) -> Self:
         started = threading.Event()
         errors: list[BaseException] = []
 
@@ -247,7 +250,7 @@ class Simulator:
             self._loop = loop
             try:
                 loop.run_until_complete(self._main(started.set))
-            except BaseException as exc:  # reported to the thread that started us
+            except Exception as exc:  # noqa: BLE001 - re-raised in the thread that started us
                 errors.append(exc)
                 started.set()
             finally:

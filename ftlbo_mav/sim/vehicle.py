@@ -134,7 +134,7 @@ class Vehicle:
     def telemetry(self, now: float) -> list:
         s = self.state
         ready = self.ready(now)
-        lat, lon = int(round(s.lat_deg * 1e7)), int(round(s.lon_deg * 1e7))
+        lat, lon = round(s.lat_deg * 1e7), round(s.lon_deg * 1e7)
         boot_ms = int((now - self.boot_time) * 1000) & 0xFFFFFFFF
         sensors = (R.MAV_SYS_STATUS_SENSOR_3D_GYRO | R.MAV_SYS_STATUS_SENSOR_3D_ACCEL
                    | R.MAV_SYS_STATUS_SENSOR_GPS)

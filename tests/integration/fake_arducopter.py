@@ -25,7 +25,9 @@ def main() -> None:
     args = p.parse_args()
     sysid = 1
     for path in filter(None, args.defaults.split(",")):
-        for line in open(path):
+        with open(path) as f:
+            lines = f.read().splitlines()
+        for line in lines:
             parts = line.split()
             if len(parts) == 2 and parts[0] == "SYSID_THISMAV":
                 sysid = int(float(parts[1]))

@@ -22,8 +22,8 @@ from tests.integration.fleet import free_udp_port
 from tests.link.support import write_missions
 
 mavsdk = pytest.importorskip("mavsdk")
-from mavsdk import Configuration, Mavsdk  # noqa: E402
-from mavsdk.plugins.mission_raw_server import MissionRawServer  # noqa: E402
+from mavsdk import Configuration, Mavsdk
+from mavsdk.plugins.mission_raw_server import MissionRawServer
 
 
 class MavsdkVehicle:

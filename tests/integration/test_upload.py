@@ -130,7 +130,7 @@ def test_signing_required_accepts_the_signed_upload(tmp_path, keys):
 
 @pytest.mark.parametrize("which", ["wrong", "unsigned"])
 def test_signing_required_ignores_wrong_or_missing_signatures(tmp_path, keys, which):
-    right, wrong, secret = keys
+    _right, wrong, secret = keys
     write_missions(tmp_path, 2)
     key_args = ["--signing-key", wrong] if which == "wrong" else []
     with vehicles(2, signing_key=secret) as fleet:

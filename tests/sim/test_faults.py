@@ -9,7 +9,7 @@ from ftlbo_mav.sim.faults import DUPLICATE_GAP_S, REORDER_HOLD_S, Faults, Faulty
 
 
 def pipe(**kw):
-    base = dict(loss=0.0, duplicate=0.0, reorder=0.0, latency_s=0.0)
+    base = {"loss": 0.0, "duplicate": 0.0, "reorder": 0.0, "latency_s": 0.0}
     return FaultyPipe(**{**base, **kw}, rng=np.random.default_rng(7))
 
 
