@@ -33,20 +33,20 @@ from pymavlink.dialects.v20 import ardupilotmega as R
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ftlbo_mav.link.mission_protocol import (  # noqa: E402
+from ftlbo_mav.link.mission_protocol import (
     MissionTransferError,
     Timing,
     Upload,
     _Transfer,
     run_transfer,
 )
-from ftlbo_mav.link.swarm import Assignment, upload_swarm  # noqa: E402
-from ftlbo_mav.sim.faults import Faults  # noqa: E402
-from ftlbo_mav.sim.homes import default_homes  # noqa: E402
-from ftlbo_mav.sim.loopback import LoopbackChannel  # noqa: E402
-from ftlbo_mav.sim.server import Simulator  # noqa: E402
-from ftlbo_mav.sim.vehicle import Vehicle, VehicleOptions  # noqa: E402
-from tests.link.support import make_mission  # noqa: E402
+from ftlbo_mav.link.swarm import Assignment, upload_swarm
+from ftlbo_mav.sim.faults import Faults
+from ftlbo_mav.sim.homes import default_homes
+from ftlbo_mav.sim.loopback import LoopbackChannel
+from ftlbo_mav.sim.server import Simulator
+from ftlbo_mav.sim.vehicle import Vehicle, VehicleOptions
+from tests.link.support import make_mission
 
 LINKS = {
     "clean": Faults(),
@@ -165,7 +165,7 @@ def main() -> None:
     print(f"\n2. upload alone, 1 vehicle x 15 items, virtual time, {seeds} seeds")
     print(f"{'link':34s} {'ours done':>10s} {'ours s':>7s} {'plain done':>11s} {'plain s':>8s}")
     virt = virtual_time(seeds)
-    fmt = lambda v: f"{v:.2f}" if v is not None else "-"  # noqa: E731
+    fmt = lambda v: f"{v:.2f}" if v is not None else "-"
     for r in virt:
         print(f"{r['link']:34s} {r['ours_completed']:>5d}/{seeds:<4d} {fmt(r['ours_mean_s']):>7s} "
               f"{r['plain_completed']:>6d}/{seeds:<4d} {fmt(r['plain_mean_s']):>8s}")
