@@ -96,10 +96,15 @@ def _is_vehicle(msg) -> bool:
 def _open(url: str, *, timeout_s: float):
     """Open a pymavlink connection, retrying refused TCP connects until ``timeout_s``."""
     deadline = time.monotonic() + timeout_s
+    device, baud = url, 115200
+    serial = re.fullmatch(r"(/dev/[^,:]+|COM\d+),(\d+)", url)
+    if serial:  # a serial port with its baud rate, as MAVProxy writes it: /dev/ttyUSB0,57600
+        device, baud = serial.group(1), int(serial.group(2))
     while True:
         try:
             return mavutil.mavlink_connection(
-                url,
+                device,
+                baud=baud,
                 source_system=GCS_SYSID,
                 source_component=GCS_COMPID,
                 dialect="ardupilotmega",
@@ -115,6 +120,8 @@ def _open(url: str, *, timeout_s: float):
             raise LinkError(f"{url}: cannot open: {exc.strerror or exc}") from None
         except ValueError as exc:
             raise BadInput(f"--connect {url}: {exc}") from None
+        except ImportError:
+            raise LinkError(f"{url}: serial links need pyserial (pip install pyserial)") from None
 
 
 class Link:

@@ -27,162 +27,25 @@ MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
 
 from __future__ import annotations
 
-import statistics
-import time
-from collections import deque
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 
-from pymavlink.dialects.v20 import ardupilotmega as mavlink2
-
-from ..errors import FtlboError
 from ..mission.items import MissionItem
 from .codec import MISSION_TYPE_MISSION, decode_item, encode_item
+from .transfer import (  # re-exported: the protocol's public names live here
+    RESULT_TEXT,
+    MissionTransferError,
+    Progress,
+    R,
+    Timing,
+    _Transfer,
+    describe_result,
+    run_transfer,
+)
 
-R = mavlink2  # MAV_MISSION_RESULT constants live on the dialect module
-
-RESULT_TEXT = {
-    R.MAV_MISSION_ACCEPTED: "accepted",
-    R.MAV_MISSION_ERROR: "the vehicle reported an error (ArduPilot: an item it could not "
-                         "store, or a request while no transfer was running)",
-    R.MAV_MISSION_UNSUPPORTED_FRAME: "an item's coordinate frame is not supported by the vehicle",
-    R.MAV_MISSION_UNSUPPORTED: "an item's command is not supported by the vehicle",
-    R.MAV_MISSION_NO_SPACE: "the vehicle has no space for this many items",
-    R.MAV_MISSION_INVALID: "an item has an invalid parameter",
-    R.MAV_MISSION_INVALID_PARAM1: "an item's param1 is out of range",
-    R.MAV_MISSION_INVALID_PARAM2: "an item's param2 is out of range",
-    R.MAV_MISSION_INVALID_PARAM3: "an item's param3 is out of range",
-    R.MAV_MISSION_INVALID_PARAM4: "an item's param4 is out of range",
-    R.MAV_MISSION_INVALID_PARAM5_X: "an item's latitude (x) is out of range",
-    R.MAV_MISSION_INVALID_PARAM6_Y: "an item's longitude (y) is out of range",
-    R.MAV_MISSION_INVALID_PARAM7: "an item's altitude (z) is out of range",
-    R.MAV_MISSION_INVALID_SEQUENCE: "an item arrived out of sequence",
-    R.MAV_MISSION_DENIED: "the vehicle denied the transfer (it is busy with another "
-                          "ground station's transfer, or its mission is read-only)",
-    R.MAV_MISSION_OPERATION_CANCELLED: "the vehicle cancelled the transfer (it waited too "
-                                       "long for an item)",
-}
-
-
-def describe_result(code: int) -> str:
-    """A MAV_MISSION_RESULT as a sentence a person understands."""
-    name = R.enums["MAV_MISSION_RESULT"].get(code)
-    label = name.name if name is not None else f"result {code}"
-    return f"{RESULT_TEXT.get(code, 'unknown result code')} ({label})"
-
-
-@dataclass(frozen=True)
-class Timing:
-    """Time-outs and retry budgets of a transfer.
-
-    ``timeout_s`` / ``retries``: a step (MISSION_COUNT answered, the next request, an
-    item) that makes no progress is resent after ``timeout_s``, and fails after
-    ``retries`` resends, i.e. after ``timeout_s * (retries + 1)`` without progress
-    (QGroundControl's defaults are about 1.5 s and 5). Once a round trip has been timed,
-    resends come sooner (every ~4 round trips, at least ``min_resend_s``), within the same
-    time budget: on a fast lossy link a lost message costs a fraction of a second, not
-    1.5 s, and the budget rides out long runs of losses. ``not_ready_s``: how long a
-    vehicle may answer NO_SPACE (booting) or DENIED (busy) before that is final,
-    retrying every ``not_ready_poll_s``. ``first_resend_s``: resend interval before any
-    round trip has been timed (TCP starts at 1 s, RFC 6298; a lost MISSION_COUNT at 30%
-    loss should not eat the budget in 1.5 s steps).
-    """
-
-    timeout_s: float = 1.5
-    retries: int = 5
-    not_ready_s: float = 15.0
-    not_ready_poll_s: float = 1.0
-    min_resend_s: float = 0.2
-    first_resend_s: float = 0.5
-
-    @property
-    def budget_s(self) -> float:
-        """How long a step may go without progress before it fails."""
-        return self.timeout_s * (self.retries + 1)
-
-
-class MissionTransferError(FtlboError):
-    """A transfer failed; names the vehicle and the step."""
-
-    def __init__(self, sysid: int, step: str, problem: str, *, result: int | None = None):
-        self.sysid = sysid
-        self.step = step
-        self.problem = problem
-        self.result = result
-        super().__init__(f"vehicle {sysid}: {step}: {problem}")
-
-
-Progress = Callable[[str, int, int], None]  # (step, done, total)
-
-
-def _quiet(_step: str, _done: int, _total: int) -> None:
-    pass
-
-
-class _Transfer:
-    """Common state: deadline, retry count, outcome."""
-
-    step = "transfer"
-
-    def __init__(self, *, sysid: int, compid: int, own: tuple[int, int], timing: Timing,
-                 progress: Progress | None, srtt: float | None = None):
-        self.sysid, self.compid = sysid, compid
-        self.own_sysid, self.own_compid = own
-        self.timing = timing
-        self.progress = progress or _quiet
-        self.deadline = 0.0
-        self.last_progress = 0.0
-        self.finished = False
-        self.error: MissionTransferError | None = None
-        self.last_result: int | None = None  # last refusal, for the message
-        # round-trip time, seconds (None: not timed yet): the median of recent samples,
-        # since a sample that spans the vehicle's own re-request (1 s later) looks valid
-        self.srtt = srtt
-        self._samples: deque[float] = deque([srtt] if srtt is not None else [], maxlen=9)
-
-    def _fail(self, problem: str, *, result: int | None = None) -> list:
-        self.finished = True
-        self.error = MissionTransferError(self.sysid, self.step, problem, result=result)
-        return []
-
-    def _done(self) -> list:
-        self.finished = True
-        return []
-
-    def _rtt_sample(self, rtt: float) -> None:
-        self._samples.append(rtt)
-        self.srtt = statistics.median(self._samples)
-
-    def _resend_s(self) -> float:
-        """When to resend a seemingly lost message: ~4 round trips, within bounds."""
-        if self.srtt is None:
-            return min(self.timing.timeout_s, self.timing.first_resend_s)
-        return min(self.timing.timeout_s, max(self.timing.min_resend_s, 4.0 * self.srtt))
-
-    def _out_of_budget(self, now: float) -> bool:
-        return now - self.last_progress >= self.timing.budget_s - 1e-9
-
-    def _gave_up(self, what: str) -> list:
-        t = self.timing
-        if self.last_result is not None:
-            return self._fail(f"{what} kept failing for {t.budget_s:g} s, last answer: "
-                              f"{describe_result(self.last_result)}", result=self.last_result)
-        return self._fail(f"no answer to {what} within {t.budget_s:g} s ({t.retries} retries "
-                          f"of {t.timeout_s:g} s): is the vehicle still there (link, signing "
-                          "key)?")
-
-    def _ours(self, msg) -> bool:
-        return getattr(msg, "mission_type", MISSION_TYPE_MISSION) == MISSION_TYPE_MISSION
-
-    def start(self, now: float) -> list:
-        raise NotImplementedError
-
-    def on_message(self, msg, now: float) -> list:
-        raise NotImplementedError
-
-    def on_timeout(self, now: float) -> list:
-        raise NotImplementedError
-
+__all__ = [
+    "RESULT_TEXT", "Clear", "Download", "MissionTransferError", "Progress", "Timing", "Upload",
+    "clear_mission", "describe_result", "download_mission", "run_transfer", "upload_mission",
+]
 
 class Upload(_Transfer):
     """MISSION_COUNT, then an item for every request, until ACK ACCEPTED.
@@ -417,30 +280,6 @@ class Clear(_Transfer):
         if self._out_of_budget(now):
             return self._gave_up("MISSION_CLEAR_ALL")
         return self._send(now)
-
-
-def run_transfer(machine: _Transfer, channel):
-    """Drive ``machine`` over ``channel`` until it finishes; raise its error if it failed.
-
-    Time is the channel's ``clock()`` when it has one (virtual time in tests), else
-    :func:`time.monotonic`.
-    """
-    clock = getattr(channel, "clock", time.monotonic)
-    for msg in machine.start(clock()):
-        channel.send(msg)
-    while not machine.finished:
-        msg = channel.recv(max(0.0, machine.deadline - clock()))
-        now = clock()
-        out = machine.on_message(msg, now) if msg is not None else []
-        if not machine.finished and now >= machine.deadline:
-            out = out + machine.on_timeout(now)
-        for m in out:
-            channel.send(m)
-    if getattr(channel, "srtt", None) is None or machine.srtt is not None:
-        channel.srtt = machine.srtt  # the next transfer starts from the measured round trip
-    if machine.error is not None:
-        raise machine.error
-    return machine
 
 
 def _kw(channel, timing: Timing | None, progress: Progress | None, compid: int) -> dict:
