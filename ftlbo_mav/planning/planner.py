@@ -14,7 +14,7 @@ import numpy as np
 from ..scenario import PlannerSettings, Scenario
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
-from .geometric import lower_bound, seed_waypoints, shortest_route
+from .geometric import lower_bound, seed_waypoints, shortest_routes
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import Progress
 from .problem import PlanningProblem, problem_from_scenario
@@ -92,6 +92,9 @@ def plan(
     return solve(problem, scenario, settings, progress=progress, notice=notice)
 
 
+SEED_ROUTES = 4
+"""Routes computed per plan: the shortest (the lower bound) and alternatives (seeds)."""
+
 NO_ROUTE = (
     "no route: the formation cannot pass between the obstacles inside the area with the "
     "clearance; every plan will be infeasible (widen the area, reduce the clearance or the "
@@ -108,9 +111,9 @@ def solve(
     notice: Callable[[str], None] | None = None,
 ) -> Plan:
     """Run ``settings.algorithm`` on ``problem`` and package the result."""
-    route = shortest_route(problem)
-    bound = lower_bound(problem, route)
-    if route is None and notice is not None:
+    routes = shortest_routes(problem, count=SEED_ROUTES)
+    bound = lower_bound(problem, routes[0]) if routes else None
+    if not routes and notice is not None:
         notice(NO_ROUTE)
     m = problem.waypoints
     lower, upper = problem.bounds()
@@ -124,7 +127,7 @@ def solve(
     t0 = time.perf_counter()
     extra = {}
     if getattr(optimizer, "wants_seeds", False):  # timed: seeding is part of the planner
-        seeds = seed_waypoints(problem) if route is not None else np.zeros((0, m, 3))
+        seeds = seed_waypoints(problem, routes=routes)
         extra["seeds"] = seeds.reshape(len(seeds), 3 * m)
     result = optimizer(
         objective,

@@ -10,6 +10,7 @@ import pytest
 from ftlbo_mav.planning.feasibility import violations
 from ftlbo_mav.planning.geometric import (
     formation_discs,
+    route_waypoints,
     lower_bound,
     seed_waypoints,
     shortest_route,
@@ -137,3 +138,22 @@ def test_example_bound_routes_and_seeds():
     assert violations(problem, best) == []  # the shortest seed route is flyable
     length = np.linalg.norm(np.diff(best, axis=0), axis=1).sum()
     assert bound < length < 1.001 * bound
+
+
+def test_fewer_waypoints_than_bends_still_give_a_clear_seed():
+    # Three discs on the straight line: the route bends around each of them, but one
+    # waypoint above them all is enough to pass clear.
+    problem = field(centres=np.array([[-8.0, 0.0], [0.0, 0.0], [8.0, 0.0]]),
+                    radii=np.array([2.0, 2.5, 2.0]), waypoints=1)
+    route = shortest_route(problem)
+    assert sum(a is not None for a in route.arcs) >= 2
+    w = route_waypoints(problem, route, 1)
+    path = problem.full_paths(w[None])[0]
+    assert violations(problem, path) == []
+    length = np.linalg.norm(np.diff(path, axis=0), axis=1).sum()
+    assert route.length < length < 1.05 * route.length
+    # with enough waypoints the polygon hugs the route
+    many = route_waypoints(problem, route, 12)
+    path = problem.full_paths(many[None])[0]
+    assert violations(problem, path) == []
+    assert np.linalg.norm(np.diff(path, axis=0), axis=1).sum() < 1.002 * route.length

@@ -1,0 +1,284 @@
+"""Planner speed: wall time per plan, cost evaluations per second, scaling.
+
+Plain ``python benchmarks/planner.py`` (add ``--quick`` for fewer repeats). Prints tables
+and writes JSON (``--json``, default ``planner-benchmark.json``). Timings are wall clock
+on this machine as it is loaded right now: the load average is printed and stored next to
+the figures, and every median is over several seeds or repeats.
+
+1. Median wall seconds of ``plan()`` per algorithm on the shipped example at the paper's
+   settings (100 students, 10 waypoints, 150 iterations), with the centroid length over
+   the lower bound.
+2. Path evaluations per second of the vectorized cost (population 100) for 3 UAVs, 10
+   waypoints and 6 cylinders, and how the time per evaluation grows with obstacles
+   (6, 25, 100), UAVs (3, 10, 30) and waypoints (10, 20, 40), one factor at a time,
+   normalised per UAV x obstacle x segment; the default planner's wall time on the same
+   fields; peak memory of one class evaluation on the largest field.
+3. When the optional ``mealpy`` package is importable: its TLBO on our cost at the same
+   evaluation budget, next to ours (cost and time).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import statistics
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from ftlbo_mav.formation import regular_formation  # noqa: E402
+from ftlbo_mav.planning.cost import search_cost  # noqa: E402
+from ftlbo_mav.planning.geometric import lower_bound, shortest_route  # noqa: E402
+from ftlbo_mav.planning.optimizers import (  # noqa: E402
+    OPTIMIZERS,
+    Objective,
+    evaluation_budget,
+    tlbo,
+)
+from ftlbo_mav.planning.planner import plan  # noqa: E402
+from ftlbo_mav.planning.problem import PlanningProblem, problem_from_scenario  # noqa: E402
+from ftlbo_mav.scenario import load_scenario  # noqa: E402
+
+EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
+PAPER = dict(students=100, waypoints=10, iterations=150)
+
+
+def load() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f"{one:.2f} {five:.2f} {fifteen:.2f}"
+
+
+def table(headers: list[str], rows: list[list]) -> str:
+    cells = [[str(h) for h in headers]] + [[str(c) for c in r] for r in rows]
+    widths = [max(len(row[i]) for row in cells) for i in range(len(headers))]
+    lines = ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+# ----------------------------------------------------------------------- 1. algorithms
+
+
+def bench_algorithms(seeds: int) -> list[dict]:
+    scenario = load_scenario(EXAMPLE)
+    plan(scenario, algorithm="ftlbo", iterations=2)  # warm up imports and caches
+    out = []
+    for algorithm in OPTIMIZERS:
+        walls, ratios, costs, evals, feasible = [], [], [], [], 0
+        for seed in range(seeds):
+            t0 = time.perf_counter()
+            p = plan(scenario, algorithm=algorithm, seed=seed, **PAPER)
+            walls.append(time.perf_counter() - t0)
+            feasible += p.feasible
+            costs.append(p.cost.total)
+            evals.append(p.evaluations)
+            if p.length_ratio is not None:
+                ratios.append(p.length_ratio)
+        out.append(dict(
+            algorithm=algorithm, seeds=seeds, wall_median_s=statistics.median(walls),
+            wall_min_s=min(walls), wall_max_s=max(walls),
+            evaluations_median=statistics.median(evals),
+            evaluations_per_s=statistics.median(e / w for e, w in zip(evals, walls)),
+            cost_median=statistics.median(costs), ratio_median=statistics.median(ratios),
+            feasible=feasible,
+        ))
+    return out
+
+
+# ----------------------------------------------------------------------- 2. scaling
+
+
+def field(*, obstacles: int, uavs: int, waypoints: int, seed: int = 0) -> PlanningProblem:
+    """A 100 m x 60 m field, start and goal 80 m apart, ``obstacles`` trees of radius
+    0.5-1.5 m (clearance 0.5 m) away from start and goal, a ring formation of radius 2 m."""
+    rng = np.random.default_rng(seed)
+    start, goal = np.array([10.0, 30.0, 4.0]), np.array([90.0, 30.0, 4.0])
+    centres, radii = [], []
+    while len(centres) < obstacles:
+        c = rng.uniform([15.0, 5.0], [85.0, 55.0])
+        r = rng.uniform(0.5, 1.5)
+        if min(np.linalg.norm(c - start[:2]), np.linalg.norm(c - goal[:2])) > r + 5.0:
+            centres.append(c)
+            radii.append(r)
+    return PlanningProblem(
+        start=start, goal=goal,
+        offsets=regular_formation(count=uavs, radius_m=2.0, plane="horizontal"),
+        centres=np.array(centres), radii=np.array(radii) + 0.5, h_min=2.0, h_max=7.0,
+        area_lower=np.array([0.0, 0.0]), area_upper=np.array([100.0, 60.0]),
+        waypoints=waypoints, weights=np.ones(3),
+    )
+
+
+def evaluations_per_second(problem: PlanningProblem, *, population: int = 100,
+                           repeats: int = 5, seconds: float = 0.3) -> float:
+    """Best-of-``repeats`` throughput of ``search_cost`` on random classes (paths/s)."""
+    lower, upper = problem.bounds()
+    rng = np.random.default_rng(1)
+    x = lower + rng.random((population, problem.waypoints, 3)) * (upper - lower)
+    search_cost(problem, x)
+    best = 0.0
+    for _ in range(repeats):
+        n, t0 = 0, time.perf_counter()
+        while (elapsed := time.perf_counter() - t0) < seconds:
+            search_cost(problem, x)
+            n += 1
+        best = max(best, n * population / elapsed)
+    return best
+
+
+def default_planner_wall(problem: PlanningProblem, seeds: int) -> tuple[float, float, float]:
+    """Median wall seconds of the default planner's optimizer+seeding, of the geometry
+    alone, and the median length ratio (NaN when no route)."""
+    from ftlbo_mav.planning.planner import solve
+    from ftlbo_mav.scenario import PlannerSettings, load_scenario as _load
+
+    scenario = _load(EXAMPLE)  # only carried along in the Plan; the problem is ours
+    walls, ratios = [], []
+    for seed in range(seeds):
+        settings = PlannerSettings(algorithm="ftlbo-seeded", students=100,
+                                   waypoints=problem.waypoints, iterations=150, seed=seed)
+        t0 = time.perf_counter()
+        p = solve(problem, scenario, settings)
+        walls.append(time.perf_counter() - t0)
+        if p.feasible and p.length_ratio:
+            ratios.append(p.length_ratio)
+    t0 = time.perf_counter()
+    shortest_route(problem)
+    geometry = time.perf_counter() - t0
+    return statistics.median(walls), geometry, statistics.median(ratios) if ratios else math.nan
+
+
+def bench_scaling(repeats: int, seeds: int) -> list[dict]:
+    base = dict(obstacles=6, uavs=3, waypoints=10)
+    cases = [dict(base)]
+    cases += [dict(base, obstacles=k) for k in (25, 100)]
+    cases += [dict(base, uavs=n) for n in (10, 30)]
+    cases += [dict(base, waypoints=m) for m in (20, 40)]
+    out = []
+    for case in cases:
+        problem = field(**case)
+        rate = evaluations_per_second(problem, repeats=repeats)
+        work = case["uavs"] * case["obstacles"] * (case["waypoints"] + 1)
+        wall, geometry, ratio = default_planner_wall(problem, seeds)
+        out.append(dict(case, evaluations_per_s=rate, us_per_evaluation=1e6 / rate,
+                        ns_per_pair=1e9 / rate / work, default_wall_median_s=wall,
+                        geometry_s=geometry, default_ratio_median=ratio))
+    return out
+
+
+def bench_memory() -> dict:
+    """Peak traced memory of one class evaluation on the largest field (chunked)."""
+    problem = field(obstacles=100, uavs=30, waypoints=40)
+    lower, upper = problem.bounds()
+    x = lower + np.random.default_rng(0).random((100, 40, 3)) * (upper - lower)
+    tracemalloc.start()
+    t0 = time.perf_counter()
+    search_cost(problem, x)
+    seconds = time.perf_counter() - t0
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    unchunked = 100 * 41 * 30 * 100 * 8  # one float64 (N*K, S*J) array without chunking
+    return dict(obstacles=100, uavs=30, waypoints=40, students=100, seconds=seconds,
+                peak_mib=peak / 2**20, one_unchunked_array_mib=unchunked / 2**20)
+
+
+# ----------------------------------------------------------------------- 3. mealpy
+
+
+def bench_mealpy(seeds: int) -> list[dict] | None:
+    try:
+        from mealpy import TLBO, FloatVar
+    except ImportError:
+        return None
+    scenario = load_scenario(EXAMPLE)
+    problem = problem_from_scenario(scenario, waypoints=10)
+    m = problem.waypoints
+    lower, upper = (b.ravel() for b in problem.bounds())
+    budget = evaluation_budget(100, 150)
+    rows = []
+    for seed in range(seeds):
+        calls = [0]
+
+        def one(x):
+            calls[0] += 1
+            return float(search_cost(problem, np.asarray(x).reshape(1, m, 3))[0])
+
+        spec = {"obj_func": one, "bounds": FloatVar(lb=lower, ub=upper), "minmax": "min",
+                "log_to": None}
+        model = TLBO.OriginalTLBO(epoch=10_000, pop_size=100)
+        t0 = time.perf_counter()
+        best = model.solve(spec, termination={"max_fe": budget}, seed=seed)
+        mealpy_s = time.perf_counter() - t0
+        objective = Objective(lambda x: search_cost(problem, x.reshape(-1, m, 3)), lower, upper)
+        t0 = time.perf_counter()
+        ours = tlbo(objective, students=100, iterations=150, rng=np.random.default_rng(seed))
+        ours_s = time.perf_counter() - t0
+        rows.append(dict(seed=seed, mealpy_cost=float(best.target.fitness),
+                         mealpy_s=mealpy_s, mealpy_evaluations=calls[0], ours_cost=ours.cost,
+                         ours_s=ours_s, ours_evaluations=ours.evaluations))
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer seeds and repeats")
+    parser.add_argument("--json", default="planner-benchmark.json", help="output JSON path")
+    args = parser.parse_args()
+    seeds, repeats = (3, 2) if args.quick else (7, 5)
+    doc = {"python": sys.version.split()[0], "numpy": np.__version__,
+           "cpus": os.cpu_count(), "load_before": load()}
+    print(f"load average before (1/5/15 min): {doc['load_before']}; {os.cpu_count()} CPUs")
+
+    doc["algorithms"] = algorithms = bench_algorithms(seeds)
+    print(f"\n1. plan() on {EXAMPLE.name}, paper's settings, {seeds} seeds each")
+    print(table(
+        ["algorithm", "median s", "min s", "max s", "evaluations", "evals/s", "median cost",
+         "length/bound", "feasible"],
+        [[a["algorithm"], f"{a['wall_median_s']:.3f}", f"{a['wall_min_s']:.3f}",
+          f"{a['wall_max_s']:.3f}", f"{a['evaluations_median']:.0f}",
+          f"{a['evaluations_per_s']:,.0f}", f"{a['cost_median']:.2f}",
+          f"{a['ratio_median']:.4f}", f"{a['feasible']}/{a['seeds']}"] for a in algorithms]))
+
+    doc["scaling"] = scaling = bench_scaling(repeats, max(seeds // 2, 1))
+    print("\n2. cost evaluations (class of 100 random paths) and the default planner, "
+          "one factor at a time")
+    print(table(
+        ["obstacles", "UAVs", "waypoints", "paths/s", "us/path", "ns/(UAV*obst*seg)",
+         "default plan s", "geometry s", "length/bound"],
+        [[s["obstacles"], s["uavs"], s["waypoints"], f"{s['evaluations_per_s']:,.0f}",
+          f"{s['us_per_evaluation']:.1f}", f"{s['ns_per_pair']:.2f}",
+          f"{s['default_wall_median_s']:.3f}", f"{s['geometry_s']:.3f}",
+          f"{s['default_ratio_median']:.4f}"] for s in scaling]))
+
+    doc["memory"] = memory = bench_memory()
+    print(f"\nlargest field ({memory['obstacles']} obstacles, {memory['uavs']} UAVs, "
+          f"{memory['waypoints']} waypoints, {memory['students']} students): one class in "
+          f"{memory['seconds']:.2f} s, peak traced memory {memory['peak_mib']:.1f} MiB "
+          f"(one unchunked distance array would be {memory['one_unchunked_array_mib']:.0f} MiB)")
+
+    doc["mealpy"] = rows = bench_mealpy(max(seeds // 2, 1))
+    if rows is None:
+        print("\n3. mealpy not installed: `pip install mealpy` to compare its TLBO")
+    else:
+        print(f"\n3. mealpy's OriginalTLBO vs ours on the example, {evaluation_budget(100, 150)} "
+              "evaluations each")
+        print(table(["seed", "mealpy cost", "mealpy s", "ours cost", "ours s"],
+                    [[r["seed"], f"{r['mealpy_cost']:.2f}", f"{r['mealpy_s']:.2f}",
+                      f"{r['ours_cost']:.2f}", f"{r['ours_s']:.2f}"] for r in rows]))
+
+    doc["load_after"] = load()
+    print(f"\nload average after (1/5/15 min): {doc['load_after']}")
+    Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
+    print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()
