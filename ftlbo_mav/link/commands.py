@@ -209,6 +209,10 @@ def _endpoint(text: str) -> tuple[str, int]:
               help="Also send every vehicle's traffic to one UDP address (a shared link: "
                    "connect with udpin:HOST:PORT).")
 @click.option("--loss", type=click.FloatRange(0, 1), default=0.0, help="Packet loss each way.")
+@click.option("--loss-up", type=click.FloatRange(0, 1), default=None,
+              help="Loss of packets to the vehicles (overrides --loss).")
+@click.option("--loss-down", type=click.FloatRange(0, 1), default=None,
+              help="Loss of packets from the vehicles (overrides --loss).")
 @click.option("--duplicate", type=click.FloatRange(0, 1), default=0.0,
               help="Fraction of packets duplicated.")
 @click.option("--reorder", type=click.FloatRange(0, 1), default=0.0,
@@ -220,12 +224,14 @@ def _endpoint(text: str) -> tuple[str, int]:
               help="Mission items a vehicle can hold.")
 @click.option("--silent", "silent", multiple=True, type=int, metavar="SYSID",
               help="This vehicle says nothing at all (repeatable).")
+@click.option("--mute", "mute", multiple=True, type=int, metavar="SYSID",
+              help="This vehicle sends HEARTBEATs but ignores the mission protocol.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="Vehicles require MAVLink 2 signing with this key.")
 @click.option("--seed", type=int, default=0, help="Seed of the fault decisions.")
 @user_errors
-def sim(count, scenario, base_port, udp_out, loss, duplicate, reorder, latency_ms, boot_delay,
-        capacity, silent, signing_key, seed):
+def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
+        latency_ms, boot_delay, capacity, silent, mute, signing_key, seed):
     """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
     from ..scenario import load_scenario
     from ..sim.faults import Faults
@@ -241,9 +247,10 @@ def sim(count, scenario, base_port, udp_out, loss, duplicate, reorder, latency_m
     else:
         homes = default_homes(count or 3)
     n = len(homes)
-    link = {"loss_up": loss, "loss_down": loss, "duplicate": duplicate, "reorder": reorder,
-            "latency_s": latency_ms / 1000.0}
-    faults = [Faults(**link, silent=(i + 1) in silent) for i in range(n)]
+    link = {"loss_up": loss if loss_up is None else loss_up,
+            "loss_down": loss if loss_down is None else loss_down,
+            "duplicate": duplicate, "reorder": reorder, "latency_s": latency_ms / 1000.0}
+    faults = [Faults(**link, silent=(i + 1) in silent, mute=(i + 1) in mute) for i in range(n)]
     options = VehicleOptions(ready_after_s=boot_delay, mission=MissionServerOptions(
         capacity=capacity, boot_no_space_s=boot_delay))
     key = load_key(signing_key) if signing_key else None
