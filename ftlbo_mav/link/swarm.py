@@ -37,6 +37,8 @@ class Assignment:
 
 @dataclass(frozen=True)
 class VehicleResult:
+    """How one vehicle ended: ``verified``, or why not, in one sentence."""
+
     name: str
     sysid: int
     verified: bool
@@ -44,10 +46,11 @@ class VehicleResult:
     seconds: float
 
 
-# (name, sysid, step, done, total); step is "upload", "read-back", "clear", "verified"
-# or "failed", the last two with the result message in ``ProgressEvent.message``.
 @dataclass(frozen=True)
 class ProgressEvent:
+    """Where one vehicle is. ``step``: "discover", "upload", "read-back" (with ``done`` of
+    ``total`` items), "clear", then "verified" or "failed" (with ``message``)."""
+
     name: str
     sysid: int
     step: str
@@ -93,7 +96,8 @@ def upload_and_verify(channel, items: Sequence[MissionItem], *, timing: Timing,
         run_transfer(machine, channel)
     except MissionTransferError as exc:
         if machine.highest < 0 and exc.result is None:
-            return False, f"upload failed: {exc.problem}; no item reached the vehicle"
+            return False, (f"upload failed: {exc.problem}; the vehicle never asked for an item, "
+                           "so none was sent")
         return False, f"upload failed: {exc.problem}; " + _clear_and_confirm(channel, timing, report)
     try:
         back = download_mission(channel, timing=timing, progress=progress)
@@ -102,7 +106,8 @@ def upload_and_verify(channel, items: Sequence[MissionItem], *, timing: Timing,
                        "NOT verified")
     problems = mission_differences(items, back)
     if problems:
-        shown = "; ".join(problems[:3]) + (f"; ... {len(problems) - 3} more" if len(problems) > 3 else "")
+        more = f"; ... {len(problems) - 3} more" if len(problems) > 3 else ""
+        shown = "; ".join(problems[:3]) + more
         return False, f"read-back differs: {shown}; " + _clear_and_confirm(channel, timing, report)
     return True, f"verified ({len(items)} items)"
 
