@@ -23,6 +23,16 @@ MISSION_TYPE_MISSION = 0
 # the altitude frame), likewise 5 -> 0 and 11 -> 10.
 _FRAME_TWIN = {5: 0, 6: 3, 11: 10}
 
+# Commands whose item carries a position (AP_Mission::stored_in_location, libraries/
+# AP_Mission/AP_Mission.cpp). For any other command (DO_CHANGE_SPEED, RETURN_TO_LAUNCH...)
+# the frame means nothing: ArduPilot returns frame 0 (GLOBAL) whatever was sent.
+POSITION_COMMANDS = frozenset(getattr(mavlink2, f"MAV_CMD_{name}") for name in (
+    "NAV_WAYPOINT", "NAV_LOITER_UNLIM", "NAV_LOITER_TURNS", "NAV_LOITER_TIME", "NAV_LAND",
+    "NAV_TAKEOFF", "NAV_CONTINUE_AND_CHANGE_ALT", "NAV_LOITER_TO_ALT", "NAV_SPLINE_WAYPOINT",
+    "NAV_GUIDED_ENABLE", "DO_SET_HOME", "DO_LAND_START", "DO_GO_AROUND", "DO_SET_ROI",
+    "NAV_VTOL_TAKEOFF", "NAV_VTOL_LAND", "NAV_PAYLOAD_PLACE",
+))
+
 # ArduPilot keeps altitudes as int32 centimetres (Location::alt, libraries/AP_Common/Location.h):
 # an altitude comes back rounded to the centimetre.
 ALT_TOLERANCE_M = 0.01
@@ -76,7 +86,7 @@ def item_differences(expected: MissionItem, actual: MissionItem) -> list[str]:
     out = []
     if actual.command != expected.command:
         out.append(f"command {actual.command}, expected {expected.command}")
-    if not same_frame(actual.frame, expected.frame):
+    if expected.command in POSITION_COMMANDS and not same_frame(actual.frame, expected.frame):
         out.append(f"frame {actual.frame}, expected {expected.frame}")
     for name in ("lat_deg", "lon_deg"):
         got, want = degrees_to_e7(getattr(actual, name)), degrees_to_e7(getattr(expected, name))

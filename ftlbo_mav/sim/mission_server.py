@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..link.codec import POSITION_COMMANDS
+
 R = mavlink2
 MISSION = R.MAV_MISSION_TYPE_MISSION
 # AP_Mission::mavlink_int_to_mission_cmd keeps only the altitude frame: the *_INT twins
@@ -50,12 +52,16 @@ class StoredItem:
 
 
 def _store(msg) -> StoredItem:
+    """As AP_Mission stores it and mission_cmd_to_mavlink_int returns it: the *_INT frames as
+    their plain twins; frame GLOBAL (0) for a command without a position."""
     if msg.get_type() == "MISSION_ITEM":  # AP_Mission::convert_MISSION_ITEM_to_MISSION_ITEM_INT
         x, y = round(msg.x * 1e7), round(msg.y * 1e7)
     else:
         x, y = msg.x, msg.y
     return StoredItem(
-        command=msg.command, frame=_STORED_FRAME.get(msg.frame, msg.frame),
+        command=msg.command,
+        frame=(_STORED_FRAME.get(msg.frame, msg.frame) if msg.command in POSITION_COMMANDS
+               else R.MAV_FRAME_GLOBAL),
         param1=msg.param1, param2=msg.param2, param3=msg.param3, param4=msg.param4,
         # Location::alt is int32 centimetres (libraries/AP_Common/Location.h)
         x=x, y=y, z=round(msg.z * 100.0) / 100.0,

@@ -57,3 +57,13 @@ def test_item_zero_is_not_compared_but_length_and_every_other_item_are():
     assert mission_differences(items, items[:10]) == ["read back 10 items, sent 15"]
     wrong = items[:4] + [replace(items[4], command=21)] + items[5:]
     assert mission_differences(items, wrong) == ["item 4: command 21, expected 16"]
+
+
+def test_frame_is_ignored_for_commands_without_a_position():
+    """ArduPilot returns DO_CHANGE_SPEED and RETURN_TO_LAUNCH in frame 0 whatever was sent."""
+    speed = MissionItem(seq=2, command=178, frame=3, param1=1, param2=5.0, param3=-1)
+    rtl = MissionItem(seq=14, command=20, frame=3)
+    assert item_differences(speed, replace(speed, frame=0)) == []
+    assert item_differences(rtl, replace(rtl, frame=0)) == []
+    waypoint = MissionItem(seq=3, command=16, frame=3)
+    assert item_differences(waypoint, replace(waypoint, frame=0)) == ["frame 0, expected 3"]

@@ -144,3 +144,16 @@ def test_items_after_the_upload_get_error():
     s = server()
     upload_all(s)
     assert only(s.handle(item(14), 2.0)).type == R.MAV_MISSION_ERROR
+
+
+def test_commands_without_a_position_come_back_in_frame_0():
+    from ftlbo_mav.mission.items import build_mission
+
+    items = build_mission(home=(12.2, 109.1), takeoff_alt_m=3.0, end_action="rtl",
+                          speed_m_s=4.0, path=[(12.2, 109.1, 4.0), (12.2001, 109.1001, 4.0)])
+    s = server()
+    s.handle(count(len(items)), 0.0)
+    for k, it in enumerate(items):
+        s.handle(wire(encode_item(it, target_system=1, target_component=1)), 0.01 * (k + 1))
+    frames = {it.command: only(read(s, k)).frame for k, it in enumerate(items) if k}
+    assert frames == {22: 3, 178: 0, 16: 3, 20: 0}
