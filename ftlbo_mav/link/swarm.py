@@ -11,11 +11,13 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+
+from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..mission.items import MissionItem
 from .codec import mission_differences
-from .endpoints import describe_missing, discover, open_links
+from .endpoints import Heartbeat, describe_missing, discover, open_links
 from .mission_protocol import (
     MissionTransferError,
     Timing,
@@ -60,6 +62,20 @@ class ProgressEvent:
 
 
 OnProgress = Callable[[ProgressEvent], None]
+
+
+# Vehicle sides known to drop an item whose seq is not the one they wait for: ArduPilot
+# (MissionItemProtocol::handle_mission_item, INVALID_SEQUENCE) and PX4 (mavlink_mission.cpp).
+# MAVSDK's MissionRawServer (autopilot GENERIC) stores every item it gets, so an early resend
+# after a slow answer would store an item twice: for those, resends wait the full time-out.
+SEQ_CHECKING_AUTOPILOTS = frozenset({R.MAV_AUTOPILOT_ARDUPILOTMEGA, R.MAV_AUTOPILOT_PX4})
+
+
+def timing_for(heartbeat: Heartbeat, timing: Timing) -> Timing:
+    """``timing``, with early resends only for autopilots that check item sequence numbers."""
+    if heartbeat.autopilot in SEQ_CHECKING_AUTOPILOTS:
+        return timing
+    return replace(timing, adaptive=False)
 
 
 def _clear_and_confirm(channel, timing: Timing, report: Callable[[str], None]) -> str:
@@ -140,8 +156,10 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
             def progress(step: str, done: int, total: int) -> None:
                 emit(ProgressEvent(a.name, a.sysid, step, done, total))
 
-            with found[a.sysid].channel(a.sysid) as channel:
-                ok, msg = upload_and_verify(channel, a.items, timing=timing, progress=progress)
+            link = found[a.sysid]
+            with link.channel(a.sysid) as channel:
+                ok, msg = upload_and_verify(channel, a.items, progress=progress,
+                                            timing=timing_for(link.heartbeats[a.sysid], timing))
             emit(ProgressEvent(a.name, a.sysid, "verified" if ok else "failed",
                                len(a.items), len(a.items), msg))
             return VehicleResult(a.name, a.sysid, ok, msg, time.monotonic() - t0)

@@ -64,7 +64,8 @@ class Timing:
     vehicle may answer NO_SPACE (booting) or DENIED (busy) before that is final,
     retrying every ``not_ready_poll_s``. ``first_resend_s``: resend interval before any
     round trip has been timed (TCP starts at 1 s, RFC 6298; a lost MISSION_COUNT at 30%
-    loss should not eat the budget in 1.5 s steps).
+    loss should not eat the budget in 1.5 s steps). ``adaptive=False``: always wait
+    ``timeout_s`` before a resend (for vehicles that would store a resent item twice).
     """
 
     timeout_s: float = 1.5
@@ -73,6 +74,7 @@ class Timing:
     not_ready_poll_s: float = 1.0
     min_resend_s: float = 0.2
     first_resend_s: float = 0.5
+    adaptive: bool = True
 
     @property
     def budget_s(self) -> float:
@@ -134,6 +136,8 @@ class _Transfer:
 
     def _resend_s(self) -> float:
         """When to resend a seemingly lost message: ~4 round trips, within bounds."""
+        if not self.timing.adaptive:
+            return self.timing.timeout_s
         if self.srtt is None:
             return min(self.timing.timeout_s, self.timing.first_resend_s)
         return min(self.timing.timeout_s, max(self.timing.min_resend_s, 4.0 * self.srtt))

@@ -332,3 +332,21 @@ def test_a_stalled_upload_is_cancelled_by_the_vehicle_and_reported():
     assert seen[-1][1:] == ("MISSION_ACK", R.MAV_MISSION_OPERATION_CANCELLED)
     assert up.on_message(ch.received[-1], ch.now) == [] and up.finished
     assert "cancelled" in str(up.error)
+
+
+def test_early_resends_only_for_autopilots_that_check_item_sequence():
+    from ftlbo_mav.link.endpoints import Heartbeat
+    from ftlbo_mav.link.swarm import timing_for
+
+    def hb(autopilot):
+        return Heartbeat(sysid=1, compid=1, vehicle_type=2, autopilot=autopilot, custom_mode=0,
+                         base_mode=0, system_status=3, received_at=0.0)
+
+    timing = Timing()
+    assert timing_for(hb(R.MAV_AUTOPILOT_ARDUPILOTMEGA), timing) is timing
+    generic = timing_for(hb(R.MAV_AUTOPILOT_GENERIC), timing)  # e.g. MAVSDK's server
+    up = upload_machine(timing=generic)
+    up.start(0.0)
+    up.on_message(request(0), 0.01)
+    up.on_message(request(1), 0.02)
+    assert up.deadline == pytest.approx(0.02 + timing.timeout_s)
