@@ -568,6 +568,12 @@ def _pad(vertices: np.ndarray, count: int) -> np.ndarray:
 
 def route_waypoints(problem: PlanningProblem, route: Route, waypoints: int, *,
                     margin: float | None = None) -> np.ndarray:
+    """See :func:`_route_polygon` (which also says whether the polygon is clear)."""
+    return _route_polygon(problem, route, waypoints, margin=margin)[0]
+
+
+def _route_polygon(problem: PlanningProblem, route: Route, waypoints: int, *,
+                   margin: float | None = None) -> tuple[np.ndarray, bool]:
     """``route`` as ``waypoints`` centroid waypoints ``(m, 3)``: a clear polygon near it.
 
     The shortest chain of at most ``m`` vertices, from start to goal, over candidate
@@ -578,6 +584,7 @@ def route_waypoints(problem: PlanningProblem, route: Route, waypoints: int, *,
     longest legs. When no such chain exists the arcs' corners are cut
     (:func:`_allocated_polygon`) and the optimizer is left to repair the seed.
     Altitudes go linearly from start to goal along the polygon, inside the bounds.
+    Returns the waypoints ``(m, 3)`` and whether the clear chain was found.
     """
     m = waypoints
     margin = seed_margin(problem) if margin is None else margin
@@ -605,7 +612,7 @@ def route_waypoints(problem: PlanningProblem, route: Route, waypoints: int, *,
     along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(full, axis=0).T))])
     frac = along[1:-1] / max(along[-1], 1e-12)
     z = start[2] + frac * (goal[2] - start[2])
-    return np.clip(np.column_stack([xy, z]), lower, upper)
+    return np.clip(np.column_stack([xy, z]), lower, upper), chain is not None
 
 
 def _resample(line: np.ndarray, count: int) -> np.ndarray:
@@ -625,11 +632,15 @@ def seed_waypoints(
     problem: PlanningProblem, *, count: int = 4, routes: list[Route] | None = None
 ) -> np.ndarray:
     """Waypoints ``(R, m, 3)`` near up to ``count`` short routes (or the given
-    ``routes``), shortest first, kept :func:`seed_margin` off the discs
-    (:func:`route_waypoints`); ``(0, m, 3)`` when no route exists."""
+    ``routes``), kept :func:`seed_margin` off the discs (:func:`route_waypoints`): the
+    clear ones first, shortest route first among equals; ``(0, m, 3)`` when no route
+    exists."""
     if routes is None:
         routes = shortest_routes(problem, count=count)
     m = problem.waypoints
     if not routes:
         return np.zeros((0, m, 3))
-    return np.stack([route_waypoints(problem, r, m) for r in routes])
+    polygons = [_route_polygon(problem, r, m) for r in routes]
+    # clear polygons first (stable: shortest route first among them)
+    order = sorted(range(len(polygons)), key=lambda i: not polygons[i][1])
+    return np.stack([polygons[i][0] for i in order])

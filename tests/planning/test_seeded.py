@@ -19,13 +19,13 @@ def test_the_seeded_planner_is_the_default_and_every_algorithm_is_accepted():
     assert parse_scenario(SMALL).planner.algorithm == DEFAULT_ALGORITHM
 
 
-def test_seeded_class_keeps_the_shortest_route_and_perturbs_copies():
+def test_seeded_class_keeps_every_seed_and_perturbs_copies():
     seeds = np.arange(12.0).reshape(2, 6)
     students = seeded_class(seeds, 6, np.random.default_rng(0))
-    assert np.array_equal(students[0], seeds[0])
-    assert np.allclose(students[1:3], seeds[0], atol=2.0) and not np.array_equal(
-        students[1], seeds[0])
-    assert np.allclose(students[3:], seeds[1], atol=2.0)
+    assert np.array_equal(students[:2], seeds)  # every seed once, unchanged
+    assert np.allclose(students[2:4], seeds[0], atol=2.0) and not np.array_equal(
+        students[2], seeds[0])
+    assert np.allclose(students[4:], seeds[1], atol=2.0)
 
 
 def test_same_seed_same_result_and_plain_ftlbo_without_seeds():

@@ -9,8 +9,9 @@ alternative routes. The rest of the class is random, and the paper's FTLBO
 (:func:`.ftlbo.ftlbo`) refines the whole class with the same budget and rules. When no
 route exists (or none is given) this is plain FTLBO.
 
-Choices: ``SEED_FRACTION`` (20%) of the class is seeded; half of the seeded students
-come from the shortest route, the rest from the alternatives in turn; perturbations are
+Choices: ``SEED_FRACTION`` (20%) of the class is seeded: every seed route once as it is,
+then perturbed copies, half of the first (clear, shortest) seed, the rest of the
+alternatives in turn; perturbations are
 normal with ``SIGMA_HORIZONTAL`` (0.25 m) east/north and ``SIGMA_VERTICAL`` (0.1 m) up,
 drawn from the injected generator. Early stop: once the best cost has improved by less
 than 1e-6 (relative) over ``PATIENCE`` (30) iterations, the run ends (the budget is an
@@ -33,17 +34,20 @@ PATIENCE = 30
 
 def seeded_class(seeds: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
     """``count`` students ``(count, D)`` from seed routes ``(R, D)`` (flattened ``(m, 3)``
-    waypoints, shortest first): the shortest route unchanged, then perturbed copies."""
+    waypoints, best first): every seed once unchanged (a seed hugging the obstacles is
+    rarely still clear after a perturbation), then perturbed copies, half of them of the
+    first seed, the rest of the others in turn."""
     seeds = np.atleast_2d(seeds)
     R, D = seeds.shape
     sigma = np.tile([SIGMA_HORIZONTAL, SIGMA_HORIZONTAL, SIGMA_VERTICAL], D // 3)
-    half = max(count // 2, 1)
-    which = np.zeros(count, int)
+    exact = min(R, count)
+    copies = count - exact
+    half = copies // 2
+    which = np.zeros(copies, int)
     if R > 1:
-        which[half:] = 1 + np.arange(count - half) % (R - 1)
-    students = seeds[which] + rng.normal(size=(count, D)) * sigma
-    students[0] = seeds[0]
-    return students
+        which[half:] = 1 + np.arange(copies - half) % (R - 1)
+    students = seeds[which] + rng.normal(size=(copies, D)) * sigma
+    return np.concatenate([seeds[:exact], students])
 
 
 def ftlbo_seeded(
