@@ -85,7 +85,12 @@ class VehicleRunner:
         for msg in att.parser.parse_buffer(data) or []:
             if msg.get_type() == "BAD_DATA":
                 continue
-            for delay, m in self.up.route(msg):
+            routes = self.up.route(msg)
+            if self.key is not None:
+                # a duplicated signed frame repeats its timestamp: the signature check
+                # rejects the replay (MAVLink signing, libraries/GCS_MAVLink/GCS_Signing.cpp)
+                routes = routes[:1]
+            for delay, m in routes:
                 self._later(delay, self._handle, att, m)
 
     def _handle(self, att: _Attachment, msg) -> None:
