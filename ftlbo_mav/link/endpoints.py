@@ -147,7 +147,6 @@ class Link:
         self.heartbeats: dict[int, Heartbeat] = {}
         # per system id: last GPS fix type and whether pre-arm checks pass
         self.readiness: dict[int, dict] = {}
-        self._heard = threading.Condition()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
         self._thread.start()
@@ -213,13 +212,11 @@ class Link:
             return
         src = msg.get_srcSystem()
         if kind == "HEARTBEAT" and _is_vehicle(msg):
-            with self._heard:
-                self.heartbeats[src] = Heartbeat(
-                    sysid=src, compid=msg.get_srcComponent(), vehicle_type=msg.type,
-                    autopilot=msg.autopilot, custom_mode=msg.custom_mode,
-                    base_mode=msg.base_mode, system_status=msg.system_status,
-                    received_at=time.monotonic())
-                self._heard.notify_all()
+            self.heartbeats[src] = Heartbeat(
+                sysid=src, compid=msg.get_srcComponent(), vehicle_type=msg.type,
+                autopilot=msg.autopilot, custom_mode=msg.custom_mode,
+                base_mode=msg.base_mode, system_status=msg.system_status,
+                received_at=time.monotonic())
         elif kind == "GPS_RAW_INT":
             self.readiness.setdefault(src, {})["gps_fix"] = msg.fix_type
         elif kind == "SYS_STATUS":
@@ -229,16 +226,6 @@ class Link:
             subs = list(self._queues.get(src, ()))
         for q in subs:
             q.put(msg)
-
-    def wait_heartbeat(self, sysid: int, *, until: float) -> bool:
-        """Wait until a HEARTBEAT from ``sysid`` has been heard or ``until`` (monotonic)."""
-        with self._heard:
-            while sysid not in self.heartbeats:
-                left = until - time.monotonic()
-                if left <= 0:
-                    return False
-                self._heard.wait(left)
-            return True
 
 
 class Channel:
@@ -317,8 +304,7 @@ def discover(links: Iterable[Link], sysids: Sequence[int], *,
         missing = [s for s in sysids if s not in found]
         if not missing or time.monotonic() >= deadline:
             return found, missing
-        # wait on one link at a time in short slices so any link's heartbeat counts
-        links[0].wait_heartbeat(missing[0], until=min(deadline, time.monotonic() + 0.05))
+        time.sleep(0.05)  # the links' reader threads fill in ``heartbeats``
 
 
 def is_ready(link: Link, sysid: int) -> bool:

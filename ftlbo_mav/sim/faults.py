@@ -43,11 +43,6 @@ class Faults:
         if self.latency_s < 0:
             raise ValueError(f"latency_s must be >= 0, got {self.latency_s}")
 
-    @property
-    def any_link_fault(self) -> bool:
-        return bool(self.loss_up or self.loss_down or self.duplicate or self.reorder
-                    or self.latency_s)
-
 
 class FaultyPipe:
     """One direction of a link: ``route(payload)`` -> ``[(delay_s, payload), ...]``.

@@ -47,8 +47,7 @@ class LoopbackChannel:
         self._veh = mavlink2.MAVLink(None, srcSystem=vehicle.sysid, srcComponent=vehicle.compid)
         self._gcs_parser = mavlink2.MAVLink(None)
         self._veh_parser = mavlink2.MAVLink(None)
-        self.sent: list = []      # every message the ground station sent, in order
-        self.received: list = []  # every message the ground station was handed
+        self.received: list = []  # every message the ground station was handed, in order
 
     def clock(self) -> float:
         return self.now
@@ -63,7 +62,6 @@ class LoopbackChannel:
         heapq.heappush(self._events, (t, next(self._order), where, msg))
 
     def send(self, msg) -> None:
-        self.sent.append(msg)
         wire = self._wire(msg, self._gcs, self._veh_parser)
         for delay, m in self.up.route(wire):
             self._push(self.now + ONE_WAY_S + delay, "vehicle", m)
