@@ -13,8 +13,10 @@ the figures, and every median is over several seeds or repeats.
    (6, 25, 100), UAVs (3, 10, 30) and waypoints (10, 20, 40), one factor at a time,
    normalised per UAV x obstacle x segment; the default planner's wall time on the same
    fields; peak memory of one class evaluation on the largest field.
-3. When the optional ``mealpy`` package is importable: its TLBO on our cost at the same
-   evaluation budget, next to ours (cost and time).
+3. When the optional ``mealpy`` package is importable: its TLBO (``OriginalTLO``) on our
+   cost, one path per call as mealpy evaluates, at the same evaluation budget, next to
+   ours (cost and time). mealpy pins numpy <= 1.26, so run it from its own virtual
+   environment (docs/planning.md).
 """
 
 from __future__ import annotations
@@ -195,7 +197,8 @@ def bench_memory() -> dict:
 
 def bench_mealpy(seeds: int) -> list[dict] | None:
     try:
-        from mealpy import TLBO, FloatVar
+        from mealpy import FloatVar
+        from mealpy.human_based.TLO import OriginalTLO  # mealpy 3: TLBO is "TLO"
     except ImportError:
         return None
     scenario = load_scenario(EXAMPLE)
@@ -213,7 +216,7 @@ def bench_mealpy(seeds: int) -> list[dict] | None:
 
         spec = {"obj_func": one, "bounds": FloatVar(lb=lower, ub=upper), "minmax": "min",
                 "log_to": None}
-        model = TLBO.OriginalTLBO(epoch=10_000, pop_size=100)
+        model = OriginalTLO(epoch=10_000, pop_size=100)
         t0 = time.perf_counter()
         best = model.solve(spec, termination={"max_fe": budget}, seed=seed)
         mealpy_s = time.perf_counter() - t0
@@ -231,12 +234,30 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer seeds and repeats")
     parser.add_argument("--json", default="planner-benchmark.json", help="output JSON path")
+    parser.add_argument("--only", choices=("algorithms", "scaling", "mealpy"),
+                        help="run one part only")
     args = parser.parse_args()
     seeds, repeats = (3, 2) if args.quick else (7, 5)
     doc = {"python": sys.version.split()[0], "numpy": np.__version__,
            "cpus": os.cpu_count(), "load_before": load()}
     print(f"load average before (1/5/15 min): {doc['load_before']}; {os.cpu_count()} CPUs")
 
+    def part(name: str) -> bool:
+        return args.only in (None, name)
+
+    if part("algorithms"):
+        report_algorithms(doc, seeds)
+    if part("scaling"):
+        report_scaling(doc, seeds, repeats)
+    if part("mealpy"):
+        report_mealpy(doc, seeds)
+    doc["load_after"] = load()
+    print(f"\nload average after (1/5/15 min): {doc['load_after']}")
+    Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
+    print(f"wrote {args.json}")
+
+
+def report_algorithms(doc: dict, seeds: int) -> None:
     doc["algorithms"] = algorithms = bench_algorithms(seeds)
     print(f"\n1. plan() on {EXAMPLE.name}, paper's settings, {seeds} seeds each")
     print(table(
@@ -247,6 +268,9 @@ def main() -> None:
           f"{a['evaluations_per_s']:,.0f}", f"{a['cost_median']:.2f}",
           f"{a['ratio_median']:.4f}", f"{a['feasible']}/{a['seeds']}"] for a in algorithms]))
 
+
+
+def report_scaling(doc: dict, seeds: int, repeats: int) -> None:
     doc["scaling"] = scaling = bench_scaling(repeats, max(seeds // 2, 1))
     print("\n2. cost evaluations (class of 100 random paths) and the default planner, "
           "one factor at a time")
@@ -264,20 +288,20 @@ def main() -> None:
           f"{memory['seconds']:.2f} s, peak traced memory {memory['peak_mib']:.1f} MiB "
           f"(one unchunked distance array would be {memory['one_unchunked_array_mib']:.0f} MiB)")
 
+
+
+def report_mealpy(doc: dict, seeds: int) -> None:
     doc["mealpy"] = rows = bench_mealpy(max(seeds // 2, 1))
     if rows is None:
         print("\n3. mealpy not installed: `pip install mealpy` to compare its TLBO")
     else:
-        print(f"\n3. mealpy's OriginalTLBO vs ours on the example, {evaluation_budget(100, 150)} "
-              "evaluations each")
-        print(table(["seed", "mealpy cost", "mealpy s", "ours cost", "ours s"],
+        print(f"\n3. mealpy's OriginalTLO (TLBO) vs our tlbo on the example, budget "
+              f"{evaluation_budget(100, 150)} evaluations (mealpy finishes its epoch)")
+        print(table(["seed", "mealpy cost", "mealpy s", "mealpy evals", "ours cost", "ours s",
+                     "ours evals"],
                     [[r["seed"], f"{r['mealpy_cost']:.2f}", f"{r['mealpy_s']:.2f}",
-                      f"{r['ours_cost']:.2f}", f"{r['ours_s']:.2f}"] for r in rows]))
-
-    doc["load_after"] = load()
-    print(f"\nload average after (1/5/15 min): {doc['load_after']}")
-    Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
-    print(f"wrote {args.json}")
+                      r["mealpy_evaluations"], f"{r['ours_cost']:.2f}", f"{r['ours_s']:.2f}",
+                      r["ours_evaluations"]] for r in rows]))
 
 
 if __name__ == "__main__":
