@@ -121,7 +121,7 @@ def _open(url: str, *, timeout_s: float):
         except ValueError as exc:
             raise BadInput(f"--connect {url}: {exc}") from None
         except ImportError:
-            raise LinkError(f"{url}: serial links need pyserial (pip install pyserial)") from None
+            raise LinkError(f"{url}: serial links need pyserial: pip install 'ftlbo-mav[serial]'") from None
 
 
 class Link:
