@@ -331,7 +331,8 @@ def compare_document(comparison: Comparison) -> dict:
             for s in c.summaries()
         ],
         "runs": [
-            {k: ([_json_number(h) for h in v] if k == "history" else _json_number(v))
+            {k: ([_json_number(round(h, 6)) for h in v] if k == "history"
+                 else _json_number(v))
              for k, v in asdict(r).items()}
             for r in c.runs
         ],
