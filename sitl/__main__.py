@@ -13,7 +13,8 @@ from .launcher import SitlSwarm
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m sitl", description=__doc__)
-    parser.add_argument("--count", type=int, default=None, help="copters (default: scenario's, else 3)")
+    parser.add_argument("--count", type=int, default=None,
+                        help="copters (default: the scenario's UAVs, else 3)")
     parser.add_argument("--scenario", help="put each home at its UAV's start position")
     parser.add_argument("--binary", help="arducopter binary (default: $ARDUPILOT_SITL)")
     parser.add_argument("--defaults", action="append", default=[],

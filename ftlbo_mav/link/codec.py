@@ -101,7 +101,8 @@ def item_differences(expected: MissionItem, actual: MissionItem) -> list[str]:
     return out
 
 
-def mission_differences(expected: Sequence[MissionItem], actual: Sequence[MissionItem]) -> list[str]:
+def mission_differences(expected: Sequence[MissionItem],
+                        actual: Sequence[MissionItem]) -> list[str]:
     """Why ``actual`` (read back) is not ``expected``; empty when they match.
 
     Item 0 is not compared: ArduPilot answers a read-back with its own home as item 0

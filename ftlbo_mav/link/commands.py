@@ -165,7 +165,8 @@ def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, di
 
 
 @click.command()
-@click.option("--sysid", type=click.IntRange(1, 254), required=True, help="The vehicle's system id.")
+@click.option("--sysid", type=click.IntRange(1, 254), required=True,
+              help="The vehicle's system id.")
 @click.option("--connect", metavar="URL",
               help="pymavlink connection string (default: tcp:127.0.0.1:5760 + 10*(sysid-1)).")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),

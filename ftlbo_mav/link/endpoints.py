@@ -121,7 +121,8 @@ def _open(url: str, *, timeout_s: float):
         except ValueError as exc:
             raise BadInput(f"--connect {url}: {exc}") from None
         except ImportError:
-            raise LinkError(f"{url}: serial links need pyserial: pip install 'ftlbo-mav[serial]'") from None
+            raise LinkError(f"{url}: serial links need pyserial: "
+                            "pip install 'ftlbo-mav[serial]'") from None
 
 
 class Link:
@@ -133,7 +134,8 @@ class Link:
     context manager; :meth:`close` stops the thread and closes the connection.
     """
 
-    def __init__(self, url: str, *, signing_key: bytes | None = None, connect_timeout_s: float = 5.0):
+    def __init__(self, url: str, *, signing_key: bytes | None = None,
+                 connect_timeout_s: float = 5.0):
         self.url = url
         self._conn = _open(url, timeout_s=connect_timeout_s)
         if signing_key is not None:

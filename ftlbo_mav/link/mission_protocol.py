@@ -283,8 +283,9 @@ class Clear(_Transfer):
 
 
 def _kw(channel, timing: Timing | None, progress: Progress | None, compid: int) -> dict:
-    return {"sysid": channel.sysid, "compid": compid, "own": (channel.own_sysid, channel.own_compid),
-                "timing": timing or Timing(), "progress": progress, "srtt": getattr(channel, "srtt", None)}
+    return {"sysid": channel.sysid, "compid": compid,
+            "own": (channel.own_sysid, channel.own_compid), "timing": timing or Timing(),
+            "progress": progress, "srtt": getattr(channel, "srtt", None)}
 
 
 def upload_mission(channel, items: Sequence[MissionItem], *, timing: Timing | None = None,

@@ -114,7 +114,8 @@ def upload_and_verify(channel, items: Sequence[MissionItem], *, timing: Timing,
         if machine.highest < 0 and exc.result is None:
             return False, (f"upload failed: {exc.problem}; the vehicle never asked for an item, "
                            "so none was sent")
-        return False, f"upload failed: {exc.problem}; " + _clear_and_confirm(channel, timing, report)
+        cleared = _clear_and_confirm(channel, timing, report)
+        return False, f"upload failed: {exc.problem}; {cleared}"
     try:
         back = download_mission(channel, timing=timing, progress=progress)
     except MissionTransferError as exc:

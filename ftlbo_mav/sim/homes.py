@@ -22,7 +22,8 @@ def default_homes(count: int, *, origin: tuple[float, float, float] = CMAC,
     return [(lat, lon + i * spacing_m / m_per_deg_lon, alt) for i in range(count)]
 
 
-def scenario_homes(scenario: Scenario, *, ground_alt_m: float = 0.0) -> list[tuple[float, float, float]]:
+def scenario_homes(scenario: Scenario, *,
+                   ground_alt_m: float = 0.0) -> list[tuple[float, float, float]]:
     """Each UAV's start on the ground: the centroid start plus its formation offset.
 
     UAV n starts at ``frame.to_lla(start_enu + offsets_m[n])`` (its first mission item,

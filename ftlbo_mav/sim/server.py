@@ -199,8 +199,8 @@ class Simulator:
         for i, home in enumerate(self.homes):
             v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
                         boot_time=now)
-            self.runners.append(VehicleRunner(v, faults=self.faults[i], signing_key=self.signing_key,
-                                              rng=rngs[i], loop=loop))
+            self.runners.append(VehicleRunner(v, faults=self.faults[i], rng=rngs[i], loop=loop,
+                                              signing_key=self.signing_key))
         servers = []
         try:
             for i, runner in enumerate(self.runners):
