@@ -596,9 +596,9 @@ def _route_polygon(problem: PlanningProblem, route: Route, waypoints: int, *,
     rect_lo, rect_hi = _centroid_rectangle(problem)
     widened = Discs(route.discs.centres, route.discs.radii + 0.5 * margin,
                     route.discs.cylinder, route.discs.uav)
-    ok = _in_rectangle(points, rect_lo, rect_hi)
-    ok[0] = ok[-1] = True
-    points = points[ok]
+    # A vertex beyond the area's side (a route along the side) is moved onto it; the
+    # legs' clearance decides whether it is usable.
+    points = np.clip(points, rect_lo, rect_hi)
     P = len(points)
     i, j = np.triu_indices(P, 1)
     clear = np.zeros((P, P), bool)
