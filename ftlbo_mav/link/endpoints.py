@@ -143,6 +143,9 @@ class Link:
             # with signing enabled signs its replies, one without does not).
             self._conn.setup_signing(signing_key, sign_outgoing=True,
                                      allow_unsigned_callback=lambda _mav, _msgid: True)
+        # pymavlink prints and retries on a closed TCP peer; here it ends the reader instead
+        self.closed_by_peer = False
+        self._conn.handle_eof = self._conn.handle_disconnect = self._peer_closed
         self._send_lock = threading.Lock()
         self._subs_lock = threading.Lock()
         self._queues: dict[int, list[queue.SimpleQueue]] = {}
@@ -205,8 +208,12 @@ class Link:
                 while (msg := self._conn.recv_msg()) is not None:
                     self._dispatch(msg)
             except (OSError, ValueError):
-                if self._stop.wait(0.1):
+                if self.closed_by_peer or self._stop.wait(0.1):
                     return
+
+    def _peer_closed(self) -> None:
+        self.closed_by_peer = True
+        raise ConnectionResetError(f"{self.url}: closed by the other end")
 
     def _dispatch(self, msg) -> None:
         kind = msg.get_type()

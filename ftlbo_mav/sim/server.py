@@ -178,6 +178,7 @@ class Simulator:
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._stopping: asyncio.Event | None = None
+        self._clients: dict[asyncio.Task, asyncio.StreamWriter] = {}
 
     @property
     def urls(self) -> list[str]:
@@ -225,6 +226,9 @@ class Simulator:
         finally:
             for s in servers:
                 s.close()
+            for writer in self._clients.values():  # clients are dropped, as SITL exiting does
+                writer.close()
+            await asyncio.gather(*self._clients, return_exceptions=True)
             for s in servers:
                 await s.wait_closed()
 
@@ -232,6 +236,18 @@ class Simulator:
         one_at_a_time = asyncio.Lock()
 
         async def serve(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+            task = asyncio.current_task()
+            self._clients[task] = writer
+            try:
+                await self._serve(runner, one_at_a_time, reader, writer)
+            finally:
+                del self._clients[task]
+
+        return serve
+
+    async def _serve(self, runner: VehicleRunner, one_at_a_time: asyncio.Lock,
+                     reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        try:
             async with one_at_a_time:  # the next client is served after this one leaves
                 att = runner.attach(writer.write)
                 try:
@@ -241,9 +257,8 @@ class Simulator:
                     pass
                 finally:
                     runner.detach(att)
-                    writer.close()
-
-        return serve
+        finally:
+            writer.close()
 
     # -- background thread (tests, benchmarks)
     def __enter__(self) -> Self:
