@@ -97,3 +97,18 @@ def test_random_fields_no_feasible_plan_beats_the_bound(trial):
             assert not result.feasible
         elif result.feasible:
             assert result.cost.length > result.lower_bound_length
+
+
+def test_plan_command_says_no_route_in_one_line(tmp_path):
+    from click.testing import CliRunner
+
+    from ftlbo_mav.cli import main
+
+    path = tmp_path / "blocked.toml"
+    path.write_text(BLOCKED)
+    result = CliRunner().invoke(main, ["plan", str(path), "-o", str(tmp_path / "out"),
+                                       "--iterations", "3", "-q"])
+    assert result.exit_code == 1
+    assert result.stderr.splitlines()[0] == NO_ROUTE  # before anything else
+    assert "no route: no lower bound" in result.stdout
+    assert "Traceback" not in result.output
