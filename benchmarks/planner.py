@@ -38,7 +38,7 @@ sys.path.insert(0, str(ROOT))
 
 from ftlbo_mav.formation import regular_formation  # noqa: E402
 from ftlbo_mav.planning.cost import search_cost  # noqa: E402
-from ftlbo_mav.planning.geometric import lower_bound, shortest_route  # noqa: E402
+from ftlbo_mav.planning.geometric import shortest_route  # noqa: E402
 from ftlbo_mav.planning.optimizers import (  # noqa: E402
     OPTIMIZERS,
     Objective,

@@ -14,7 +14,8 @@ import numpy as np
 from ..scenario import PlannerSettings, Scenario
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
-from .geometric import lower_bound, seed_waypoints, shortest_routes
+from .geometric import lower_bound, shortest_routes
+from .seeds import seed_waypoints
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import Progress
 from .problem import PlanningProblem, problem_from_scenario

@@ -10,13 +10,12 @@ import pytest
 from ftlbo_mav.planning.feasibility import violations
 from ftlbo_mav.planning.geometric import (
     formation_discs,
-    route_waypoints,
     lower_bound,
-    seed_waypoints,
     shortest_route,
     shortest_routes,
 )
 from ftlbo_mav.planning.problem import PlanningProblem, problem_from_scenario
+from ftlbo_mav.planning.seeds import route_waypoints, seed_waypoints
 from ftlbo_mav.scenario import load_scenario
 
 from ..conftest import EXAMPLE
