@@ -11,6 +11,7 @@ that address, as a telemetry radio or a router's UDP output does.
 from __future__ import annotations
 
 import asyncio
+import signal
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -297,9 +298,14 @@ class Simulator:
 
     # -- foreground (the CLI)
     def run(self, ready: Callable[[], None] = lambda: None) -> None:
-        """Serve until interrupted (Ctrl-C)."""
+        """Serve until interrupted (Ctrl-C) or terminated (SIGTERM), then stop cleanly."""
+
+        def started() -> None:
+            asyncio.get_running_loop().add_signal_handler(signal.SIGTERM, self._stopping.set)
+            ready()
+
         try:
-            asyncio.run(self._main(ready))
+            asyncio.run(self._main(started))
         except KeyboardInterrupt:
             pass
 
