@@ -72,3 +72,37 @@ def test_download_from_nobody_is_a_clear_error(tmp_path):
     assert result.exit_code == 1
     assert "cannot connect" in result.output and "tcp:127.0.0.1:9" in result.output
     assert not (tmp_path / "x.waypoints").exists()
+
+
+class FakeTerminal:
+    def __init__(self, tty: bool):
+        self.tty, self.text = tty, ""
+
+    def isatty(self) -> bool:
+        return self.tty
+
+    def write(self, s: str) -> None:
+        self.text += s
+
+    def flush(self) -> None:
+        pass
+
+
+def test_progress_is_one_line_per_vehicle_redrawn_in_place_on_a_terminal():
+    from ftlbo_mav.link.commands import ProgressBoard
+    from ftlbo_mav.link.swarm import ProgressEvent
+
+    term = FakeTerminal(tty=True)
+    board = ProgressBoard([("uav1", 1), ("uav2", 2)], stream=term)
+    board(ProgressEvent("uav2", 2, "upload", 5, 15))
+    board(ProgressEvent("uav1", 1, "failed", message="x"))
+    last = term.text.split("\x1b[2F")[-1]  # cursor up two lines, then both lines again
+    assert last == ("\x1b[2Kuav1 -> sysid 1: FAILED\n"
+                    "\x1b[2Kuav2 -> sysid 2: upload    [######              ] 5/15\n")
+    log = FakeTerminal(tty=False)
+    board = ProgressBoard([("uav1", 1)], stream=log)
+    for done in range(3):
+        board(ProgressEvent("uav1", 1, "upload", done, 15))
+    board(ProgressEvent("uav1", 1, "verified"))
+    assert log.text.splitlines() == ["uav1 -> sysid 1: upload    [                    ] 0/15",
+                                     "uav1 -> sysid 1: verified"]
