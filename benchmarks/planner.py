@@ -210,7 +210,7 @@ def bench_mealpy(seeds: int) -> list[dict] | None:
     for seed in range(seeds):
         calls = [0]
 
-        def one(x):
+        def one(x, calls=calls):
             calls[0] += 1
             return float(search_cost(problem, np.asarray(x).reshape(1, m, 3))[0])
 

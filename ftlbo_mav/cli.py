@@ -156,7 +156,8 @@ main.add_command(sim)
               help="Comma-separated algorithm names (ftlbo,tlbo,ga,theta-pso is the paper's set).")
 @click.option("--processes", type=click.IntRange(min=1),
               help="Worker processes (default: the number of cores).")
-@click.option("--iterations", type=click.IntRange(min=1), help="Iterations L (default: scenario's).")
+@click.option("--iterations", type=click.IntRange(min=1),
+              help="Iterations L (default: scenario's).")
 @click.option("--students", type=click.IntRange(min=4), help="Class size (default: scenario's).")
 @click.option("--waypoints", type=click.IntRange(min=1), help="Waypoints m (default: scenario's).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")

@@ -28,9 +28,9 @@ import math
 import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 
@@ -108,7 +108,9 @@ class Comparison:
         return [summarize(algorithm, self.of(algorithm)) for algorithm in self.algorithms]
 
 
-def converged_iteration(history: Sequence[float], *, within: float = CONVERGED_WITHIN) -> int | None:
+def converged_iteration(
+    history: Sequence[float], *, within: float = CONVERGED_WITHIN
+) -> int | None:
     """First iteration (1-based) within ``within`` (relative) of the final best cost."""
     h = np.asarray(history, float)
     if not len(h) or not np.isfinite(h[-1]):

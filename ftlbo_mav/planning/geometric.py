@@ -214,7 +214,8 @@ def _point_tangents(p: np.ndarray, discs: Discs):
     phi = np.arctan2(v[:, 1], v[:, 0])
     alpha = np.arccos(np.clip(discs.radii / np.where(ok, d, 1.0), -1, 1))
     idx = np.nonzero(ok)[0]
-    return np.concatenate([idx, idx]), np.concatenate([phi[idx] + alpha[idx], phi[idx] - alpha[idx]])
+    angles = np.concatenate([phi[idx] + alpha[idx], phi[idx] - alpha[idx]])
+    return np.concatenate([idx, idx]), angles
 
 
 def _bitangents(discs: Discs):

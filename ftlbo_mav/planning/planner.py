@@ -6,8 +6,8 @@ Pure computation: no files, no printing (progress goes to an optional callback).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Callable
 
 import numpy as np
 
@@ -15,10 +15,10 @@ from ..scenario import PlannerSettings, Scenario
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
 from .geometric import lower_bound, shortest_routes
-from .seeds import seed_waypoints
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import Progress
 from .problem import PlanningProblem, problem_from_scenario
+from .seeds import seed_waypoints
 
 
 @dataclass(frozen=True, eq=False)
