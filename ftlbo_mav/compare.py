@@ -17,6 +17,8 @@ Definitions (docs/planning.md):
   run's final cost; *first feasible iteration*: the first whose best plan is feasible
   (the paper's table starts every algorithm from one cost, 248.28; random classes on our
   map often start with no feasible student at all).
+- *seconds*: ``Plan.seconds``, the optimizer's wall time (for ``ftlbo-seeded`` with its
+  seed routes), measured while the other processes run.
 """
 
 from __future__ import annotations
