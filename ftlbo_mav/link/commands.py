@@ -230,14 +230,23 @@ def _endpoint(text: str) -> tuple[str, int]:
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="Vehicles require MAVLink 2 signing with this key.")
 @click.option("--seed", type=int, default=0, help="Seed of the fault decisions.")
+@click.option("--arm-delay", type=click.FloatRange(min=0), default=None,
+              help="Seconds after start before arming is allowed (the EKF's position "
+                   "estimate; ArduCopter SITL: about 42 s). Default: --boot-delay.")
+@click.option("--speed", type=click.FloatRange(min=0.1), default=5.0, show_default=True,
+              help="Horizontal speed between waypoints, m/s (WPNAV_SPEED).")
+@click.option("--time-scale", type=click.FloatRange(min=0.01), default=1.0, show_default=True,
+              help="Run the vehicles' clock this many times faster than real time.")
 @user_errors
 def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
-        latency_ms, boot_delay, capacity, silent, mute, signing_key, seed):
+        latency_ms, boot_delay, capacity, silent, mute, signing_key, seed, arm_delay, speed,
+        time_scale):
     """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
     from ..scenario import load_scenario
     from ..sim.faults import Faults
     from ..sim.homes import default_homes, scenario_homes
     from ..sim.mission_server import MissionServerOptions
+    from ..sim.physics import FlightLimits
     from ..sim.server import Simulator
     from ..sim.vehicle import VehicleOptions
 
@@ -252,12 +261,14 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
             "loss_down": loss if loss_down is None else loss_down,
             "duplicate": duplicate, "reorder": reorder, "latency_s": latency_ms / 1000.0}
     faults = [Faults(**link, silent=(i + 1) in silent, mute=(i + 1) in mute) for i in range(n)]
-    options = VehicleOptions(ready_after_s=boot_delay, mission=MissionServerOptions(
-        capacity=capacity, boot_no_space_s=boot_delay))
+    options = VehicleOptions(ready_after_s=boot_delay, position_after_s=arm_delay,
+                             limits=FlightLimits(speed_m_s=speed),
+                             mission=MissionServerOptions(capacity=capacity,
+                                                          boot_no_space_s=boot_delay))
     key = load_key(signing_key) if signing_key else None
     simulator = Simulator(homes=homes, base_port=base_port,
                           udp_out=_endpoint(udp_out) if udp_out else None, faults=faults,
-                          options=options, signing_key=key, seed=seed)
+                          options=options, signing_key=key, seed=seed, time_scale=time_scale)
 
     def ready() -> None:
         for i, (url, home) in enumerate(zip(simulator.urls, homes)):

@@ -49,8 +49,10 @@ class VehicleRunner:
     """One vehicle between its clients: faults each way, signing, periodic telemetry."""
 
     def __init__(self, vehicle: Vehicle, *, faults: Faults, signing_key: bytes | None,
-                 rng: np.random.Generator, loop: asyncio.AbstractEventLoop):
+                 rng: np.random.Generator, loop: asyncio.AbstractEventLoop,
+                 clock: Callable[[], float] | None = None):
         self.vehicle = vehicle
+        self.clock = clock or loop.time
         self.faults = faults
         self.key = signing_key
         self.loop = loop
@@ -97,7 +99,7 @@ class VehicleRunner:
     def _handle(self, att: _Attachment, msg) -> None:
         if att not in self.attachments or self.faults.mute:
             return
-        replies = self.vehicle.handle(msg, self.loop.time())
+        replies = self.vehicle.handle(msg, self.clock())
         if replies:
             self._mission_peer = att
         self._send(att, replies)
@@ -117,7 +119,7 @@ class VehicleRunner:
                 self.detach(att)
 
     def tick(self) -> None:
-        periodic, replies = self.vehicle.tick(self.loop.time())
+        periodic, replies = self.vehicle.tick(self.clock())
         if self.faults.silent:
             return
         for att in list(self.attachments):
@@ -152,7 +154,9 @@ class Simulator:
     ``homes``: ``(lat_deg, lon_deg, alt_m AMSL)`` per vehicle. ``base_port``: vehicle i
     listens on ``base_port + 10*i``; ``0`` lets the system choose free ports (tests).
     ``faults`` / ``options``: one for all vehicles, or one per vehicle. ``seed``: seeds
-    the fault decisions. Use ``with Simulator(...) as sim:`` (background thread) or
+    the fault decisions. ``time_scale``: the vehicles' clock runs this many times faster
+    than the wall clock (flights in tests; link latency stays real). Use
+    ``with Simulator(...) as sim:`` (background thread) or
     :meth:`run` (foreground, until interrupted). ``urls`` gives the client connection
     strings; ``udp_url`` the shared link's, when ``udp_out`` is set.
     """
@@ -161,8 +165,12 @@ class Simulator:
                  host: str = "127.0.0.1", udp_out: tuple[str, int] | None = None,
                  faults: Faults | Sequence[Faults] | None = None,
                  options: VehicleOptions | Sequence[VehicleOptions] | None = None,
-                 signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1):
+                 signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1,
+                 time_scale: float = 1.0):
         n = len(homes)
+        if time_scale <= 0:
+            raise ValueError("time_scale must be positive")
+        self.time_scale = time_scale
         if n < 1:
             raise ValueError("at least one vehicle")
         self.homes = [tuple(h) for h in homes]
@@ -197,12 +205,16 @@ class Simulator:
         loop = asyncio.get_running_loop()
         self._stopping = asyncio.Event()
         rngs = [np.random.default_rng([self.seed, i]) for i in range(len(self.homes))]
-        now = loop.time()
+        start, scale = loop.time(), self.time_scale
+
+        def clock() -> float:
+            return start + (loop.time() - start) * scale
+
         for i, home in enumerate(self.homes):
             v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
-                        boot_time=now)
+                        boot_time=start)
             self.runners.append(VehicleRunner(v, faults=self.faults[i], rng=rngs[i], loop=loop,
-                                              signing_key=self.signing_key))
+                                              signing_key=self.signing_key, clock=clock))
         servers = []
         try:
             for i, runner in enumerate(self.runners):

@@ -2,9 +2,9 @@
 
 :class:`Vehicle` takes decoded messages and the time and returns messages (no sockets):
 ``handle`` for what arrives, ``tick`` for what time brings (HEARTBEAT and telemetry once
-a period, the mission server's re-requests). Its state (mode, armed, position) is kept
-in one place so that flight modes and physics can be added later beside the mission
-server without touching the transport.
+a period, the mission server's re-requests, the flight). Mission transfers go to the
+:class:`~ftlbo_mav.sim.mission_server.MissionServer`; modes, arming, takeoff and flying
+the stored mission to the :class:`~ftlbo_mav.sim.autopilot.Autopilot`.
 """
 
 from __future__ import annotations
@@ -14,7 +14,10 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..mission.items import MissionItem
+from .autopilot import Autopilot, AutopilotOptions
 from .mission_server import MissionServer, MissionServerOptions
+from .physics import FlightLimits
 
 R = mavlink2
 
@@ -58,17 +61,24 @@ _GUIDED_MODES = {CopterMode.AUTO, CopterMode.RTL, CopterMode.LOITER, CopterMode.
 
 @dataclass(frozen=True)
 class VehicleOptions:
-    """``heartbeat_s``: period of HEARTBEAT and telemetry (ArduPilot: 1 Hz heartbeat).
-    ``ready_after_s``: GPS 3D fix and pre-arm checks pass this long after boot."""
+    """``heartbeat_s``: period of HEARTBEAT and status telemetry (ArduPilot: 1 Hz heartbeat).
+    ``ready_after_s``: GPS 3D fix and pre-arm checks pass this long after boot.
+    ``position_after_s``: the EKF has a position estimate and arming is allowed (default:
+    with the pre-arm checks; ArduCopter SITL: about 24 s and 42 s after boot).
+    ``position_hz``: GLOBAL_POSITION_INT rate until a client asks for another with
+    MAV_CMD_SET_MESSAGE_INTERVAL. ``limits``: the copter's speeds and accelerations."""
 
     heartbeat_s: float = 1.0
     ready_after_s: float = 0.0
+    position_after_s: float | None = None
+    position_hz: float = 4.0
+    limits: FlightLimits = field(default_factory=FlightLimits)
     mission: MissionServerOptions = field(default_factory=MissionServerOptions)
 
 
 @dataclass
 class VehicleState:
-    """What a later flight model will move; today the copter sits at home, disarmed."""
+    """What the vehicle reports about itself (kept in step with the autopilot)."""
 
     lat_deg: float
     lon_deg: float
@@ -92,7 +102,17 @@ class Vehicle:
         self.state = VehicleState(lat_deg=lat, lon_deg=lon, alt_amsl_m=alt)
         self.missions = MissionServer(sysid=sysid, home=home, options=options.mission,
                                       boot_time=boot_time)
+        position_after = (options.ready_after_s if options.position_after_s is None
+                          else options.position_after_s)
+        self.autopilot = Autopilot(
+            home=(lat, lon), boot_time=boot_time,
+            options=AutopilotOptions(prearm_after_s=options.ready_after_s,
+                                     position_after_s=position_after, limits=options.limits))
+        self._home_alt = alt
         self._next_beat = boot_time
+        self._position_period = 1.0 / options.position_hz
+        self._next_position = boot_time
+        self._stored: list = []
 
     def is_for_me(self, msg) -> bool:
         """MAVLink routing: a targeted message is handled only by its target (or broadcast)."""
@@ -103,16 +123,102 @@ class Vehicle:
         """Replies to one message (already through the link's faults and signing check)."""
         if msg.get_type() == "BAD_DATA" or not self.is_for_me(msg):
             return []
+        kind = msg.get_type()
+        if kind in ("COMMAND_LONG", "SET_MODE", "MISSION_SET_CURRENT"):
+            self._sync_mission()
+            self.autopilot.advance(now)
+            replies = self._command(msg, now)
+            self._sync_state()
+            return replies
         return self.missions.handle(msg, now)
 
     def tick(self, now: float) -> tuple[list, list]:
-        """``(broadcast, replies)``: periodic telemetry for every client, and the mission
-        server's re-requests/cancellations for the client of the transfer."""
-        periodic = []
+        """``(broadcast, replies)``: telemetry and flight announcements for every client,
+        and the mission server's re-requests/cancellations for the client of the transfer."""
+        self._sync_mission()
+        periodic = self.autopilot.advance(now)
+        self._sync_state()
         if now >= self._next_beat:
             self._next_beat = now + self.options.heartbeat_s
-            periodic = self.telemetry(now)
+            periodic += self.telemetry(now)
+            if self.autopilot.mode == CopterMode.AUTO:
+                periodic.append(R.MAVLink_mission_current_message(self.autopilot.current))
+        elif now >= self._next_position:
+            periodic.append(self.position_message(now))
+        if now >= self._next_position:
+            self._next_position = max(self._next_position + self._position_period, now - 1.0)
         return periodic, self.missions.update(now)
+
+    # -- flight commands (ArduCopter/GCS_Mavlink.cpp handle_command_long_packet, and
+    #    libraries/GCS_MAVLink/GCS_Common.cpp for the commands every vehicle shares)
+    def _sync_mission(self) -> None:
+        """Give the autopilot the stored mission whenever an upload or clear changed it."""
+        items = self.missions.items
+        if items != self._stored:
+            self._stored = list(items)
+            self.autopilot.set_mission([
+                MissionItem(seq=i, command=it.command, frame=it.frame, lat_deg=it.x / 1e7,
+                            lon_deg=it.y / 1e7, alt_m=it.z, param1=it.param1,
+                            param2=it.param2, param3=it.param3, param4=it.param4)
+                for i, it in enumerate(items)])
+
+    def _sync_state(self) -> None:
+        ap, s = self.autopilot, self.state
+        s.lat_deg, s.lon_deg = ap.latlon()
+        s.relative_alt_m = float(ap.position[2])
+        s.alt_amsl_m = self._home_alt + s.relative_alt_m
+        s.mode = CopterMode(ap.mode)
+        s.armed = ap.armed
+
+    def _command(self, msg, now: float) -> list:
+        ap = self.autopilot
+        kind = msg.get_type()
+        sender = (msg.get_srcSystem(), msg.get_srcComponent())
+        if kind == "SET_MODE":  # common.xml: deprecated, still honoured by ArduPilot
+            ap.set_mode(int(msg.custom_mode), now)
+            return []
+        if kind == "MISSION_SET_CURRENT":  # GCS_Common.cpp handle_mission_set_current
+            if ap.set_current(int(msg.seq)):
+                return [R.MAVLink_mission_current_message(ap.current)]
+            return []
+        cmd = msg.command
+        text: list = []
+        if cmd == R.MAV_CMD_COMPONENT_ARM_DISARM:
+            if msg.param1 >= 0.5:
+                reason = ap.arm(now) if not ap.armed else None
+                ok = reason is None
+                if reason:  # ArduPilot says why as STATUSTEXT beside the FAILED ack
+                    text.append(R.MAVLink_statustext_message(R.MAV_SEVERITY_CRITICAL,
+                                                             reason.encode()))
+            else:
+                ok = ap.landed or int(msg.param2) == 21196  # force-disarm magic number
+                if ok:
+                    ap.disarm()
+        elif cmd == R.MAV_CMD_NAV_TAKEOFF:
+            ok = ap.takeoff(float(msg.param7))
+        elif cmd == R.MAV_CMD_DO_SET_MODE:
+            ok = ap.set_mode(int(msg.param2), now)
+        elif cmd == R.MAV_CMD_MISSION_START:
+            ok = ap.set_mode(CopterMode.AUTO, now)
+        elif cmd == R.MAV_CMD_DO_SET_MISSION_CURRENT:
+            ok = ap.set_current(int(msg.param1))
+        elif cmd == R.MAV_CMD_NAV_RETURN_TO_LAUNCH:
+            ok = ap.set_mode(CopterMode.RTL, now)
+        elif cmd == R.MAV_CMD_NAV_LAND:
+            ok = ap.set_mode(CopterMode.LAND, now)
+        elif cmd == R.MAV_CMD_SET_MESSAGE_INTERVAL:
+            ok = int(msg.param1) == R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT and msg.param2 > 0
+            if ok:
+                self._position_period = float(msg.param2) / 1e6
+                self._next_position = now
+        else:
+            return [self._ack(cmd, R.MAV_RESULT_UNSUPPORTED, sender)]
+        result = R.MAV_RESULT_ACCEPTED if ok else R.MAV_RESULT_FAILED
+        return text + [self._ack(cmd, result, sender)]
+
+    @staticmethod
+    def _ack(command: int, result: int, to: tuple[int, int]):
+        return R.MAVLink_command_ack_message(command, result, 0, 0, to[0], to[1])
 
     # -- what ArduCopter streams
     def heartbeat(self):
@@ -149,7 +255,14 @@ class Vehicle:
             R.MAVLink_gps_raw_int_message(
                 boot_ms * 1000, R.GPS_FIX_TYPE_3D_FIX if ready else R.GPS_FIX_TYPE_NO_FIX,
                 lat, lon, int(s.alt_amsl_m * 1000), 80, 120, 0, 0, 10 if ready else 0),
-            R.MAVLink_global_position_int_message(
-                boot_ms, lat, lon, int(s.alt_amsl_m * 1000), int(s.relative_alt_m * 1000),
-                0, 0, 0, 0),
+            self.position_message(now),
         ]
+
+    def position_message(self, now: float):
+        s, v = self.state, self.autopilot.velocity
+        boot_ms = int((now - self.boot_time) * 1000) & 0xFFFFFFFF
+        # GLOBAL_POSITION_INT velocities are NED cm/s; ours are ENU m/s
+        return R.MAVLink_global_position_int_message(
+            boot_ms, round(s.lat_deg * 1e7), round(s.lon_deg * 1e7), int(s.alt_amsl_m * 1000),
+            int(round(s.relative_alt_m * 1000)), int(v[1] * 100), int(v[0] * 100),
+            int(-v[2] * 100), 0)

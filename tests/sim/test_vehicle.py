@@ -29,7 +29,10 @@ def test_telemetry_reports_fix_and_prearm_once_ready():
     assert kinds == ["HEARTBEAT", "SYS_STATUS", "GPS_RAW_INT", "GLOBAL_POSITION_INT"]
     assert periodic[2].fix_type < 3
     assert not periodic[1].onboard_control_sensors_health & R.MAV_SYS_STATUS_PREARM_CHECK
-    assert v.tick(0.5) == ([], [])  # once a heartbeat period
+    # status once a heartbeat period; the position between, at position_hz (4 Hz)
+    periodic, replies = v.tick(0.3)
+    assert [m.get_type() for m in periodic] == ["GLOBAL_POSITION_INT"] and replies == []
+    assert v.tick(0.4) == ([], [])
     periodic, _ = v.tick(2.0)
     assert periodic[2].fix_type == 3 and periodic[2].lat == round(HOME[0] * 1e7)
     assert periodic[1].onboard_control_sensors_health & R.MAV_SYS_STATUS_PREARM_CHECK
