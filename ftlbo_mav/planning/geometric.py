@@ -329,7 +329,10 @@ class _Graph:
                 edges[b].append((int(a), r * sweep, Arc(int(disc), start_a + sweep, -sweep)))
         self.edges = edges
 
-    def dijkstra(self, source: int) -> tuple[np.ndarray, np.ndarray, list]:
+    def dijkstra(self, source: int, *, leg_penalty: float = 0.0
+                 ) -> tuple[np.ndarray, np.ndarray, list]:
+        """Distances, predecessors and arcs from ``source``; ``leg_penalty`` metres are
+        added to every straight segment (routes with fewer legs)."""
         n = len(self.points)
         dist = np.full(n, np.inf)
         prev = np.full(n, -1)
@@ -343,7 +346,7 @@ class _Graph:
                 continue
             done[u] = True
             for v, w, arc in self.edges[u]:
-                nd = d + w
+                nd = d + w + (leg_penalty if arc is None else 0.0)
                 if nd < dist[v] - 1e-12:
                     dist[v], prev[v], via[v] = nd, u, arc
                     heapq.heappush(heap, (nd, v))
@@ -400,6 +403,25 @@ def shortest_routes(
         all_arcs = head_arcs + [_reverse(a) for a in tail_arcs[::-1]]
         routes.append(graph.route(all_nodes, all_arcs, through[v]))
     return routes
+
+
+def straighter_routes(problem: PlanningProblem, penalties, *, margin: float = 0.0):
+    """For each penalty (metres), the shortest route when every straight leg costs that
+    much more: routes with fewer, longer legs (for seeds with few waypoints). Yields
+    :class:`Route` objects (true lengths), or nothing when no route exists."""
+    graph = _Graph(problem, formation_discs(problem, margin=margin))
+    for penalty in penalties:
+        dist, prev, via = graph.dijkstra(0, leg_penalty=penalty)
+        if not np.isfinite(dist[1]):
+            return
+        nodes, arcs = _walk(prev, via, 1)
+        points = graph.points[nodes]
+        length = sum(
+            float(np.hypot(*(points[i + 1] - points[i]))) if arc is None
+            else float(graph.discs.radii[arc.disc]) * abs(arc.sweep)
+            for i, arc in enumerate(arcs)
+        )
+        yield graph.route(nodes, arcs, length)
 
 
 def shortest_route(problem: PlanningProblem, *, margin: float = 0.0) -> Route | None:

@@ -20,6 +20,7 @@ from .geometric import (
     centroid_rectangle,
     segments_clear,
     shortest_routes,
+    straighter_routes,
 )
 from .problem import PlanningProblem
 
@@ -86,9 +87,9 @@ def _motion(angle: float, sweep: float) -> np.ndarray:
 def _candidates(route: Route, margin: float) -> tuple[np.ndarray, np.ndarray]:
     """Candidate polygon vertices around ``route`` and their position along it.
 
-    Start and goal; for every arc, vertices of a polygon circumscribed about the disc
-    widened by ``margin`` (one per ``_ARC_STEP`` radians), so that following them stays
-    clear; and "apexes": where the line entering one arc meets the line leaving an arc up
+    Start and goal; for every arc, vertices of polygons circumscribed about the disc
+    widened by ``margin`` (one per ``_ARC_STEP`` radians, and with one or two vertices for
+    the whole arc), so that following them stays clear; and "apexes": where the line entering one arc meets the line leaving an arc up
     to ``_APEX_SPAN`` arcs later, one vertex that cuts several bends when the gap allows.
     Returns points ``(P, 2)`` and keys ``(P,)`` (metres along the route).
     """
@@ -103,10 +104,12 @@ def _candidates(route: Route, margin: float) -> tuple[np.ndarray, np.ndarray]:
         c = route.discs.centres[arc.disc]
         r = float(route.discs.radii[arc.disc])
         big = r + margin
-        count = max(1, math.ceil(abs(arc.sweep) / _ARC_STEP))
-        if abs(arc.sweep) / (2 * count) < 0.5 * math.pi - 1e-3:
-            points.extend(c + _arc_vertices(arc, big, count))
-            keys.extend(along + r * abs(arc.sweep) * (2 * np.arange(count) + 1) / (2 * count))
+        dense = max(1, math.ceil(abs(arc.sweep) / _ARC_STEP))
+        for count in sorted({1, 2, dense}):  # coarse polygons too: fewer vertices per arc
+            if abs(arc.sweep) / (2 * count) < 0.5 * math.pi - 1e-3:
+                points.extend(c + _arc_vertices(arc, big, count))
+                keys.extend(
+                    along + r * abs(arc.sweep) * (2 * np.arange(count) + 1) / (2 * count))
         end_angle = arc.start + arc.sweep
         ends.append((c + big * np.array([math.cos(arc.start), math.sin(arc.start)]),
                      _motion(arc.start, arc.sweep),
@@ -187,7 +190,8 @@ def _route_polygon(problem: PlanningProblem, route: Route, waypoints: int, *,
     route has bends it hugs the route (within ``margin``); with fewer it cuts across
     bends where the gaps allow, still clear. Unused waypoints are spread along the
     longest legs. When no such chain exists the arcs' corners are cut
-    (:func:`_allocated_polygon`) and the optimizer is left to repair the seed.
+    (:func:`_allocated_polygon`) and the optimizer is left to repair the seed
+    (:func:`seed_waypoints` then also tries routes with fewer legs).
     Altitudes go linearly from start to goal along the polygon, inside the bounds.
     Returns the waypoints ``(m, 3)`` and whether the clear chain was found.
     """
@@ -227,6 +231,27 @@ def _resample(line: np.ndarray, count: int) -> np.ndarray:
     return np.column_stack([np.interp(s, along, line[:, 0]), np.interp(s, along, line[:, 1])])
 
 
+STRAIGHTER_SHARES = (0.02, 0.05, 0.1, 0.2, 0.5)
+"""Extra metres per straight leg, as shares of the shortest route's length, tried in turn
+when no route has a clear ``m``-waypoint polygon (it bends too often)."""
+
+
+def _straighter_polygon(problem: PlanningProblem, length: float) -> np.ndarray | None:
+    """A clear ``m``-waypoint polygon near a route with fewer legs, or ``None``.
+
+    The routes here run around discs already widened by :func:`seed_margin`, so their
+    long legs, which graze other discs, stay clear when followed exactly; each straight leg
+    costs ``share * length`` extra, the smallest share that gives a clear polygon wins.
+    """
+    margin = seed_margin(problem)
+    for route in straighter_routes(problem, [s * length for s in STRAIGHTER_SHARES],
+                                   margin=margin):
+        polygon, clear = _route_polygon(problem, route, problem.waypoints, margin=1e-6)
+        if clear:
+            return polygon
+    return None
+
+
 def seed_margin(problem: PlanningProblem) -> float:
     """Radius margin for seed routes (metres): feasibility needs *more* than the radius."""
     scale = float(problem.radii.max()) if len(problem.radii) else 1.0
@@ -246,6 +271,10 @@ def seed_waypoints(
     if not routes:
         return np.zeros((0, m, 3))
     polygons = [_route_polygon(problem, r, m) for r in routes]
+    if not any(clear for _, clear in polygons):
+        polygon = _straighter_polygon(problem, routes[0].length)
+        if polygon is not None:
+            polygons.insert(0, (polygon, True))
     # clear polygons first (stable: shortest route first among them)
     order = sorted(range(len(polygons)), key=lambda i: not polygons[i][1])
     return np.stack([polygons[i][0] for i in order])

@@ -156,3 +156,15 @@ def test_fewer_waypoints_than_bends_still_give_a_clear_seed():
     path = problem.full_paths(many[None])[0]
     assert violations(problem, path) == []
     assert np.linalg.norm(np.diff(path, axis=0), axis=1).sum() < 1.002 * route.length
+
+
+def test_a_route_that_bends_too_often_falls_back_to_a_straighter_one():
+    # The shortest route weaves over, under and over three discs: one waypoint cannot
+    # follow it, but going under all three with one waypoint is clear.
+    problem = field(centres=np.array([[-8.0, 2.5], [0.0, -2.5], [8.0, 2.5]]),
+                    radii=np.full(3, 2.8), waypoints=1)
+    route = shortest_route(problem)
+    weaving = problem.full_paths(route_waypoints(problem, route, 1)[None])[0]
+    assert violations(problem, weaving) != []
+    seeds = seed_waypoints(problem)
+    assert violations(problem, problem.full_paths(seeds[:1])[0]) == []
