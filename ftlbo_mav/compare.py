@@ -29,7 +29,7 @@ import json
 import math
 import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -219,7 +219,8 @@ def compare(
         context = multiprocessing.get_context("fork" if os.name == "posix" else "spawn")
         with ProcessPoolExecutor(max_workers=min(processes, len(jobs)), mp_context=context,
                                  initializer=_init_worker, initargs=(portable,)) as pool:
-            for run in pool.map(_work, jobs, chunksize=1):
+            for future in as_completed([pool.submit(_work, job) for job in jobs]):
+                run = future.result()
                 results[run.algorithm, run.seed] = run
                 if progress is not None:
                     progress(run)
