@@ -6,31 +6,16 @@ stderr and a non-zero exit code; a traceback is a bug.
 
 from __future__ import annotations
 
-import functools
 import sys
 
 import click
 
 from . import __version__
-from .errors import FtlboError, ScenarioError
+from .cli_errors import user_errors
 from .mission.export import FORMATS, read_plan, write_plan
 from .planning.optimizers import OPTIMIZERS
 from .planning.planner import plan as plan_scenario
 from .scenario import load_scenario
-
-
-def user_errors(func):
-    """Turn a user error into one line on stderr: exit 2 for bad input, else 1."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        try:
-            return func(*args, **kwargs)
-        except FtlboError as exc:
-            click.echo(f"error: {exc}", err=True)
-            sys.exit(2 if isinstance(exc, ScenarioError) or getattr(exc, "bad_input", False) else 1)
-
-    return wrapper
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -183,3 +168,9 @@ def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, 
     click.echo(table_markdown(result), nl=False)
     for path in write_comparison(result, out_dir):
         click.echo(f"  wrote {path}")
+
+from .flight.commands import abort_command, fly_command, monitor  # noqa: E402
+
+main.add_command(fly_command)
+main.add_command(monitor)
+main.add_command(abort_command)

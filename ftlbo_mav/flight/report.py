@@ -45,6 +45,9 @@ def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
         "formation_error_rms_legs_m": float(np.sqrt(np.mean(err[legs] ** 2))) if legs.any() else None,
         "formation_error_max_legs_m": float(err[legs].max()) if legs.any() else None,
         "planned_min_separation_m": planned_separation(planned.offsets),
+        "min_separation_legs_m": float(sep[legs].min()) if legs.any() else None,
+        # includes takeoff and landing, where UAVs whose homes are closer than the planned
+        # separation (offsets differing in altitude only) pass at their homes' distance
         "min_separation_airborne_m": float(sep[airborne].min()) if airborne.any() else None,
         "min_clearance_m": float(clear.min()) if np.isfinite(clear).all() else None,
         "inside_obstacle": bool((clear < 0).any()),

@@ -5,7 +5,6 @@ Registered on the main group at the end of :mod:`ftlbo_mav.cli`.
 
 from __future__ import annotations
 
-import functools
 import re
 import sys
 import threading
@@ -13,6 +12,7 @@ from pathlib import Path
 
 import click
 
+from ..cli_errors import user_errors
 from ..errors import FtlboError, MissionFileError
 from ..mission.waypoints import read_waypoints, write_waypoints
 from .endpoints import (
@@ -27,19 +27,6 @@ from .endpoints import (
 from .mission_protocol import Timing, download_mission
 from .signing import load_key
 from .swarm import Assignment, ProgressEvent, upload_swarm
-
-
-def user_errors(func):
-    """:func:`ftlbo_mav.cli.user_errors`, looked up when called: ``cli`` imports this module
-    at its end to register the commands, so importing ``cli`` here would be circular."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        from ..cli import user_errors as one_line_errors
-
-        return one_line_errors(func)(*args, **kwargs)
-
-    return wrapper
 
 
 def _urls(values: tuple[str, ...]) -> list[str]:

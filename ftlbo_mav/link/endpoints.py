@@ -152,6 +152,9 @@ class Link:
         self.heartbeats: dict[int, Heartbeat] = {}
         # per system id: last GPS fix type and whether pre-arm checks pass
         self.readiness: dict[int, dict] = {}
+        # called with every message received (from the reader thread): a ground-station
+        # relay forwards them (flight/forward.py)
+        self.taps: list = []
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
         self._thread.start()
@@ -176,6 +179,11 @@ class Link:
         """Send one message (a pymavlink message object) from the ground station's ids."""
         with self._send_lock:
             self._conn.mav.send(msg)
+
+    def write_raw(self, data: bytes) -> None:
+        """Send an already packed MAVLink frame unchanged (a relayed ground station's)."""
+        with self._send_lock:
+            self._conn.write(data)
 
     def channel(self, sysid: int) -> Channel:
         """The messages of vehicle ``sysid`` on this link, from now on."""
@@ -219,6 +227,8 @@ class Link:
         kind = msg.get_type()
         if kind == "BAD_DATA":
             return
+        for tap in self.taps:
+            tap(msg)
         src = msg.get_srcSystem()
         if kind == "HEARTBEAT" and _is_vehicle(msg):
             self.heartbeats[src] = Heartbeat(

@@ -44,19 +44,22 @@ def free_udp_port() -> int:
 
 @contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
-             shared_link: bool = False, seed: int = 0):
-    """``count`` vehicles, system ids 1..count, ready for uploads."""
+             shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0):
+    """``count`` vehicles, system ids 1..count, ready for uploads; ``homes`` (default a
+    row at SITL's default location) and ``speedup`` (the emulator's time scale, SITL's
+    --speedup) for flights."""
+    homes = default_homes(count) if homes is None else homes
     emulator_only = faults is not None or options is not None or signing_key or shared_link
     if BACKEND == "sitl":
         if emulator_only:
             pytest.skip("needs the emulator's fault injection")
         from sitl import SitlSwarm
 
-        with SitlSwarm(binary=SITL_BINARY, homes=default_homes(count)) as swarm:
+        with SitlSwarm(binary=SITL_BINARY, homes=homes, speedup=speedup) as swarm:
             yield Fleet(urls=swarm.urls)
         return
     udp_out = ("127.0.0.1", free_udp_port()) if shared_link else None
-    with Simulator(homes=default_homes(count), base_port=0, udp_out=udp_out,
+    with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
                    signing_key=signing_key, seed=seed) as sim:

@@ -1,0 +1,205 @@
+"""``ftlbo-mav fly``, ``monitor`` and ``abort``: parse options, call the library, print.
+
+Registered on the main group at the end of :mod:`ftlbo_mav.cli`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import sys
+import time
+from pathlib import Path
+
+import click
+
+from ..cli_errors import user_errors
+from ..link.commands import _timing, _urls, timing_options
+from ..link.endpoints import BadInput, default_urls, parse_sysids
+from ..link.signing import load_key
+from ..mission.files import write_atomic
+from .fly import Fleet, FlyOptions, abort, fly
+from .monitor import LiveView, Monitor
+from .planned import PlannedFlight, load_planned_flight
+from .report import render_report_png, summarize
+
+_link_options = [
+    click.option("--sysid", "sysid_text", required=True,
+                 help="Vehicle system ids: a range 1..3 or a list 1,2,5; uav1 is the first."),
+    click.option("--connect", "connect", multiple=True, metavar="URL",
+                 help="pymavlink connection string(s); default tcp:127.0.0.1:5760 + 10*i."),
+]
+
+
+def link_options(func):
+    for option in reversed(_link_options):
+        func = option(func)
+    return func
+
+
+def _fleet_args(planned: PlannedFlight | None, sysid_text: str, connect) -> tuple:
+    sysids = parse_sysids(sysid_text)
+    if planned is not None and planned.count != len(sysids):
+        raise BadInput(f"{planned.folder} plans {planned.count} UAVs but --sysid {sysid_text} "
+                       f"names {len(sysids)} vehicles")
+    names = list(planned.names) if planned else [f"uav{i + 1}" for i in range(len(sysids))]
+    return names, sysids, _urls(connect) or default_urls(len(sysids))
+
+
+def _forwarding(url: str | None, fleet: Fleet):
+    if not url:
+        return contextlib.nullcontext()
+    from .forward import Forwarder
+
+    return Forwarder(url, fleet.links, {v.sysid: v.link for v in fleet.vehicles})
+
+
+def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
+                        sysids: list[int]) -> dict:
+    """flight.csv, summary.json and report.png in ``out_dir``; returns the summary."""
+    times, positions, seqs = monitor.record.grid(sysids, planned.frame)
+    summary = summarize(planned, times, positions, seqs)
+    summary["position_rate_hz"] = {str(s): round(monitor.record.rate_hz(s), 2) for s in sysids}
+    write_atomic(out_dir / "flight.csv", monitor.record.to_csv())
+    write_atomic(out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")
+    if len(times):
+        write_atomic(out_dir / "report.png",
+                     render_report_png(planned, times, positions, seqs, summary))
+    return summary
+
+
+def _print_summary(summary: dict, out_dir: Path) -> None:
+    def m(key):
+        v = summary.get(key)
+        return "n/a" if v is None else f"{v:.2f} m"
+
+    click.echo(f"formation error on the legs: {m('formation_error_rms_legs_m')} RMS, "
+               f"{m('formation_error_max_legs_m')} worst; smallest separation "
+               f"{m('min_separation_legs_m')} on the legs, {m('min_separation_airborne_m')} in "
+               f"the air (planned {m('planned_min_separation_m')}); "
+               f"smallest clearance {m('min_clearance_m')}")
+    click.echo(f"flight log, summary and report in {out_dir}/")
+
+
+@click.command(name="fly")
+@click.argument("plan_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
+@link_options
+@click.option("--forward", metavar="URL",
+              help="Relay everything to a ground station, e.g. udpout:127.0.0.1:14550.")
+@click.option("--log-dir", type=click.Path(file_okay=False, path_type=Path),
+              help="Where the flight log and report go (default PLAN_DIR/flight).")
+@click.option("--abort-mode", type=click.Choice(["RTL", "LAND"]), default="RTL",
+              show_default=True, help="Where Ctrl-C sends every vehicle.")
+@click.option("--arm-budget", type=click.FloatRange(min=0), default=60.0, show_default=True,
+              help="Seconds to keep retrying a refused arm (EKF still converging).")
+@click.option("--preflight-timeout", type=click.FloatRange(min=0),
+              default=60.0, show_default=True,
+              help="Seconds to wait for a 3D GPS fix and passing pre-arm checks.")
+@click.option("--flight-timeout", type=click.FloatRange(min=1), default=900.0,
+              show_default=True, help="Abort if the missions have not ended by then.")
+@timing_options
+@user_errors
+def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, arm_budget,
+                preflight_timeout, flight_timeout, timeout, retries, ready_timeout,
+                discover_timeout, signing_key):
+    """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
+
+    The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
+    armed unless every vehicle passes the pre-flight checks. Ctrl-C sends every vehicle
+    to RTL (or --abort-mode LAND).
+    """
+    planned = load_planned_flight(plan_dir)
+    names, sysids, urls = _fleet_args(planned, sysid_text, connect)
+    key = load_key(signing_key) if signing_key else None
+    monitor = Monitor(planned)
+    options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
+                         flight_timeout_s=flight_timeout, abort_mode=abort_mode)
+    out_dir = log_dir or plan_dir / "flight"
+    with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
+               on_position=monitor) as fleet, _forwarding(forward, fleet):
+        monitor.vehicles = fleet.vehicles
+        view = LiveView(monitor, sys.stderr)
+        try:
+            fly(planned, fleet.vehicles, options=options,
+                timing=_timing(timeout, retries, ready_timeout), say=view.message,
+                tick=view.update)
+            view.update(force=True)
+        except KeyboardInterrupt:
+            summary = write_flight_report(planned, monitor, out_dir, sysids)
+            _print_summary(summary, out_dir)
+            sys.exit(130)
+    summary = write_flight_report(planned, monitor, out_dir, sysids)
+    click.echo("all vehicles finished their missions")
+    _print_summary(summary, out_dir)
+
+
+@click.command()
+@click.argument("plan_dir", required=False,
+                type=click.Path(exists=True, file_okay=False, path_type=Path))
+@link_options
+@click.option("--forward", metavar="URL",
+              help="Relay everything to a ground station, e.g. udpout:127.0.0.1:14550.")
+@click.option("--duration", type=click.FloatRange(min=0.1), default=None,
+              help="Stop after this many seconds (default: until Ctrl-C, or until every "
+                   "vehicle has landed after flying).")
+@click.option("--log-dir", type=click.Path(file_okay=False, path_type=Path),
+              help="Where the flight log and report go (default PLAN_DIR/monitor).")
+@click.option("--rate", type=click.FloatRange(min=1), default=10.0, show_default=True,
+              help="Position reports per second requested from each vehicle.")
+@click.option("--discover-timeout", type=click.FloatRange(min=0.1), default=5.0,
+              show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
+@click.option("--signing-key", type=click.Path(dir_okay=False),
+              help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
+@user_errors
+def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, discover_timeout,
+            signing_key):
+    """Live view of the vehicles; with PLAN_DIR also formation error, separation and
+    clearance, and a flight log and report at the end."""
+    planned = load_planned_flight(plan_dir) if plan_dir else None
+    names, sysids, urls = _fleet_args(planned, sysid_text, connect)
+    key = load_key(signing_key) if signing_key else None
+    watch = Monitor(planned)
+    with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
+               on_position=watch) as fleet, _forwarding(forward, fleet):
+        watch.vehicles = fleet.vehicles
+        for v in fleet.vehicles:
+            v.request_position_rate(rate)
+        view = LiveView(watch, sys.stderr)
+        end = time.monotonic() + duration if duration else float("inf")
+        flew = set()
+        try:
+            while time.monotonic() < end:
+                flew |= {v.sysid for v in fleet.vehicles if v.status.armed}
+                if flew and len(flew) == len(sysids) and not any(
+                        v.status.armed for v in fleet.vehicles):
+                    break  # every vehicle flew and has landed
+                view.update()
+                time.sleep(0.1)
+        except KeyboardInterrupt:
+            pass
+        view.update(force=True)
+    if planned is not None:
+        out_dir = log_dir or plan_dir / "monitor"
+        _print_summary(write_flight_report(planned, watch, out_dir, sysids), out_dir)
+
+
+@click.command(name="abort")
+@link_options
+@click.option("--land", is_flag=True, help="LAND where they are instead of RTL.")
+@click.option("--discover-timeout", type=click.FloatRange(min=0.1), default=5.0,
+              show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
+@click.option("--signing-key", type=click.Path(dir_okay=False),
+              help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
+@user_errors
+def abort_command(sysid_text, connect, land, discover_timeout, signing_key):
+    """Send every vehicle to RTL (or LAND) at once and confirm the switch."""
+    names, sysids, urls = _fleet_args(None, sysid_text, connect)
+    key = load_key(signing_key) if signing_key else None
+    mode = "LAND" if land else "RTL"
+    with Fleet(names, sysids, urls, signing_key=key,
+               discover_timeout_s=discover_timeout) as fleet:
+        late = abort(fleet.vehicles, mode=mode)
+    for name, s in zip(names, sysids):
+        click.echo(f"sysid {s}: {'NOT CONFIRMED' if name in late else mode}")
+    if late:
+        sys.exit(1)

@@ -1,0 +1,266 @@
+"""Fly a planned formation: pre-flight, synchronized takeoff and start, watch, abort.
+
+The steps, each with a timeout and a clear error naming the vehicle:
+
+1. Pre-flight: every vehicle holds exactly its planned mission (read back and compared
+   as ``upload`` verifies), has a 3D GPS fix and passes its pre-arm checks. Any failure
+   stops here, one line per vehicle, before anything is armed.
+2. GUIDED, arm (retried while the autopilot still waits for its position estimate),
+   take off to the mission's takeoff altitude, all vehicles at once.
+3. Wait until every vehicle is within a tolerance of its altitude *and* has stopped
+   climbing: a naive start (switch to AUTO as soon as all are near altitude) lets one
+   copter still climbing start late and fly the legs behind the others.
+4. Synchronized start: every vehicle's current item is set to the first item after the
+   takeoff (confirmed by MISSION_CURRENT); then every vehicle is switched to AUTO in one
+   burst of messages, and only afterwards are the switches confirmed, so that the
+   formation leaves as one.
+5. Watch until every vehicle has landed (disarmed) or ended its mission.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+from ..errors import FtlboError
+from ..link.codec import mission_differences
+from ..link.endpoints import (
+    LinkError,
+    describe_missing,
+    discover,
+    is_ready,
+    open_links,
+)
+from ..link.mission_protocol import download_mission
+from ..link.transfer import Timing
+from ..mission.items import CMD_NAV_TAKEOFF
+from .planned import PlannedFlight
+from .vehicle import FlightError, FlightVehicle
+
+
+class PreflightError(FtlboError):
+    """Pre-flight checks failed; ``problems`` holds one line per failing vehicle."""
+
+    def __init__(self, problems: list[str]) -> None:
+        self.problems = problems
+        super().__init__("pre-flight failed, nothing armed:\n  " + "\n  ".join(problems))
+
+
+@dataclass(frozen=True)
+class FlyOptions:
+    ready_timeout_s: float = 60.0
+    arm_budget_s: float = 60.0
+    takeoff_timeout_s: float = 60.0
+    takeoff_tolerance_m: float = 0.3
+    settled_climb_m_s: float = 0.15
+    position_hz: float = 10.0
+    flight_timeout_s: float = 900.0
+    abort_mode: str = "RTL"
+
+
+class Fleet:
+    """The vehicles of a flight on their links: open, discover by HEARTBEAT, close.
+
+    ``with Fleet(names, sysids, urls) as fleet:`` gives ``fleet.vehicles``, one
+    :class:`FlightVehicle` per requested id, in order.
+    """
+
+    def __init__(self, names: Sequence[str], sysids: Sequence[int], urls: Sequence[str], *,
+                 signing_key: bytes | None = None, discover_timeout_s: float = 5.0,
+                 on_position: Callable | None = None) -> None:
+        self.names, self.sysids, self.urls = list(names), list(sysids), list(urls)
+        self.signing_key, self.discover_timeout_s = signing_key, discover_timeout_s
+        self.on_position = on_position
+        self.links: list = []
+        self.vehicles: list[FlightVehicle] = []
+
+    def __enter__(self) -> Fleet:
+        self.links = open_links(self.urls, signing_key=self.signing_key,
+                                connect_timeout_s=self.discover_timeout_s)
+        try:
+            found, missing = discover(self.links, self.sysids, timeout_s=self.discover_timeout_s)
+            if missing:
+                raise LinkError("; ".join(describe_missing(s, self.links, self.discover_timeout_s)
+                                          for s in missing))
+            self.vehicles = [FlightVehicle(n, s, found[s], on_position=self.on_position)
+                             for n, s in zip(self.names, self.sysids)]
+        except BaseException:
+            self.__exit__()
+            raise
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for v in self.vehicles:
+            v.close()
+        for link in self.links:
+            link.close()
+
+
+def _concurrently(fn: Callable, args: Sequence) -> list:
+    """``fn(arg)`` for every arg at once (one thread each); after all have finished,
+    re-raises the first error."""
+    with ThreadPoolExecutor(max_workers=max(1, len(args))) as pool:
+        futures = [pool.submit(fn, a) for a in args]
+        errors = [f.exception() for f in futures]
+    for e in errors:
+        if e is not None:
+            raise e
+    return [f.result() for f in futures]
+
+
+def takeoff_item(items) -> tuple[int, float]:
+    """``(seq, altitude)`` of the mission's NAV_TAKEOFF."""
+    for it in items:
+        if it.command == CMD_NAV_TAKEOFF:
+            return it.seq, it.alt_m
+    raise ValueError("the mission has no NAV_TAKEOFF")
+
+
+def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
+              timing: Timing, ready_timeout_s: float) -> None:
+    """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission."""
+
+    def mission_problem(pair) -> str | None:
+        vehicle, expected = pair
+        try:
+            with vehicle.link.channel(vehicle.sysid) as channel:
+                onboard = download_mission(channel, timing=timing)
+        except FtlboError as exc:
+            return f"cannot read its mission back: {exc}"
+        diff = mission_differences(expected, onboard)
+        if diff:
+            return (f"holds a different mission than {vehicle.name}.waypoints "
+                    f"({diff[0]}); run `ftlbo-mav upload` first")
+        return None
+
+    with ThreadPoolExecutor(max_workers=max(1, len(vehicles))) as pool:
+        missions = list(pool.map(mission_problem, zip(vehicles, planned.missions)))
+    deadline = time.monotonic() + ready_timeout_s
+    while time.monotonic() < deadline and not all(is_ready(v.link, v.sysid) for v in vehicles):
+        time.sleep(0.1)
+    problems = []
+    for v, mission in zip(vehicles, missions):
+        state = v.link.readiness.get(v.sysid, {})
+        why = [mission] if mission else []
+        if state.get("gps_fix", 0) < 3:
+            why.append(f"no 3D GPS fix (fix type {state.get('gps_fix', 'unknown')})")
+        if not state.get("prearm", False):
+            why.append("pre-arm checks failing")
+        if v.status.armed:
+            why.append("already armed")
+        if why:
+            problems.append(f"{v.name} (sysid {v.sysid}): " + "; ".join(why))
+    if problems:
+        raise PreflightError(problems)
+
+
+def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options: FlyOptions,
+             say: Callable[[str], None]) -> None:
+    """GUIDED, arm, take off, all at once; wait until all hover at their altitudes."""
+    targets = [takeoff_item(m)[1] for m in planned.missions]
+
+    def launch(pair) -> None:
+        v, alt = pair
+        v.set_mode("GUIDED")
+        v.arm(budget_s=options.arm_budget_s)
+        v.takeoff(alt)
+
+    say("arming and taking off")
+    try:
+        _concurrently(launch, list(zip(vehicles, targets)))
+    except FlightError:
+        abort(vehicles, mode="LAND")
+        raise
+
+    def hovering(alt: float):
+        return lambda s: (abs(s.alt_m - alt) <= options.takeoff_tolerance_m
+                          and abs(s.climb_m_s) <= options.settled_climb_m_s)
+
+    deadline = time.monotonic() + options.takeoff_timeout_s
+    while True:
+        pending = [v for v, alt in zip(vehicles, targets) if not hovering(alt)(v.status)]
+        if not pending:
+            return
+        if time.monotonic() >= deadline:
+            abort(vehicles, mode="LAND")
+            raise FlightError(pending[0].name, pending[0].sysid, "takeoff",
+                              f"not hovering at its altitude after {options.takeoff_timeout_s:g}"
+                              f" s (at {pending[0].status.alt_m:.1f} m); all vehicles landing")
+        pending[0].wait_for(hovering(targets[vehicles.index(pending[0])]), 0.2)
+
+
+def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> float:
+    """Set every current item to the one after the takeoff, then AUTO in one burst.
+
+    Returns the monotonic time of the burst.
+    """
+    starts = [takeoff_item(m)[0] + 1 for m in planned.missions]
+    _concurrently(lambda p: p[0].set_current(p[1]), list(zip(vehicles, starts)))
+    t = time.monotonic()
+    for v in vehicles:
+        v.send_mode("AUTO")
+    _concurrently(lambda v: v.set_mode("AUTO"), vehicles)
+    return t
+
+
+def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> bool:
+    """Every vehicle landed (disarmed) or reached its mission's last item."""
+    return all(not v.status.armed or v.status.seq >= len(m) - 1 and v.status.mode != "AUTO"
+               for v, m in zip(vehicles, planned.missions))
+
+
+def abort(vehicles: Sequence[FlightVehicle], *, mode: str = "RTL",
+          timeout_s: float = 3.0) -> list[str]:
+    """Send every vehicle to ``mode`` at once; returns the names of those not confirmed."""
+    for v in vehicles:
+        v.send_mode(mode)
+    late = []
+    for v in vehicles:
+        try:
+            v.set_mode(mode, timeout_s=timeout_s)
+        except FlightError:
+            late.append(v.name)
+    return late
+
+
+def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_s: float,
+          tick: Callable[[], None]) -> bool:
+    """Until every vehicle is done; ``tick`` runs a few times a second. False on timeout."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if finished(planned, vehicles):
+            return True
+        tick()
+        time.sleep(0.1)
+    return False
+
+
+def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: FlyOptions,
+        timing: Timing, say: Callable[[str], None], tick: Callable[[], None]) -> float:
+    """The whole flight; returns the monotonic time of the synchronized start.
+
+    On Ctrl-C (KeyboardInterrupt) every vehicle is sent to ``options.abort_mode`` before
+    the interrupt propagates.
+    """
+    say("pre-flight: missions, GPS, pre-arm checks")
+    preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s)
+    for v in vehicles:
+        v.request_position_rate(options.position_hz)
+    try:
+        take_off(planned, vehicles, options, say)
+        say("all hovering at their altitudes: starting the missions together")
+        started = start_together(planned, vehicles)
+        if not watch(planned, vehicles, timeout_s=options.flight_timeout_s, tick=tick):
+            late = abort(vehicles, mode=options.abort_mode)
+            raise FlightError(vehicles[0].name, vehicles[0].sysid, "flight",
+                              f"not finished after {options.flight_timeout_s:g} s; sent every "
+                              f"vehicle to {options.abort_mode}" + (f" (unconfirmed: {late})"
+                                                                   if late else ""))
+        return started
+    except KeyboardInterrupt:
+        late = abort(vehicles, mode=options.abort_mode)
+        say(f"interrupted: every vehicle sent to {options.abort_mode}"
+            + (f" (unconfirmed: {', '.join(late)})" if late else ""))
+        raise

@@ -1,0 +1,191 @@
+"""One vehicle seen from the ground: its live status and the commands a flight needs.
+
+A :class:`FlightVehicle` owns a channel of a :class:`~ftlbo_mav.link.endpoints.Link`
+and a reader thread that keeps :class:`Status` up to date (HEARTBEAT, GLOBAL_POSITION_INT,
+MISSION_CURRENT, COMMAND_ACK, STATUSTEXT). Commands are sent with a timeout and a retry
+budget and fail with :class:`FlightError` naming the vehicle and the step.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from ..errors import FtlboError
+from ..sim.autopilot import MODE_NAMES
+
+MODE_NUMBERS = {name: number for number, name in MODE_NAMES.items()}
+
+
+class FlightError(FtlboError):
+    """A vehicle refused or did not answer a flight step."""
+
+    def __init__(self, name: str, sysid: int, step: str, problem: str) -> None:
+        self.name, self.sysid, self.step = name, sysid, step
+        super().__init__(f"{name} (sysid {sysid}): {step}: {problem}")
+
+
+@dataclass
+class Status:
+    """What the vehicle last said about itself; ``t`` values are ``time.monotonic()``."""
+
+    mode: str = "?"
+    armed: bool = False
+    lat_deg: float | None = None
+    lon_deg: float | None = None
+    alt_m: float = 0.0
+    climb_m_s: float = 0.0
+    seq: int = -1
+    position_t: float = 0.0
+    heartbeat_t: float = 0.0
+    texts: list[str] = field(default_factory=list)
+    acks: dict[int, int] = field(default_factory=dict)
+
+
+class FlightVehicle:
+    """``name`` (uav1...) at ``sysid`` on ``link``; ``on_position(vehicle)`` is called from
+    the reader thread after every position report (the recorder hooks in there)."""
+
+    def __init__(self, name: str, sysid: int, link, *,
+                 on_position: Callable[[FlightVehicle], None] | None = None,
+                 command_timeout_s: float = 1.5, command_retries: int = 5) -> None:
+        self.name, self.sysid, self.link = name, sysid, link
+        self.status = Status()
+        self.on_position = on_position
+        self.command_timeout_s = command_timeout_s
+        self.command_retries = command_retries
+        self._changed = threading.Condition()
+        self._channel = link.channel(sysid)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._pump, name=f"{name} status", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self._channel.close()
+
+    # -- status
+    def _pump(self) -> None:
+        while not self._stop.is_set():
+            msg = self._channel.recv(0.1)
+            if msg is not None:
+                self._update(msg)
+
+    def _update(self, msg) -> None:
+        kind, s, now = msg.get_type(), self.status, time.monotonic()
+        position = False
+        with self._changed:
+            if kind == "HEARTBEAT":
+                s.mode = MODE_NAMES.get(msg.custom_mode, str(msg.custom_mode))
+                s.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
+                s.heartbeat_t = now
+            elif kind == "GLOBAL_POSITION_INT":
+                s.lat_deg, s.lon_deg = msg.lat * 1e-7, msg.lon * 1e-7
+                s.alt_m = msg.relative_alt / 1000.0
+                s.climb_m_s = -msg.vz / 100.0
+                s.position_t = now
+                position = True
+            elif kind == "MISSION_CURRENT":
+                s.seq = msg.seq
+            elif kind == "COMMAND_ACK":
+                s.acks[msg.command] = msg.result
+            elif kind == "STATUSTEXT":
+                s.texts.append(msg.text)
+                del s.texts[:-20]
+            else:
+                return
+            self._changed.notify_all()
+        if position and self.on_position is not None:
+            self.on_position(self)
+
+    def wait_for(self, predicate: Callable[[Status], bool], timeout_s: float) -> bool:
+        """Wait until ``predicate(status)`` holds, at most ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        with self._changed:
+            while not predicate(self.status):
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return False
+                self._changed.wait(min(left, 0.1))
+            return True
+
+    # -- commands
+    def send(self, msg) -> None:
+        self.link.send(msg)
+
+    def command(self, command: int, *params: float, step: str,
+                timeout_s: float | None = None, retries: int | None = None) -> int:
+        """COMMAND_LONG with up to 7 params until acknowledged; returns the MAV_RESULT.
+
+        Resent (with the confirmation field counting up) when no ack arrives within
+        ``timeout_s``; FlightError after ``retries`` resends.
+        """
+        timeout_s = self.command_timeout_s if timeout_s is None else timeout_s
+        retries = self.command_retries if retries is None else retries
+        p = list(params) + [0.0] * (7 - len(params))
+        for attempt in range(retries + 1):
+            with self._changed:
+                self.status.acks.pop(command, None)
+            self.send(R.MAVLink_command_long_message(self.sysid, 1, command, min(attempt, 255), *p))
+            if self.wait_for(lambda s: command in s.acks, timeout_s):
+                return self.status.acks[command]
+        raise FlightError(self.name, self.sysid, step,
+                          f"no COMMAND_ACK after {retries + 1} tries, {timeout_s:g} s each")
+
+    def request_position_rate(self, hz: float) -> None:
+        """MAV_CMD_SET_MESSAGE_INTERVAL for GLOBAL_POSITION_INT (a refusal is not fatal)."""
+        try:
+            self.command(R.MAV_CMD_SET_MESSAGE_INTERVAL, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
+                         1e6 / hz, step="position stream", retries=2)
+        except FlightError:
+            pass
+
+    def send_mode(self, mode: str) -> None:
+        """Ask for ``mode`` without waiting (MAV_CMD_DO_SET_MODE, custom mode)."""
+        self.send(R.MAVLink_command_long_message(
+            self.sysid, 1, R.MAV_CMD_DO_SET_MODE, 0, R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+            MODE_NUMBERS[mode], 0, 0, 0, 0, 0))
+
+    def set_mode(self, mode: str, *, timeout_s: float = 5.0) -> None:
+        """Switch to ``mode`` and wait for the HEARTBEAT to show it (resending each second)."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            self.send_mode(mode)
+            if self.wait_for(lambda s: s.mode == mode, min(1.0, deadline - time.monotonic())):
+                return
+        raise FlightError(self.name, self.sysid, f"mode {mode}",
+                          f"still in {self.status.mode} after {timeout_s:g} s")
+
+    def arm(self, *, budget_s: float, retry_s: float = 2.0) -> None:
+        """Arm, retrying while the autopilot refuses (ArduCopter refuses with "Arm: Need
+        Position Estimate" for a while after its pre-arm checks already pass)."""
+        deadline = time.monotonic() + budget_s
+        while True:
+            result = self.command(R.MAV_CMD_COMPONENT_ARM_DISARM, 1, step="arm")
+            if result == R.MAV_RESULT_ACCEPTED and self.wait_for(lambda s: s.armed, 3.0):
+                return
+            if time.monotonic() + retry_s > deadline:
+                why = self.status.texts[-1] if self.status.texts else f"MAV_RESULT {result}"
+                raise FlightError(self.name, self.sysid, "arm",
+                                  f"refused for {budget_s:g} s (last: {why})")
+            time.sleep(retry_s)
+
+    def takeoff(self, alt_m: float) -> None:
+        result = self.command(R.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, alt_m, step="takeoff")
+        if result != R.MAV_RESULT_ACCEPTED:
+            raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
+
+    def set_current(self, seq: int, *, timeout_s: float = 5.0) -> None:
+        """MISSION_SET_CURRENT, confirmed by MISSION_CURRENT."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            self.send(R.MAVLink_mission_set_current_message(self.sysid, 1, seq))
+            if self.wait_for(lambda s: s.seq == seq, min(1.0, deadline - time.monotonic())):
+                return
+        raise FlightError(self.name, self.sysid, "set current item",
+                          f"vehicle reports item {self.status.seq}, asked for {seq}")

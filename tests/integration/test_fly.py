@@ -1,0 +1,147 @@
+"""Fly the shipped example with three vehicles: the emulator, or ArduPilot SITL when
+ARDUPILOT_SITL is set. One test code path: everything is observed over MAVLink."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import threading
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+from pymavlink import mavutil
+
+from ftlbo_mav.cli import main
+from ftlbo_mav.flight.fly import Fleet, FlyOptions, abort, start_together, take_off
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.scenario import load_scenario
+from ftlbo_mav.sim.homes import scenario_homes
+from ftlbo_mav.sim.vehicle import VehicleOptions
+
+from ..conftest import EXAMPLE
+from .fleet import BACKEND, free_udp_port, vehicles
+
+pytestmark = pytest.mark.sitl
+
+SPEEDUP = 4.0
+OPTIONS = VehicleOptions(heartbeat_s=0.25)
+HOMES = scenario_homes(load_scenario(EXAMPLE))
+
+
+@pytest.fixture
+def plan_dir(tmp_path) -> Path:
+    folder = tmp_path / "plan"
+    shutil.copytree(EXAMPLE.with_suffix(""), folder)
+    return folder
+
+
+def _emulator_options():
+    return {} if BACKEND == "sitl" else {"options": OPTIONS}
+
+
+def _upload(plan_dir: Path, urls: list[str]) -> None:
+    result = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                       "--connect", " ".join(urls)])
+    assert result.exit_code == 0, result.output
+
+
+def test_fly_the_example_all_land_at_the_goal_in_formation(plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        _upload(plan_dir, fleet.urls)
+        result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--connect", " ".join(fleet.urls)])
+        assert result.exit_code == 0, result.output
+    assert "all vehicles finished their missions" in result.stdout
+    summary = json.loads((plan_dir / "flight" / "summary.json").read_text())
+    assert (plan_dir / "flight" / "report.png").stat().st_size > 20_000
+    assert summary["leg_seconds"] > 1.0
+    assert summary["formation_error_rms_legs_m"] < 0.2
+    assert summary["min_separation_legs_m"] >= summary["planned_min_separation_m"] - 0.5
+    assert summary["inside_obstacle"] is False and summary["min_clearance_m"] > 0
+    assert max(summary["final_distance_to_goal_m"]) < 1.0
+    assert min(summary["position_rate_hz"].values()) >= 5.0
+    csv = (plan_dir / "flight" / "flight.csv").read_text().splitlines()
+    assert csv[0].startswith("t,sysid,lat_deg") and len(csv) > 100
+
+
+def test_abort_mid_flight_sends_every_vehicle_to_rtl_within_a_second(plan_dir):
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        _upload(plan_dir, fleet.urls)
+        with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
+            take_off(planned, flying.vehicles, FlyOptions(), say=lambda _t: None)
+            start_together(planned, flying.vehicles)
+            assert all(v.wait_for(lambda s: s.seq >= 4, 30.0) for v in flying.vehicles)
+            t0 = time.monotonic()
+            assert abort(flying.vehicles, mode="RTL") == []
+            for v in flying.vehicles:
+                assert v.wait_for(lambda s: s.mode == "RTL", 1.0)
+            assert time.monotonic() - t0 < 1.0
+        # the command line does the same over fresh links (LAND this time)
+        result = CliRunner().invoke(main, ["abort", "--sysid", "1..3", "--land",
+                                           "--connect", " ".join(fleet.urls)])
+        assert result.exit_code == 0, result.output
+        assert result.stdout.count("LAND") == 3
+
+
+def test_fly_refuses_before_arming_when_a_mission_differs(plan_dir, tmp_path):
+    wrong = tmp_path / "wrong"
+    shutil.copytree(plan_dir, wrong)
+    shutil.copy(plan_dir / "uav3.waypoints", wrong / "uav2.waypoints")
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        _upload(wrong, fleet.urls)  # vehicle 2 now holds uav3's mission
+        result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--connect", " ".join(fleet.urls)])
+        assert result.exit_code == 1
+        assert "pre-flight failed, nothing armed" in result.stderr
+        assert "uav2 (sysid 2): holds a different mission" in result.stderr
+        assert "uav1 (sysid 1)" not in result.stderr
+        with Fleet(["uav1", "uav2", "uav3"], [1, 2, 3], fleet.urls) as watching:
+            for v in watching.vehicles:
+                assert v.wait_for(lambda s: s.heartbeat_t > 0, 5.0)
+                assert not v.status.armed and v.status.mode != "GUIDED"
+
+
+def test_monitor_records_and_forwards_to_a_ground_station(plan_dir):
+    port = free_udp_port()
+    gcs = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}", source_system=250,
+                                     dialect="ardupilotmega")
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        runner = CliRunner()
+        holder = {}
+        thread = threading.Thread(target=lambda: holder.setdefault("result", runner.invoke(
+            main, ["monitor", str(plan_dir), "--sysid", "1..3", "--duration", "4",
+                   "--forward", f"udpout:127.0.0.1:{port}", "--connect", " ".join(fleet.urls)])))
+        thread.start()
+        heard, acked = set(), False
+        deadline = time.monotonic() + 3.5
+        while time.monotonic() < deadline and not (heard == {1, 2, 3} and acked):
+            msg = gcs.recv_match(blocking=True, timeout=0.2)
+            if msg is None:
+                continue
+            if msg.get_type() == "HEARTBEAT":
+                heard.add(msg.get_srcSystem())
+                if msg.get_srcSystem() == 2 and not acked:
+                    # the ground station asks vehicle 2, and only it, to switch to GUIDED
+                    gcs.mav.command_long_send(2, 1, mavutil.mavlink.MAV_CMD_DO_SET_MODE, 0,
+                                              1, 4, 0, 0, 0, 0, 0)
+            elif (msg.get_type() == "COMMAND_ACK" and msg.get_srcSystem() == 2
+                  and msg.command == mavutil.mavlink.MAV_CMD_DO_SET_MODE):
+                acked = msg.result == mavutil.mavlink.MAV_RESULT_ACCEPTED
+        thread.join(timeout=15)
+        gcs.close()
+        assert heard == {1, 2, 3}
+        assert acked
+        with Fleet(["uav1", "uav2", "uav3"], [1, 2, 3], fleet.urls) as watching:
+            modes = []
+            for v in watching.vehicles:
+                assert v.wait_for(lambda s: s.heartbeat_t > 0, 5.0)
+                modes.append(v.status.mode)
+        assert modes[1] == "GUIDED" and modes[0] != "GUIDED" and modes[2] != "GUIDED"
+    result = holder["result"]
+    assert result.exit_code == 0, result.output
+    lines = (plan_dir / "monitor" / "flight.csv").read_text().splitlines()
+    per_vehicle = sum(1 for line in lines[1:] if line.split(",")[1] == "1")
+    assert per_vehicle >= 5 * 3  # at least 5 Hz over the monitored seconds
