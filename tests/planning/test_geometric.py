@@ -168,3 +168,73 @@ def test_a_route_that_bends_too_often_falls_back_to_a_straighter_one():
     assert violations(problem, weaving) != []
     seeds = seed_waypoints(problem)
     assert violations(problem, problem.full_paths(seeds[:1])[0]) == []
+
+
+def grid_shortest(problem: PlanningProblem, step: float) -> float:
+    """Length of the shortest path on a grid (16 neighbours) whose every edge is clear and
+    inside the area: a feasible path, so never shorter than the true shortest route."""
+    import heapq
+
+    from ftlbo_mav.planning.geometric import centroid_rectangle, segments_clear
+
+    lo, hi = centroid_rectangle(problem)
+    xs = np.arange(lo[0], hi[0] + 1e-9, step)
+    ys = np.arange(lo[1], hi[1] + 1e-9, step)
+    nodes = np.array([(x, y) for x in xs for y in ys] + [problem.start[:2], problem.goal[:2]])
+    start, goal = len(nodes) - 2, len(nodes) - 1
+    moves = [(dx, dy) for dx in range(-2, 3) for dy in range(-2, 3)
+             if (dx, dy) != (0, 0) and math.gcd(abs(dx), abs(dy)) == 1]
+    index = {(i, j): i * len(ys) + j for i in range(len(xs)) for j in range(len(ys))}
+    p, q = [], []
+    for (i, j), a in index.items():
+        for dx, dy in moves:
+            b = index.get((i + dx, j + dy))
+            if b is not None and a < b:
+                p.append(a), q.append(b)
+    near = np.hypot(*(nodes[:-2] - problem.start[:2]).T).argsort()[:9]
+    near_goal = np.hypot(*(nodes[:-2] - problem.goal[:2]).T).argsort()[:9]
+    p += [start] * 9 + [goal] * 9
+    q += list(near) + list(near_goal)
+    p, q = np.array(p), np.array(q)
+    ok = segments_clear(nodes[p], nodes[q], formation_discs(problem))
+    edges = [[] for _ in nodes]
+    for a, b in zip(p[ok], q[ok]):
+        w = float(np.hypot(*(nodes[a] - nodes[b])))
+        edges[a].append((b, w))
+        edges[b].append((a, w))
+    dist = {start: 0.0}
+    heap = [(0.0, start)]
+    while heap:
+        d, u = heapq.heappop(heap)
+        if u == goal:
+            return d
+        if d > dist[u]:
+            continue
+        for v, w in edges[u]:
+            if d + w < dist.get(v, math.inf):
+                dist[v] = d + w
+                heapq.heappush(heap, (d + w, v))
+    return math.inf
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(8))
+def test_no_clear_grid_path_is_shorter_than_the_bound(seed):
+    rng = np.random.default_rng(seed)
+    problem = field(
+        centres=rng.uniform([-15, -12], [15, 12], size=(12, 2)),
+        radii=rng.uniform(1.0, 3.0, size=12),
+        offsets=np.array([[0.0, 1.5, 0.0], [0.0, -1.5, 0.0], [1.0, 0.0, 0.0]]),
+        area_lower=np.array([-25.0, -16.0]), area_upper=np.array([25.0, 16.0]),
+    )
+    discs = formation_discs(problem)
+    for end in (problem.start, problem.goal):
+        if np.any(np.hypot(*(discs.centres - end[:2]).T) <= discs.radii):
+            pytest.skip("a disc covers the start or the goal")
+    bound = lower_bound(problem)
+    grid = grid_shortest(problem, 0.5)
+    if bound is None:
+        assert grid == math.inf
+    else:
+        assert bound <= grid + 1e-9  # a clear path shorter than the bound: a missed gap
+        assert grid < 1.05 * bound  # and the bound is not far too low
