@@ -364,15 +364,15 @@ def convergence_figure(comparison: Comparison):
         q25, q50, q75 = (np.where(np.isfinite(q), q, np.nan) for q in (q25, q50, q75))
         x = np.arange(1, h.shape[1] + 1)
         feasible = sum(r.feasible for r in runs)
-        (line,) = ax.plot(x, q50, linewidth=1.6,
+        (line,) = ax.plot(x, q50, linewidth=1.8, zorder=3,
                           label=f"{algorithm} ({feasible}/{len(runs)} runs feasible)")
-        ax.fill_between(x, q25, q75, color=line.get_color(), alpha=0.2, linewidth=0)
+        ax.fill_between(x, q25, q75, color=line.get_color(), alpha=0.15, linewidth=0, zorder=1)
         if np.isfinite(q50).any():  # y range: from the lowest quartile to the medians
             finite_low.append(np.nanmin(q25))  # after the first few iterations' plunge
             later = q50[h.shape[1] // 15 :]
             finite_high.append(np.nanmax(later) if np.isfinite(later).any() else np.nanmax(q50))
     if c.lower_bound_length is not None:
-        ax.axhline(c.lower_bound_length, color="black", linestyle="--", linewidth=1.0,
+        ax.axhline(c.lower_bound_length, color="black", linestyle=":", linewidth=1.0, zorder=2,
                    label=f"lower bound on the length ({c.lower_bound_length:.2f} m)")
         finite_low.append(c.lower_bound_length)
     if finite_low and finite_high:
