@@ -1,0 +1,61 @@
+import io
+import time
+from types import SimpleNamespace
+
+import numpy as np
+
+from ftlbo_mav.flight.monitor import LiveView, Monitor
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.flight.vehicle import Status
+
+from ..conftest import EXAMPLE
+
+
+def _vehicles(planned, shift=(0.0, 0.0, 0.0)):
+    out = []
+    for n, name in enumerate(planned.names):
+        enu = planned.paths[n, 3] + (np.array(shift) if n == 1 else 0.0)
+        lat, lon, alt = planned.frame.to_lla(enu)
+        status = Status(mode="AUTO", armed=True, lat_deg=float(lat), lon_deg=float(lon),
+                        alt_m=float(alt), seq=5, position_t=time.monotonic(),
+                        heartbeat_t=time.monotonic())
+        out.append(SimpleNamespace(name=name, sysid=n + 1, status=status))
+    return out
+
+
+def test_lines_show_each_vehicle_and_the_group():
+    planned = load_planned_flight(EXAMPLE.with_suffix(""))
+    monitor = Monitor(planned)
+    monitor.vehicles = _vehicles(planned, shift=(0.6, 0.0, 0.0))
+    lines = monitor.lines()
+    assert len(lines) == 4
+    assert lines[0].split()[:4] == ["uav1", "sysid", "1", "AUTO"]
+    assert "item 5/14" in lines[0] and "slot" in lines[0]
+    # uav2 0.6 m east of its slot: the centroid moves 0.2 m, its slot error is 0.4 m
+    assert "slot  0.40 m" in lines[1]
+    assert lines[3].startswith("formation error 0.28 m RMS")
+
+
+def test_recording_and_views():
+    planned = load_planned_flight(EXAMPLE.with_suffix(""))
+    monitor = Monitor(planned)
+    monitor.vehicles = _vehicles(planned)
+    for v in monitor.vehicles:
+        monitor(v)
+    assert [s.sysid for s in monitor.record.samples] == [1, 2, 3]
+    assert monitor.record.samples[0].seq == 5
+    stream = io.StringIO()
+    view = LiveView(monitor, stream)
+    view.update()
+    view.update()  # a pipe gets the view every few seconds, not at every call
+    assert stream.getvalue().count("formation error") == 1
+    view.message("starting")
+    assert stream.getvalue().endswith("starting\n")
+
+
+def test_without_a_plan_only_the_vehicles():
+    planned = load_planned_flight(EXAMPLE.with_suffix(""))
+    monitor = Monitor(None)
+    monitor.vehicles = _vehicles(planned)
+    lines = monitor.lines()
+    assert len(lines) == 3 and "slot" not in lines[0]
