@@ -18,7 +18,7 @@ Definitions (docs/planning.md):
   (the paper's table starts every algorithm from one cost, 248.28; random classes on our
   map often start with no feasible student at all).
 - *seconds*: ``Plan.seconds``, the optimizer's wall time (for ``ftlbo-seeded`` with its
-  seed routes), measured while the other processes run.
+  routes and seeds), measured while the other processes run.
 """
 
 from __future__ import annotations
