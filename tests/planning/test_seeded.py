@@ -113,3 +113,40 @@ def test_plan_command_says_no_route_in_one_line(tmp_path):
     assert result.stderr.splitlines()[0] == NO_ROUTE  # before anything else
     assert "no route: no lower bound" in result.stdout
     assert "Traceback" not in result.output
+
+
+def orchard(rng: np.random.Generator, offsets: np.ndarray):
+    """A random orchard on the example's area: 5-11 trees of radius 2-4.5 m (+1 m
+    clearance) between start and goal."""
+    from ftlbo_mav.planning.problem import PlanningProblem
+
+    start, goal = np.array([8.0, 12.0, 4.0]), np.array([80.0, 40.0, 4.0])
+    centres, radii, count = [], [], rng.integers(5, 12)
+    while len(centres) < count:
+        c, r = rng.uniform([15, 5], [75, 45]), rng.uniform(2.0, 4.5)
+        if min(np.linalg.norm(c - start[:2]), np.linalg.norm(c - goal[:2])) > r + 7.0:
+            centres.append(c)
+            radii.append(r)
+    return PlanningProblem(
+        start=start, goal=goal, offsets=offsets, centres=np.array(centres),
+        radii=np.array(radii) + 1.0, h_min=2.0, h_max=7.0, area_lower=np.array([0.0, 0.0]),
+        area_upper=np.array([86.0, 49.5]), waypoints=10, weights=np.ones(3))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("trial", range(6))
+def test_random_orchards_default_plan_within_one_percent_or_no_route(trial):
+    from ftlbo_mav.formation import regular_formation
+    from ftlbo_mav.planning.planner import solve
+
+    formations = [np.array([[0, 0, 2], [3, 0, -1], [-3, 0, -1]], float),
+                  regular_formation(count=4, radius_m=3.0, plane="horizontal"),
+                  regular_formation(count=6, radius_m=4.0, plane="horizontal")]
+    problem = orchard(np.random.default_rng(50 + trial), formations[trial % 3])
+    result = solve(problem, load_scenario(EXAMPLE),
+                   PlannerSettings(algorithm=DEFAULT_ALGORITHM, seed=trial))
+    if result.lower_bound_length is None:
+        assert not result.feasible  # no route: nothing flyable either
+    else:
+        assert result.feasible, result.violations
+        assert result.length_ratio < 1.01
