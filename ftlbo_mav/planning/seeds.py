@@ -43,9 +43,7 @@ def _excess(radius: float, sweep: float, count: int) -> float:
     return radius * (2 * count * math.tan(half) - abs(sweep))
 
 
-def _allocated_polygon(
-    problem: PlanningProblem, route: Route, waypoints: int, margin: float
-) -> np.ndarray:
+def _allocated_polygon(route: Route, waypoints: int, margin: float) -> np.ndarray:
     """Fallback of :func:`route_waypoints` when no clear polygon of ``m`` vertices follows
     the route: each arc gets vertices of a polygon circumscribed about it (radius +
     ``margin``), each added vertex to the arc whose excess length it cuts most; with more
@@ -89,8 +87,9 @@ def _candidates(route: Route, margin: float) -> tuple[np.ndarray, np.ndarray]:
 
     Start and goal; for every arc, vertices of polygons circumscribed about the disc
     widened by ``margin`` (one per ``_ARC_STEP`` radians, and with one or two vertices for
-    the whole arc), so that following them stays clear; and "apexes": where the line entering one arc meets the line leaving an arc up
-    to ``_APEX_SPAN`` arcs later, one vertex that cuts several bends when the gap allows.
+    the whole arc), so that following them stays clear; and "apexes": where the line
+    entering one arc meets the line leaving an arc up to ``_APEX_SPAN`` arcs later, one
+    vertex that cuts several bends when the gap allows.
     Returns points ``(P, 2)`` and keys ``(P,)`` (metres along the route).
     """
     points, keys = [route.nodes[0]], [-1.0]
@@ -214,7 +213,7 @@ def _route_polygon(problem: PlanningProblem, route: Route, waypoints: int, *,
     clear[i, j] = segments_clear(points[i], points[j], widened)
     chain = _fewest_metres_polygon(points, clear, m + 1)
     if chain is None:
-        xy = _allocated_polygon(problem, route, m, margin)
+        xy = _allocated_polygon(route, m, margin)
     else:
         xy = _pad(points[chain], m)
     full = np.vstack([start[:2], xy, goal[:2]])
