@@ -115,3 +115,15 @@ def test_parse_errors_name_the_line(text, words):
 def test_unreadable_file(tmp_path):
     with pytest.raises(MissionFileError, match="cannot read"):
         read_waypoints(tmp_path / "missing.waypoints")
+
+
+def test_written_files_are_readable_by_others(tmp_path):
+    import os
+    import stat
+
+    file = write_waypoints(tmp_path / "m.waypoints",
+                           build_mission(home=(1, 2), takeoff_alt_m=4,
+                                         path=[(1.0, 2.0, 4.0), (1.0001, 2.0, 4.0)]))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(file.stat().st_mode) == 0o666 & ~umask
