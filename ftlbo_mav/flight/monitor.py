@@ -32,7 +32,7 @@ class Monitor:
         if s.lat_deg is None:
             return
         sample = Sample(s.position_t - self.t0, vehicle.sysid, s.lat_deg, s.lon_deg, s.alt_m,
-                        s.mode, s.armed, s.seq if s.mode == "AUTO" else -1)
+                        s.mode, s.armed, s.seq if s.mode == "AUTO" else -1, s.position_boot_s)
         with self._lock:
             self.record.add(sample)
 

@@ -16,7 +16,11 @@ from ..geo import LocalFrame
 
 @dataclass(frozen=True)
 class Sample:
-    """One telemetry sample of one vehicle; ``t`` seconds since the recording started."""
+    """One telemetry sample of one vehicle.
+
+    ``t``: seconds since the recording started, when it arrived; ``boot_s``: the vehicle's
+    own time stamp (GLOBAL_POSITION_INT ``time_boot_ms``), seconds since its boot.
+    """
 
     t: float
     sysid: int
@@ -26,6 +30,7 @@ class Sample:
     mode: str
     armed: bool
     seq: int
+    boot_s: float = float("nan")
 
 
 class FlightRecord:
@@ -47,7 +52,7 @@ class FlightRecord:
         for s in self.samples:
             writer.writerow(
                 [f"{s.t:.3f}", s.sysid, f"{s.lat_deg:.8f}", f"{s.lon_deg:.8f}", f"{s.alt_m:.3f}",
-                 s.mode, int(s.armed), s.seq]
+                 s.mode, int(s.armed), s.seq, f"{s.boot_s:.3f}"]
             )
         return buf.getvalue()
 
@@ -57,7 +62,8 @@ class FlightRecord:
         return cls(
             [
                 Sample(float(r["t"]), int(r["sysid"]), float(r["lat_deg"]), float(r["lon_deg"]),
-                       float(r["alt_m"]), r["mode"], r["armed"] in ("1", "True"), int(r["seq"]))
+                       float(r["alt_m"]), r["mode"], r["armed"] in ("1", "True"), int(r["seq"]),
+                       float(r.get("boot_s") or "nan"))
                 for r in rows
             ]
         )
@@ -77,17 +83,17 @@ class FlightRecord:
         one reported at or before each time; -1 outside AUTO).
         """
         per = [self.of(s) for s in sysids]
+        when = [sample_times(p) for p in per]
         if any(len(p) < 2 for p in per):
             return np.zeros(0), np.zeros((0, len(sysids), 3)), np.zeros((0, len(sysids)), int)
-        start = max(p[0].t for p in per)
-        stop = min(p[-1].t for p in per)
+        start = max(w[0] for w in when)
+        stop = min(w[-1] for w in when)
         if stop <= start:
             return np.zeros(0), np.zeros((0, len(sysids), 3)), np.zeros((0, len(sysids)), int)
         times = np.arange(start, stop, 1.0 / rate_hz)
         positions = np.empty((len(times), len(sysids), 3))
         seqs = np.empty((len(times), len(sysids)), int)
-        for n, samples in enumerate(per):
-            t = np.array([s.t for s in samples])
+        for n, (samples, t) in enumerate(zip(per, when)):
             enu = frame.to_enu(
                 lat_deg=[s.lat_deg for s in samples],
                 lon_deg=[s.lon_deg for s in samples],
@@ -101,4 +107,24 @@ class FlightRecord:
         return times, positions, seqs
 
 
-__all__ = ["FlightRecord", "Sample"]
+def sample_times(samples: list[Sample]) -> np.ndarray:
+    """When each sample was taken, on the recorder's clock, ``(len(samples),)`` seconds.
+
+    Arrival times carry the link's jitter (a few to tens of milliseconds: centimetres at
+    cruise speed, enough to show as formation error). The vehicle's own time stamps do
+    not, so where every sample has one and they increase, arrival time is fitted as
+    ``a + b * boot_s`` (``b`` absorbs a simulator running faster than real time) and the
+    line is moved down onto the earliest arrivals, the ones least delayed.
+    """
+    t = np.array([s.t for s in samples])
+    boot = np.array([s.boot_s for s in samples])
+    if len(t) < 3 or not np.all(np.isfinite(boot)) or np.any(np.diff(boot) <= 0):
+        return t
+    b, _a = np.polyfit(boot, t, 1)
+    if not b > 0:
+        return t
+    a = np.min(t - b * boot)
+    return a + b * boot
+
+
+__all__ = ["FlightRecord", "Sample", "sample_times"]

@@ -41,6 +41,7 @@ class Status:
     climb_m_s: float = 0.0
     seq: int = -1
     position_t: float = 0.0
+    position_boot_s: float = 0.0
     heartbeat_t: float = 0.0
     texts: list[str] = field(default_factory=list)
     acks: dict[int, int] = field(default_factory=dict)
@@ -89,6 +90,7 @@ class FlightVehicle:
                 s.alt_m = msg.relative_alt / 1000.0
                 s.climb_m_s = -msg.vz / 100.0
                 s.position_t = now
+                s.position_boot_s = msg.time_boot_ms / 1000.0
                 position = True
             elif kind == "MISSION_CURRENT":
                 s.seq = msg.seq

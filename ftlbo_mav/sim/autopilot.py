@@ -227,9 +227,10 @@ class Autopilot:
     def advance(self, now: float) -> list:
         """Fly until ``now``; returns announcements."""
         out: list = []
-        while self.time + STEP_S <= now:
-            self.time += STEP_S
-            self._step(STEP_S, out)
+        while self.time < now - 1e-9:  # fixed steps, the last one shortened to end at now
+            dt = min(STEP_S, now - self.time)
+            self.time += dt
+            self._step(dt, out)
         if self.mode == AUTO and self.current != self._announced_current:
             self._announced_current = self.current
             out.append(R.MAVLink_mission_current_message(self.current))

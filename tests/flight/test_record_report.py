@@ -76,3 +76,22 @@ def test_folder_errors(tmp_path, plan_dir):
     (tmp_path / "plan.json").write_text(json.dumps(doc))
     with pytest.raises(PlanFolderError, match="missing.waypoints"):
         load_planned_flight(tmp_path)
+
+
+def test_sample_times_remove_link_jitter_using_the_vehicles_clock():
+    from ftlbo_mav.flight.record import sample_times
+
+    rng = np.random.default_rng(0)
+    boot = np.arange(0, 20, 0.1) * 4.0  # a vehicle clock running 4x faster (time scale)
+    true = 3.0 + boot / 4.0
+    arrival = true + rng.uniform(0.002, 0.060, boot.size)  # loopback to radio-link jitter
+    samples = [Sample(float(t), 1, 0.0, 0.0, 0.0, "AUTO", True, 3, float(b))
+               for t, b in zip(arrival, boot)]
+    fitted = sample_times(samples)
+    assert np.abs(fitted - true).max() < 0.01 < np.abs(arrival - true).max()
+    # without the vehicle's time stamps (or after a reboot) arrival times are used as they are
+    plain = [Sample(s.t, 1, 0.0, 0.0, 0.0, "AUTO", True, 3) for s in samples]
+    assert np.array_equal(sample_times(plain), arrival)
+    rebooted = samples[:50] + [Sample(s.t, 1, 0, 0, 0, "AUTO", True, 3, s.boot_s - 30)
+                               for s in samples[50:]]
+    assert np.array_equal(sample_times(rebooted), arrival)
