@@ -183,7 +183,19 @@ class FlightVehicle:
             raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
 
     def set_current(self, seq: int, *, timeout_s: float = 5.0) -> None:
-        """MISSION_SET_CURRENT, confirmed by MISSION_CURRENT."""
+        """Make ``seq`` the current mission item.
+
+        MAV_CMD_DO_SET_MISSION_CURRENT, acknowledged; autopilots without it get the older
+        MISSION_SET_CURRENT message, confirmed by the MISSION_CURRENT that ArduPilot
+        answers it with (libraries/GCS_MAVLink/GCS_Common.cpp handle_mission_set_current).
+        """
+        try:
+            result = self.command(R.MAV_CMD_DO_SET_MISSION_CURRENT, seq, step="set current item",
+                                  retries=2)
+        except FlightError:
+            result = None
+        if result == R.MAV_RESULT_ACCEPTED:
+            return
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             self.send(R.MAVLink_mission_set_current_message(self.sysid, 1, seq))

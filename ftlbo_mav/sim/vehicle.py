@@ -141,8 +141,9 @@ class Vehicle:
         if now >= self._next_beat:
             self._next_beat = now + self.options.heartbeat_s
             periodic += self.telemetry(now)
-            if self.autopilot.mode == CopterMode.AUTO:
-                periodic.append(R.MAVLink_mission_current_message(self.autopilot.current))
+            # in the extended-status stream, whatever the mode (GCS_Common.cpp
+            # send_mission_current)
+            periodic.append(R.MAVLink_mission_current_message(self.autopilot.current))
         elif now >= self._next_position:
             periodic.append(self.position_message(now))
         if now >= self._next_position:
@@ -202,6 +203,8 @@ class Vehicle:
             ok = ap.set_mode(CopterMode.AUTO, now)
         elif cmd == R.MAV_CMD_DO_SET_MISSION_CURRENT:
             ok = ap.set_current(int(msg.param1))
+            if ok:
+                text.append(R.MAVLink_mission_current_message(ap.current))
         elif cmd == R.MAV_CMD_NAV_RETURN_TO_LAUNCH:
             ok = ap.set_mode(CopterMode.RTL, now)
         elif cmd == R.MAV_CMD_NAV_LAND:

@@ -26,7 +26,8 @@ def test_telemetry_reports_fix_and_prearm_once_ready():
     v = Vehicle(sysid=1, home=HOME, options=VehicleOptions(ready_after_s=2.0))
     periodic, _ = v.tick(0.0)
     kinds = [m.get_type() for m in periodic]
-    assert kinds == ["HEARTBEAT", "SYS_STATUS", "GPS_RAW_INT", "GLOBAL_POSITION_INT"]
+    assert kinds == ["HEARTBEAT", "SYS_STATUS", "GPS_RAW_INT", "GLOBAL_POSITION_INT",
+                     "MISSION_CURRENT"]
     assert periodic[2].fix_type < 3
     assert not periodic[1].onboard_control_sensors_health & R.MAV_SYS_STATUS_PREARM_CHECK
     # status once a heartbeat period; the position between, at position_hz (4 Hz)
