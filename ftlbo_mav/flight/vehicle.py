@@ -60,6 +60,7 @@ class FlightVehicle:
         self.command_timeout_s = command_timeout_s
         self.command_retries = command_retries
         self._changed = threading.Condition()
+        self._requested_mode: str | None = None
         self._channel = link.channel(sysid)
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._pump, name=f"{name} status", daemon=True)
@@ -96,6 +97,11 @@ class FlightVehicle:
                 s.seq = msg.seq
             elif kind == "COMMAND_ACK":
                 s.acks[msg.command] = msg.result
+                if (msg.command == R.MAV_CMD_DO_SET_MODE and msg.result == R.MAV_RESULT_ACCEPTED
+                        and self._requested_mode is not None):
+                    # ArduPilot switches before it acknowledges (GCS_Common.cpp
+                    # handle_command_do_set_mode): no need to wait for the next HEARTBEAT
+                    s.mode = self._requested_mode
             elif kind == "STATUSTEXT":
                 s.texts.append(msg.text)
                 del s.texts[:-20]
@@ -149,12 +155,14 @@ class FlightVehicle:
 
     def send_mode(self, mode: str) -> None:
         """Ask for ``mode`` without waiting (MAV_CMD_DO_SET_MODE, custom mode)."""
+        self._requested_mode = mode
         self.send(R.MAVLink_command_long_message(
             self.sysid, 1, R.MAV_CMD_DO_SET_MODE, 0, R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
             MODE_NUMBERS[mode], 0, 0, 0, 0, 0))
 
     def set_mode(self, mode: str, *, timeout_s: float = 5.0) -> None:
-        """Switch to ``mode`` and wait for the HEARTBEAT to show it (resending each second)."""
+        """Switch to ``mode``; confirmed by its acknowledgement or the HEARTBEAT (resent
+        each second until then)."""
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
             self.send_mode(mode)
