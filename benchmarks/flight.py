@@ -27,15 +27,21 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ftlbo_mav.flight.fly import Fleet, FlyOptions, finished, start_together, take_off  # noqa: E402
-from ftlbo_mav.flight.fly import takeoff_item  # noqa: E402
-from ftlbo_mav.flight.monitor import Monitor  # noqa: E402
-from ftlbo_mav.flight.planned import load_planned_flight  # noqa: E402
-from ftlbo_mav.flight.report import summarize  # noqa: E402
-from ftlbo_mav.link.swarm import Assignment, upload_swarm  # noqa: E402
-from ftlbo_mav.link.transfer import Timing  # noqa: E402
-from ftlbo_mav.scenario import load_scenario  # noqa: E402
-from ftlbo_mav.sim.homes import scenario_homes  # noqa: E402
+from ftlbo_mav.flight.fly import (
+    Fleet,
+    FlyOptions,
+    finished,
+    start_together,
+    take_off,
+    takeoff_item,
+)
+from ftlbo_mav.flight.monitor import Monitor
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.flight.report import summarize
+from ftlbo_mav.link.swarm import Assignment, upload_swarm
+from ftlbo_mav.link.transfer import Timing
+from ftlbo_mav.scenario import load_scenario
+from ftlbo_mav.sim.homes import scenario_homes
 
 EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
 

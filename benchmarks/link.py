@@ -165,7 +165,10 @@ def main() -> None:
     print(f"\n2. upload alone, 1 vehicle x 15 items, virtual time, {seeds} seeds")
     print(f"{'link':34s} {'ours done':>10s} {'ours s':>7s} {'plain done':>11s} {'plain s':>8s}")
     virt = virtual_time(seeds)
-    fmt = lambda v: f"{v:.2f}" if v is not None else "-"
+
+    def fmt(v):
+        return f"{v:.2f}" if v is not None else "-"
+
     for r in virt:
         print(f"{r['link']:34s} {r['ours_completed']:>5d}/{seeds:<4d} {fmt(r['ours_mean_s']):>7s} "
               f"{r['plain_completed']:>6d}/{seeds:<4d} {fmt(r['plain_mean_s']):>8s}")

@@ -36,18 +36,18 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from ftlbo_mav.formation import regular_formation  # noqa: E402
-from ftlbo_mav.planning.cost import search_cost  # noqa: E402
-from ftlbo_mav.planning.geometric import shortest_route  # noqa: E402
-from ftlbo_mav.planning.optimizers import (  # noqa: E402
+from ftlbo_mav.formation import regular_formation
+from ftlbo_mav.planning.cost import search_cost
+from ftlbo_mav.planning.geometric import shortest_route
+from ftlbo_mav.planning.optimizers import (
     OPTIMIZERS,
     Objective,
     evaluation_budget,
     tlbo,
 )
-from ftlbo_mav.planning.planner import plan  # noqa: E402
-from ftlbo_mav.planning.problem import PlanningProblem, problem_from_scenario  # noqa: E402
-from ftlbo_mav.scenario import load_scenario  # noqa: E402
+from ftlbo_mav.planning.planner import plan
+from ftlbo_mav.planning.problem import PlanningProblem, problem_from_scenario
+from ftlbo_mav.scenario import load_scenario
 
 EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
 PAPER = dict(students=100, waypoints=10, iterations=150)
@@ -140,7 +140,8 @@ def default_planner_wall(problem: PlanningProblem, seeds: int) -> tuple[float, f
     """Median wall seconds of the default planner's optimizer+seeding, of the geometry
     alone, and the median length ratio (NaN when no route)."""
     from ftlbo_mav.planning.planner import solve
-    from ftlbo_mav.scenario import PlannerSettings, load_scenario as _load
+    from ftlbo_mav.scenario import PlannerSettings
+    from ftlbo_mav.scenario import load_scenario as _load
 
     scenario = _load(EXAMPLE)  # only carried along in the Plan; the problem is ours
     walls, ratios = [], []

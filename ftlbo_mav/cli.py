@@ -123,7 +123,7 @@ def plot_command(folder, out_dir):
 
 
 # The MAVLink bridge (ftlbo_mav/link/commands.py): upload, download, sim.
-from .link.commands import download, sim, upload  # noqa: E402
+from .link.commands import download, sim, upload
 
 main.add_command(upload)
 main.add_command(download)
@@ -169,7 +169,7 @@ def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, 
     for path in write_comparison(result, out_dir):
         click.echo(f"  wrote {path}")
 
-from .flight.commands import abort_command, fly_command, monitor  # noqa: E402
+from .flight.commands import abort_command, fly_command, monitor
 
 main.add_command(fly_command)
 main.add_command(monitor)

@@ -29,8 +29,8 @@ import json
 import math
 import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
@@ -164,7 +164,7 @@ def summarize(algorithm: str, runs: Sequence[Run]) -> Summary:
     return Summary(
         algorithm=algorithm,
         runs=len(runs),
-        feasible=int(len(costs)),
+        feasible=len(costs),
         min=stat(np.min, costs),
         median=stat(np.median, costs),
         mean=stat(np.mean, costs),

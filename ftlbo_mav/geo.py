@@ -19,7 +19,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from pyproj import Transformer
 
-
 _EARTH_RADIUS_M = 6378137.0
 
 

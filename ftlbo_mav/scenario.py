@@ -268,7 +268,9 @@ def load_scenario(path: str | Path) -> Scenario:
     return parse_scenario(text, source=source, base_dir=path.parent)
 
 
-def parse_scenario(text: str, *, source: str = "<scenario>", base_dir: Path | None = None) -> Scenario:
+def parse_scenario(
+    text: str, *, source: str = "<scenario>", base_dir: Path | None = None
+) -> Scenario:
     """Parse scenario TOML text; see :func:`load_scenario`."""
     try:
         data = tomllib.loads(text)
@@ -344,7 +346,8 @@ def _read_offsets(form: _Table) -> np.ndarray:
                 or len(row) != 3
                 or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in row)
             ):
-                raise form.error(f"offsets[{i}]", f"must be [east, north, up] in metres, got {row!r}")
+                raise form.error(f"offsets[{i}]",
+                                 f"must be [east, north, up] in metres, got {row!r}")
         return np.array(rows, dtype=float)
     if not form.has("count"):
         raise form.error("offsets", "missing: give offsets, or count and radius")

@@ -53,7 +53,7 @@ class Monitor:
         for n, v in enumerate(self.vehicles):
             s = v.status
             total = len(self.planned.missions[n]) - 1 if self.planned else None
-            item = f"{s.seq}/{total}" if total and s.seq >= 0 else (str(s.seq) if s.seq >= 0 else "-")
+            item = "-" if s.seq < 0 else f"{s.seq}/{total}" if total else str(s.seq)
             slot = f"slot {slots[n]:5.2f} m" if slots is not None else ""
             age = time.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
             stale = "  NO HEARTBEAT" if age > 3.0 else ""

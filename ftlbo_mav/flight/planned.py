@@ -71,11 +71,10 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
             ]
         )
         obstacles = doc.get("obstacles", [])
-        centres = (
-            frame.to_enu(lat_deg=[o["lat"] for o in obstacles], lon_deg=[o["lon"] for o in obstacles])[:, :2]
-            if obstacles
-            else np.zeros((0, 2))
-        )
+        centres = np.zeros((0, 2))
+        if obstacles:
+            centres = frame.to_enu(lat_deg=[o["lat"] for o in obstacles],
+                                   lon_deg=[o["lon"] for o in obstacles])[:, :2]
         radii = np.array([o["radius"] for o in obstacles], float)
         clearance = float(doc.get("clearance", 0.0))
         files = [u["mission_file"] for u in uavs]

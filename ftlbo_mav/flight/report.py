@@ -39,10 +39,11 @@ def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
     clear = min_clearance(positions, planned.centres, planned.radii)
     goal = planned.paths[:, -1, :2]
     summary = {
-        "samples": int(len(times)),
+        "samples": len(times),
         "seconds": float(times[-1] - times[0]),
         "leg_seconds": float(legs.sum() * (times[1] - times[0])) if len(times) > 1 else 0.0,
-        "formation_error_rms_legs_m": float(np.sqrt(np.mean(err[legs] ** 2))) if legs.any() else None,
+        "formation_error_rms_legs_m": (float(np.sqrt(np.mean(err[legs] ** 2)))
+                                       if legs.any() else None),
         "formation_error_max_legs_m": float(err[legs].max()) if legs.any() else None,
         "planned_min_separation_m": planned_separation(planned.offsets),
         "min_separation_legs_m": float(sep[legs].min()) if legs.any() else None,
@@ -51,7 +52,8 @@ def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
         "min_separation_airborne_m": float(sep[airborne].min()) if airborne.any() else None,
         "min_clearance_m": float(clear.min()) if np.isfinite(clear).all() else None,
         "inside_obstacle": bool((clear < 0).any()),
-        "final_distance_to_goal_m": [float(d) for d in np.linalg.norm(positions[-1, :, :2] - goal, axis=1)],
+        "final_distance_to_goal_m": [
+            float(d) for d in np.linalg.norm(positions[-1, :, :2] - goal, axis=1)],
     }
     return summary
 
@@ -66,7 +68,7 @@ def render_report_png(planned: PlannedFlight, times, positions, seqs, summary: d
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     fig, axes = plt.subplots(2, 2, figsize=(13, 9), dpi=100)
     ground, side, ferr, fsep = axes.ravel()
-    for k, (c, r) in enumerate(zip(planned.centres, planned.radii)):
+    for c, r in zip(planned.centres, planned.radii):
         ground.add_patch(Circle(c, r, color="tab:green", alpha=0.45, lw=0))
         ground.add_patch(Circle(c, r + planned.clearance_m, fill=False, ls=":", color="tab:green"))
     for n, name in enumerate(planned.names):
@@ -75,7 +77,8 @@ def render_report_png(planned: PlannedFlight, times, positions, seqs, summary: d
         ground.plot(p[:, 0], p[:, 1], "--", color=colour, lw=1, label=f"{name} planned")
         side.plot(p[:, 0], p[:, 2], "--", color=colour, lw=1)
         if len(times):
-            ground.plot(positions[:, n, 0], positions[:, n, 1], color=colour, lw=1.8, label=f"{name} flown")
+            ground.plot(positions[:, n, 0], positions[:, n, 1], color=colour, lw=1.8,
+                        label=f"{name} flown")
             side.plot(positions[:, n, 0], positions[:, n, 2], color=colour, lw=1.8)
     ground.set(title="Ground track (obstacles green, clearance dotted)", xlabel="east [m]",
                ylabel="north [m]", aspect="equal")

@@ -18,8 +18,9 @@ from __future__ import annotations
 import json
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -309,7 +310,7 @@ def render_kml(plan: Plan, missions: Sequence[UavMission]) -> str:
     _sub(centroid, "name", "Centroid")
     _kml_line(centroid, "centroid path", "centroid", plan.lla(plan.centroid))
 
-    for n, (mission, path) in enumerate(zip(missions, plan.uav_paths)):
+    for mission, path in zip(missions, plan.uav_paths):
         folder = _sub(doc, "Folder")
         _sub(folder, "name", mission.name)
         _kml_line(folder, f"{mission.name} path", mission.name, plan.lla(path))

@@ -6,8 +6,8 @@ Coordinates stay in float degrees here; the 1e-7 integer encoding belongs to the
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 # MAV_FRAME
 FRAME_GLOBAL = 0
@@ -87,7 +87,8 @@ def build_mission(
         # param1 = 1: ground speed; param2: the speed; param3 = -1: throttle unchanged.
         items.append(dict(command=CMD_DO_CHANGE_SPEED, param1=1.0, param2=speed_m_s, param3=-1.0))
     items += [
-        dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt) for lat, lon, alt in path
+        dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt)
+        for lat, lon, alt in path
     ]
     lat_f, lon_f, alt_f = path[-1]
     if end_action == "land":

@@ -10,8 +10,8 @@ Mission Planner writes them; pymavlink's ``mavwp.MAVWPLoader`` reads the same fo
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Iterable
 
 from ..errors import MissionFileError
 from .files import write_atomic
@@ -57,7 +57,8 @@ def parse_waypoints(text: str, *, source: str = "<waypoints>") -> list[MissionIt
     for lineno, line in enumerate(lines[1:], start=2):
         fields = line.split()
         if len(fields) != 12:
-            raise MissionFileError(f"{source}: line {lineno}: expected 12 fields, got {len(fields)}")
+            raise MissionFileError(
+                f"{source}: line {lineno}: expected 12 fields, got {len(fields)}")
         try:
             seq, current, frame, command = (int(f) for f in fields[:4])
             p1, p2, p3, p4, lat, lon, alt = (float(f) for f in fields[4:11])

@@ -29,7 +29,7 @@ def _fly_perfectly(planned, *, lag_uav: int | None = None) -> FlightRecord:
         path = planned.paths[n]
         seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
         s_of_point = np.concatenate([[0], np.cumsum(seg)])
-        for k, t in enumerate(np.arange(0, s_of_point[-1], 0.1)):
+        for t in np.arange(0, s_of_point[-1], 0.1):
             s = t - (0.5 if n == lag_uav else 0.0)
             enu = np.array([np.interp(max(s, 0), s_of_point, path[:, i]) for i in range(3)])
             lat, lon, alt = planned.frame.to_lla(enu)

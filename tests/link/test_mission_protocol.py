@@ -196,8 +196,9 @@ def test_download_ignores_duplicates_and_stale_acks_and_acks_at_the_end():
     assert first.get_type() == "MISSION_REQUEST_LIST"
     (req0,) = dl.on_message(R.MAVLink_mission_count_message(255, 190, 2, 0), 0.01)
     assert req0.get_type() == "MISSION_REQUEST_INT" and req0.seq == 0
-    item = lambda seq: R.MAVLink_mission_item_int_message(
-        255, 190, seq, 3, 16, 0, 1, 0, 0, 0, 0, 122332099, 1091145051, 5.0, 0)
+    def item(seq):
+        return R.MAVLink_mission_item_int_message(
+            255, 190, seq, 3, 16, 0, 1, 0, 0, 0, 0, 122332099, 1091145051, 5.0, 0)
     (_req1,) = dl.on_message(item(0), 0.02)
     assert dl.on_message(item(0), 0.03) == []  # duplicate
     assert dl.on_message(ack(R.MAV_MISSION_ERROR), 0.035) == []  # stale, from an upload

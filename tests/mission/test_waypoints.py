@@ -32,7 +32,8 @@ coord = st.tuples(
 
 
 @settings(max_examples=100, deadline=None)
-@given(path=st.lists(coord, min_size=2, max_size=20), end=st.sampled_from(["land", "rtl", "loiter"]),
+@given(path=st.lists(coord, min_size=2, max_size=20),
+       end=st.sampled_from(["land", "rtl", "loiter"]),
        speed=st.none() | st.floats(0.5, 15).map(lambda v: round(v, 3)))
 def test_render_parse_round_trip(path, end, speed):
     items = build_mission(home=path[0][:2], takeoff_alt_m=path[0][2], path=path,
