@@ -163,8 +163,11 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options:
 
     def launch(pair) -> None:
         v, alt = pair
-        v.set_mode("GUIDED")
-        v.arm(budget_s=options.arm_budget_s)
+        # ArduCopter refuses GUIDED, then arming, until its EKF has a position estimate
+        # (SITL: about 18 s after the pre-arm checks pass): both wait within the budget
+        deadline = time.monotonic() + options.arm_budget_s
+        v.set_mode("GUIDED", timeout_s=options.arm_budget_s)
+        v.arm(budget_s=max(0.0, deadline - time.monotonic()))
         v.takeoff(alt)
 
     say("arming and taking off")

@@ -130,14 +130,25 @@ class Autopilot:
         self.mission = list(items)
         self.current = min(self.current, max(len(self.mission) - 1, 0))
 
-    def set_mode(self, mode: int, now: float) -> bool:
-        """Switch mode; False when ArduCopter would refuse (unknown mode, AUTO without a
-        mission, a position mode before the position estimate)."""
+    def mode_refusal(self, mode: int, now: float) -> str | None:
+        """Why ArduCopter would refuse ``mode`` now (its STATUSTEXT), or None.
+
+        Modes that need a position refuse until the EKF has one, AUTO refuses an empty
+        mission (ArduCopter/mode.cpp ``Copter::set_mode`` and ``mode_change_failed``:
+        "Mode change to GUIDED failed: requires position").
+        """
+        name = MODE_NAMES.get(mode, str(mode))
         if mode not in MODE_NAMES:
-            return False
+            return f"Mode change to {name} failed: unknown mode"
         if mode in (AUTO, GUIDED, LOITER, RTL) and not self.position_ok(now):
-            return False
+            return f"Mode change to {name} failed: requires position"
         if mode == AUTO and len(self.mission) < 2:
+            return f"Mode change to {name} failed: init failed"
+        return None
+
+    def set_mode(self, mode: int, now: float) -> bool:
+        """Switch mode; False when ArduCopter would refuse (see :meth:`mode_refusal`)."""
+        if self.mode_refusal(mode, now) is not None:
             return False
         self.mode = mode
         self._phase = ""

@@ -198,7 +198,11 @@ class Vehicle:
         elif cmd == R.MAV_CMD_NAV_TAKEOFF:
             ok = ap.takeoff(float(msg.param7))
         elif cmd == R.MAV_CMD_DO_SET_MODE:
-            ok = ap.set_mode(int(msg.param2), now)
+            reason = ap.mode_refusal(int(msg.param2), now)
+            ok = reason is None and ap.set_mode(int(msg.param2), now)
+            if reason:
+                text.append(R.MAVLink_statustext_message(R.MAV_SEVERITY_WARNING,
+                                                         reason.encode()))
         elif cmd == R.MAV_CMD_MISSION_START:
             ok = ap.set_mode(CopterMode.AUTO, now)
         elif cmd == R.MAV_CMD_DO_SET_MISSION_CURRENT:

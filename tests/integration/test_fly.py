@@ -145,3 +145,19 @@ def test_monitor_records_and_forwards_to_a_ground_station(plan_dir):
     lines = (plan_dir / "monitor" / "flight.csv").read_text().splitlines()
     per_vehicle = sum(1 for line in lines[1:] if line.split(",")[1] == "1")
     assert per_vehicle >= 5 * 3  # at least 5 Hz over the monitored seconds
+
+
+@pytest.mark.skipif(BACKEND == "sitl", reason="SITL's own boot decides when arming works")
+def test_takeoff_retries_arming_until_the_position_estimate_is_ready(plan_dir):
+    """ArduCopter passes its pre-arm checks well before it will arm ("Arm: Need Position
+    Estimate"): the takeoff retries within its budget instead of failing."""
+    planned = load_planned_flight(plan_dir)
+    late = VehicleOptions(heartbeat_s=0.25, ready_after_s=0.0, position_after_s=10.0)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=late) as fleet:
+        with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
+            take_off(planned, flying.vehicles, FlyOptions(arm_budget_s=20.0),
+                     say=lambda _t: None)
+            assert all(v.status.armed and v.status.alt_m > 2.5 for v in flying.vehicles)
+            assert all("Mode change to GUIDED failed: requires position" in v.status.texts
+                       for v in flying.vehicles)
+            abort(flying.vehicles, mode="LAND")
