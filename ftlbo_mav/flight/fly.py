@@ -24,6 +24,8 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..errors import FtlboError
 from ..link.codec import mission_differences
 from ..link.endpoints import (
@@ -35,9 +37,11 @@ from ..link.endpoints import (
 )
 from ..link.mission_protocol import download_mission
 from ..link.transfer import Timing
-from ..mission.items import CMD_NAV_TAKEOFF
+from ..mission.items import CMD_NAV_LOITER_UNLIM, CMD_NAV_TAKEOFF
 from .planned import PlannedFlight
 from .vehicle import FlightError, FlightVehicle
+
+LOITER_REACHED_M = 2.0  # ArduCopter's default waypoint radius (WPNAV_RADIUS)
 
 
 class PreflightError(FtlboError):
@@ -209,9 +213,23 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) ->
 
 
 def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> bool:
-    """Every vehicle landed (disarmed) or reached its mission's last item."""
-    return all(not v.status.armed or v.status.seq >= len(m) - 1 and v.status.mode != "AUTO"
-               for v, m in zip(vehicles, planned.missions))
+    """Every vehicle landed (disarmed), left AUTO after its last item, or holds at the
+    point of a final NAV_LOITER_UNLIM (within the waypoint radius)."""
+
+    def done(v: FlightVehicle, mission) -> bool:
+        s, last = v.status, mission[-1]
+        if not s.armed:
+            return True
+        if s.seq < last.seq:
+            return False
+        if last.command != CMD_NAV_LOITER_UNLIM:
+            return s.mode != "AUTO"
+        here = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
+        there = planned.frame.to_enu(lat_deg=last.lat_deg, lon_deg=last.lon_deg,
+                                     alt_m=last.alt_m)
+        return float(np.linalg.norm(here - there)) <= LOITER_REACHED_M
+
+    return all(done(v, m) for v, m in zip(vehicles, planned.missions))
 
 
 def abort(vehicles: Sequence[FlightVehicle], *, mode: str = "RTL",

@@ -161,3 +161,25 @@ def test_takeoff_retries_arming_until_the_position_estimate_is_ready(plan_dir):
             assert all("Mode change to GUIDED failed: requires position" in v.status.texts
                        for v in flying.vehicles)
             abort(flying.vehicles, mode="LAND")
+
+
+def test_a_mission_ending_in_loiter_finishes_when_every_vehicle_holds_there(tmp_path):
+    scenario = tmp_path / "loiter.toml"
+    scenario.write_text(EXAMPLE.read_text().replace('end_action = "land"',
+                                                    'end_action = "loiter"'))
+    plan_dir = tmp_path / "plan"
+    assert CliRunner().invoke(main, ["plan", str(scenario), "-o", str(plan_dir), "-q"]
+                              ).exit_code == 0
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        _upload(plan_dir, fleet.urls)
+        result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--connect", " ".join(fleet.urls),
+                                           "--flight-timeout", "60"])
+        assert result.exit_code == 0, result.output
+        with Fleet(["uav1", "uav2", "uav3"], [1, 2, 3], fleet.urls) as watching:
+            for v in watching.vehicles:
+                assert v.wait_for(lambda s: s.heartbeat_t > 0, 5.0)
+                assert v.status.armed and v.status.mode == "AUTO"  # still holding
+            abort(watching.vehicles, mode="LAND")
+    summary = json.loads((plan_dir / "flight" / "summary.json").read_text())
+    assert max(summary["final_distance_to_goal_m"]) < 2.0
