@@ -15,7 +15,7 @@ import click
 
 from ..cli_errors import user_errors
 from ..link.commands import _timing, _urls, timing_options
-from ..link.endpoints import BadInput, default_urls, parse_sysids
+from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
 from ..mission.files import write_atomic
 from .fly import Fleet, FlyOptions, abort, fly
@@ -27,7 +27,8 @@ _link_options = [
     click.option("--sysid", "sysid_text", required=True,
                  help="Vehicle system ids: a range 1..3 or a list 1,2,5; uav1 is the first."),
     click.option("--connect", "connect", multiple=True, metavar="URL",
-                 help="pymavlink connection string(s); default tcp:127.0.0.1:5760 + 10*i."),
+                 help="pymavlink connection string(s); default: system id s on "
+                      "tcp:127.0.0.1:5760 + 10*(s-1), as SITL and `ftlbo-mav sim` listen."),
 ]
 
 
@@ -43,7 +44,7 @@ def _fleet_args(planned: PlannedFlight | None, sysid_text: str, connect) -> tupl
         raise BadInput(f"{planned.folder} plans {planned.count} UAVs but --sysid {sysid_text} "
                        f"names {len(sysids)} vehicles")
     names = list(planned.names) if planned else [f"uav{i + 1}" for i in range(len(sysids))]
-    return names, sysids, _urls(connect) or default_urls(len(sysids))
+    return names, sysids, _urls(connect) or default_urls_for(sysids)
 
 
 def _forwarding(url: str | None, fleet: Fleet):

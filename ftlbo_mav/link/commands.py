@@ -18,7 +18,7 @@ from ..mission.waypoints import read_waypoints, write_waypoints
 from .endpoints import (
     BadInput,
     LinkError,
-    default_urls,
+    default_urls_for,
     describe_missing,
     discover,
     open_links,
@@ -117,7 +117,8 @@ def timing_options(func):
               help="Vehicle system ids: a range 1..3 or a list 1,2,5; uav1 goes to the first.")
 @click.option("--connect", "connect", multiple=True, metavar="URL",
               help="pymavlink connection string; repeat it (or give several separated by "
-                   "spaces) for one link per vehicle. Default: tcp:127.0.0.1:5760 + 10*i.")
+                   "spaces) for one link per vehicle. Default: system id s on "
+                   "tcp:127.0.0.1:5760 + 10*(s-1), where SITL and `ftlbo-mav sim` listen.")
 @timing_options
 @user_errors
 def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, discover_timeout,
@@ -136,7 +137,7 @@ def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, di
     except MissionFileError as exc:
         raise BadInput(f"{exc}; no vehicle was contacted") from None
     key = load_key(signing_key) if signing_key else None
-    urls = _urls(connect) or default_urls(len(sysids))
+    urls = _urls(connect) or default_urls_for(sysids)
     assignments = [Assignment(f.stem, s, m) for f, s, m in zip(files, sysids, missions)]
     board = ProgressBoard([(a.name, a.sysid) for a in assignments])
     results = upload_swarm(assignments, urls, signing_key=key,
@@ -164,7 +165,7 @@ def download(sysid, connect, output, timeout, retries, ready_timeout, discover_t
              signing_key):
     """Save the mission a vehicle holds as a Mission Planner .waypoints file."""
     key = load_key(signing_key) if signing_key else None
-    url = connect or default_urls(sysid)[sysid - 1]
+    url = connect or default_urls_for([sysid])[0]
     links = open_links([url], signing_key=key, connect_timeout_s=discover_timeout)
     try:
         found, missing = discover(links, [sysid], timeout_s=discover_timeout)

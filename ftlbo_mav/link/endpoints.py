@@ -75,6 +75,12 @@ def default_urls(count: int) -> list[str]:
     return [f"tcp:127.0.0.1:{FIRST_TCP_PORT + 10 * i}" for i in range(count)]
 
 
+def default_urls_for(sysids: Sequence[int]) -> list[str]:
+    """Where SITL and the emulator put these system ids: id s (instance s-1) on
+    ``tcp:127.0.0.1:5760 + 10*(s-1)``."""
+    return [f"tcp:127.0.0.1:{FIRST_TCP_PORT + 10 * (s - 1)}" for s in sysids]
+
+
 @dataclass(frozen=True)
 class Heartbeat:
     """What a vehicle said about itself in its last HEARTBEAT."""

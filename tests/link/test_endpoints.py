@@ -7,7 +7,7 @@ import hashlib
 import pytest
 
 from ftlbo_mav.link.commands import mission_files
-from ftlbo_mav.link.endpoints import BadInput, default_urls, parse_sysids
+from ftlbo_mav.link.endpoints import BadInput, default_urls, default_urls_for, parse_sysids
 from ftlbo_mav.link.signing import SigningKeyError, key_from_text, load_key
 
 
@@ -31,6 +31,8 @@ def test_bad_sysids_are_clear_input_errors(text, problem):
 
 def test_default_urls_follow_sitl_ports():
     assert default_urls(3) == ["tcp:127.0.0.1:5760", "tcp:127.0.0.1:5770", "tcp:127.0.0.1:5780"]
+    # system id s is SITL's instance s-1
+    assert default_urls_for([2, 5]) == ["tcp:127.0.0.1:5770", "tcp:127.0.0.1:5800"]
 
 
 def test_mission_files_in_uav_order_and_gaps_refused(tmp_path):
