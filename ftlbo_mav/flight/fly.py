@@ -139,8 +139,7 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                     f"({diff[0]}); run `ftlbo-mav upload` first")
         return None
 
-    with ThreadPoolExecutor(max_workers=max(1, len(vehicles))) as pool:
-        missions = list(pool.map(mission_problem, zip(vehicles, planned.missions)))
+    missions = _concurrently(mission_problem, list(zip(vehicles, planned.missions)))
     deadline = time.monotonic() + ready_timeout_s
     while time.monotonic() < deadline and not all(is_ready(v.link, v.sysid) for v in vehicles):
         time.sleep(0.1)

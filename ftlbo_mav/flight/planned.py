@@ -10,7 +10,7 @@ import numpy as np
 
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
-from ..mission.items import MissionItem
+from ..mission.items import CMD_NAV_TAKEOFF, MissionItem
 from ..mission.waypoints import read_waypoints
 
 
@@ -85,8 +85,11 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
     missions = []
     for f in files:
         try:
-            missions.append(tuple(read_waypoints(folder / f)))
+            items = tuple(read_waypoints(folder / f))
         except MissionFileError as exc:
             raise PlanFolderError(str(exc)) from None
+        if not any(it.command == CMD_NAV_TAKEOFF for it in items):
+            raise PlanFolderError(f"{folder / f}: no NAV_TAKEOFF item; `fly` takes off with it")
+        missions.append(items)
     return PlannedFlight(folder, names, offsets, paths, tuple(missions), frame, centres, radii,
                          clearance)

@@ -76,6 +76,16 @@ def test_folder_errors(tmp_path, plan_dir):
     (tmp_path / "plan.json").write_text(json.dumps(doc))
     with pytest.raises(PlanFolderError, match="missing.waypoints"):
         load_planned_flight(tmp_path)
+    doc["uavs"][0]["mission_file"] = "hover.waypoints"
+    (tmp_path / "plan.json").write_text(json.dumps(doc))
+    for name in ("hover", "uav2", "uav3"):
+        source = plan_dir / ("uav1" if name == "hover" else name)
+        lines = source.with_suffix(".waypoints").read_text().splitlines()
+        kept = [line for line in lines if "\t22\t" not in line]  # drop the takeoff
+        kept = [kept[0]] + [f"{i}\t" + line.split("\t", 1)[1] for i, line in enumerate(kept[1:])]
+        (tmp_path / f"{name}.waypoints").write_text("\n".join(kept) + "\n")
+    with pytest.raises(PlanFolderError, match="no NAV_TAKEOFF"):
+        load_planned_flight(tmp_path)
 
 
 def test_sample_times_remove_link_jitter_using_the_vehicles_clock():
