@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+
+# Before any test module imports pymavlink (as ftlbo_mav/__init__.py does for the package):
+# pymavlink picks MAVLink 1 or 2 from this when it first loads a dialect.
+os.environ.setdefault("MAVLINK20", "1")
 
 import pytest
 

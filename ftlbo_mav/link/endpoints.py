@@ -9,7 +9,6 @@ router's UDP output). :func:`discover` finds which link each requested id speaks
 
 from __future__ import annotations
 
-import os
 import queue
 import re
 import threading
@@ -17,10 +16,7 @@ import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-# pymavlink picks MAVLink 1 or 2 from this variable when it loads a dialect; the mission
-# protocol with MISSION_ITEM_INT and signing need MAVLink 2.
-os.environ.setdefault("MAVLINK20", "1")
-
+# MAVLink 2 is chosen in ftlbo_mav/__init__.py, before pymavlink is imported.
 from typing import Self
 
 from pymavlink import mavutil

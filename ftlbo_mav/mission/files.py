@@ -1,4 +1,5 @@
-"""The one place that writes files: atomically (temp file in the same folder, then rename)."""
+"""The one place that writes files: atomically (temp file in the same folder, then rename);
+and the one way mission files are read as text."""
 
 from __future__ import annotations
 
@@ -34,3 +35,16 @@ def write_atomic(path: str | Path, data: str | bytes) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def read_mission_text(path: str | Path) -> str:
+    """A mission file's text; :class:`MissionFileError` naming the file when unreadable."""
+    from ..errors import MissionFileError
+
+    path = Path(path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise MissionFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise MissionFileError(f"{path}: not a text file") from None

@@ -20,7 +20,7 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from ..errors import MissionFileError
-from .files import write_atomic
+from .files import read_mission_text, write_atomic
 from .items import (
     CMD_NAV_LAND,
     CMD_NAV_LOITER_UNLIM,
@@ -149,14 +149,7 @@ def _is_int(value) -> bool:
 
 
 def read_plan_file(path: str | Path) -> list[MissionItem]:
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise MissionFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise MissionFileError(f"{path}: not a text file") from None
-    return parse_plan(text, source=str(path))
+    return parse_plan(read_mission_text(path), source=str(path))
 
 
 def write_plan_file(

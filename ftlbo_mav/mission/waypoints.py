@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from ..errors import MissionFileError
-from .files import write_atomic
+from .files import read_mission_text, write_atomic
 from .items import MissionItem
 
 HEADER = "QGC WPL 110"
@@ -93,14 +93,7 @@ def parse_waypoints(text: str, *, source: str = "<waypoints>") -> list[MissionIt
 
 
 def read_waypoints(path: str | Path) -> list[MissionItem]:
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise MissionFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise MissionFileError(f"{path}: not a text file") from None
-    return parse_waypoints(text, source=str(path))
+    return parse_waypoints(read_mission_text(path), source=str(path))
 
 
 def write_waypoints(path: str | Path, items: Iterable[MissionItem]) -> Path:
