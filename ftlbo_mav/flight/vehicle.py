@@ -16,9 +16,7 @@ from dataclasses import dataclass, field
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..errors import FtlboError
-from ..sim.autopilot import MODE_NAMES
-
-MODE_NUMBERS = {name: number for number, name in MODE_NAMES.items()}
+from ..link.modes import CopterMode, mode_name
 
 
 class FlightError(FtlboError):
@@ -83,7 +81,7 @@ class FlightVehicle:
         position = False
         with self._changed:
             if kind == "HEARTBEAT":
-                s.mode = MODE_NAMES.get(msg.custom_mode, str(msg.custom_mode))
+                s.mode = mode_name(msg.custom_mode)
                 s.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
                 s.heartbeat_t = now
             elif kind == "GLOBAL_POSITION_INT":
@@ -158,7 +156,7 @@ class FlightVehicle:
         self._requested_mode = mode
         self.send(R.MAVLink_command_long_message(
             self.sysid, 1, R.MAV_CMD_DO_SET_MODE, 0, R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-            MODE_NUMBERS[mode], 0, 0, 0, 0, 0))
+            CopterMode[mode], 0, 0, 0, 0, 0))
 
     def set_mode(self, mode: str, *, timeout_s: float = 5.0) -> None:
         """Switch to ``mode``; confirmed by its acknowledgement or the HEARTBEAT (resent

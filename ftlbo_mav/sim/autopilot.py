@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ..link.modes import CopterMode, mode_name
 from ..mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_NAV_LAND,
@@ -42,10 +43,12 @@ from ..mission.items import (
 )
 from .physics import FlightLimits, reached, step_towards
 
-# ArduCopter custom modes (ArduCopter/mode.h)
-STABILIZE, AUTO, GUIDED, LOITER, RTL, LAND, BRAKE = 0, 3, 4, 5, 6, 9, 17
-MODE_NAMES = {0: "STABILIZE", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 5: "LOITER", 6: "RTL",
-              9: "LAND", 16: "POSHOLD", 17: "BRAKE"}
+STABILIZE, AUTO, GUIDED, LOITER, RTL, LAND, BRAKE = (
+    CopterMode.STABILIZE, CopterMode.AUTO, CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL,
+    CopterMode.LAND, CopterMode.BRAKE)
+# the modes the emulator accepts; others are refused as unknown
+FLOWN_MODES = frozenset({STABILIZE, CopterMode.ALT_HOLD, AUTO, GUIDED, LOITER, RTL, LAND,
+                         CopterMode.POSHOLD, BRAKE})
 
 RTL_ALT_M = 15.0
 DISARM_DELAY_S = 10.0
@@ -123,7 +126,7 @@ class Autopilot:
         return self.tangent.to_latlon(self.position[0], self.position[1])
 
     def mode_name(self) -> str:
-        return MODE_NAMES.get(self.mode, str(self.mode))
+        return mode_name(self.mode)
 
     # -- commands
     def set_mission(self, items: list[MissionItem]) -> None:
@@ -137,8 +140,8 @@ class Autopilot:
         mission (ArduCopter/mode.cpp ``Copter::set_mode`` and ``mode_change_failed``:
         "Mode change to GUIDED failed: requires position").
         """
-        name = MODE_NAMES.get(mode, str(mode))
-        if mode not in MODE_NAMES:
+        name = mode_name(mode)
+        if mode not in FLOWN_MODES:
             return f"Mode change to {name} failed: unknown mode"
         if mode in (AUTO, GUIDED, LOITER, RTL) and not self.position_ok(now):
             return f"Mode change to {name} failed: requires position"

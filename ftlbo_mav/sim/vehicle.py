@@ -9,48 +9,17 @@ the stored mission to the :class:`~ftlbo_mav.sim.autopilot.Autopilot`.
 
 from __future__ import annotations
 
-import enum
 from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..link.modes import CopterMode
 from ..mission.items import MissionItem
 from .autopilot import Autopilot, AutopilotOptions
 from .mission_server import MissionServer, MissionServerOptions
 from .physics import FlightLimits
 
 R = mavlink2
-
-
-class CopterMode(enum.IntEnum):
-    """ArduCopter's custom modes (ArduCopter/mode.h, ``enum class Number``)."""
-
-    STABILIZE = 0
-    ACRO = 1
-    ALT_HOLD = 2
-    AUTO = 3
-    GUIDED = 4
-    LOITER = 5
-    RTL = 6
-    CIRCLE = 7
-    LAND = 9
-    DRIFT = 11
-    SPORT = 13
-    FLIP = 14
-    AUTOTUNE = 15
-    POSHOLD = 16
-    BRAKE = 17
-    THROW = 18
-    AVOID_ADSB = 19
-    GUIDED_NOGPS = 20
-    SMART_RTL = 21
-    FLOWHOLD = 22
-    FOLLOW = 23
-    ZIGZAG = 24
-    SYSTEMID = 25
-    AUTOROTATE = 26
-    AUTO_RTL = 27
-    TURTLE = 28
 
 
 # Modes in which ArduCopter sets MAV_MODE_FLAG_GUIDED_ENABLED (GCS_Mavlink.cpp base_mode())
