@@ -1,11 +1,11 @@
 """Start N ArduCopter SITL instances, wait until each is ready, stop them all on exit.
 
 Instance i runs in its own working directory (its eeprom.bin, logs), with ``--instance i``
-so it listens on TCP 5760 + 10*i, ``--home`` at its UAV's start and a defaults file that
-sets SYSID_THISMAV = i + 1 and the telemetry streams the readiness check reads. The
-binary is ``ARDUPILOT_SITL`` (a built ``arducopter``, e.g. ``build/sitl/bin/arducopter``);
-add ArduPilot's ``Tools/autotest/default_params/copter.parm`` with ``defaults=`` (or
-``ARDUPILOT_SITL_DEFAULTS``) for the same parameters sim_vehicle.py uses.
+so it listens on TCP 5760 + 10*i, ``--home`` at its UAV's start, and the defaults a user
+gives it (ArduPilot's ``Tools/autotest/default_params/copter.parm``, with ``defaults=`` or
+``ARDUPILOT_SITL_DEFAULTS``) plus one line of ours: SYSID_THISMAV = i + 1. Nothing else:
+no stream rates (the ground side asks for what it reads, as it must on a real vehicle).
+The binary is ``ARDUPILOT_SITL`` (a built ``arducopter``, e.g. ``build/sitl/bin/arducopter``).
 """
 
 from __future__ import annotations
@@ -21,14 +21,7 @@ from typing import Self
 
 from ftlbo_mav.link.endpoints import default_urls, open_links, wait_ready
 
-IDENTITY_PARAMS = """\
-SYSID_THISMAV {sysid}
-# streams on SERIAL0 (TCP 5760 + 10*i): SYS_STATUS and GPS_RAW_INT (EXT_STAT),
-# GLOBAL_POSITION_INT (POSITION), so a ground station can tell the copter is ready
-SR0_EXT_STAT 2
-SR0_POSITION 2
-SR0_EXTRA3 1
-"""
+IDENTITY_PARAMS = "SYSID_THISMAV {sysid}\n"
 
 
 def sitl_command(binary: str | Path, *, instance: int, home: tuple[float, float, float],

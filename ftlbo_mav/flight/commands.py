@@ -161,10 +161,8 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
     key = load_key(signing_key) if signing_key else None
     watch = Monitor(planned)
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
-               on_position=watch) as fleet, _forwarding(forward, fleet):
+               on_position=watch, position_hz=rate) as fleet, _forwarding(forward, fleet):
         watch.vehicles = fleet.vehicles
-        for v in fleet.vehicles:
-            v.request_position_rate(rate)
         view = LiveView(watch, sys.stderr)
         end = time.monotonic() + duration if duration else float("inf")
         flew = set()

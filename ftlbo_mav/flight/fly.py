@@ -34,6 +34,7 @@ from ..link.endpoints import (
     discover,
     is_ready,
     open_links,
+    readiness_problems,
 )
 from ..link.mission_protocol import download_mission
 from ..link.transfer import Timing
@@ -73,8 +74,9 @@ class Fleet:
 
     def __init__(self, names: Sequence[str], sysids: Sequence[int], urls: Sequence[str], *,
                  signing_key: bytes | None = None, discover_timeout_s: float = 5.0,
-                 on_position: Callable | None = None) -> None:
+                 on_position: Callable | None = None, position_hz: float = 10.0) -> None:
         self.names, self.sysids, self.urls = list(names), list(sysids), list(urls)
+        self.position_hz = position_hz
         self.signing_key, self.discover_timeout_s = signing_key, discover_timeout_s
         self.on_position = on_position
         self.links: list = []
@@ -88,7 +90,8 @@ class Fleet:
             if missing:
                 raise LinkError("; ".join(describe_missing(s, self.links, self.discover_timeout_s)
                                           for s in missing))
-            self.vehicles = [FlightVehicle(n, s, found[s], on_position=self.on_position)
+            self.vehicles = [FlightVehicle(n, s, found[s], on_position=self.on_position,
+                                           position_hz=self.position_hz)
                              for n, s in zip(self.names, self.sysids)]
         except BaseException:
             self.__exit__()
@@ -145,12 +148,9 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
         time.sleep(0.1)
     problems = []
     for v, mission in zip(vehicles, missions):
-        state = v.link.readiness.get(v.sysid, {})
         why = [mission] if mission else []
-        if state.get("gps_fix", 0) < 3:
-            why.append(f"no 3D GPS fix (fix type {state.get('gps_fix', 'unknown')})")
-        if not state.get("prearm", False):
-            why.append("pre-arm checks failing")
+        if not is_ready(v.link, v.sysid):
+            why += readiness_problems(v.link, v.sysid)
         if v.status.armed:
             why.append("already armed")
         if why:
@@ -266,8 +266,6 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     """
     say("pre-flight: missions, GPS, pre-arm checks")
     preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s)
-    for v in vehicles:
-        v.request_position_rate(options.position_hz)
     try:
         take_off(planned, vehicles, options, say)
         say("all hovering at their altitudes: starting the missions together")

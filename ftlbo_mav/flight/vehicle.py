@@ -2,7 +2,8 @@
 
 A :class:`FlightVehicle` owns a channel of a :class:`~ftlbo_mav.link.endpoints.Link`
 and a reader thread that keeps :class:`Status` up to date (HEARTBEAT, GLOBAL_POSITION_INT,
-MISSION_CURRENT, COMMAND_ACK, STATUSTEXT). Commands are sent with a timeout and a retry
+MISSION_CURRENT, COMMAND_ACK, STATUSTEXT); it asks the vehicle for those streams on its
+link, since ArduPilot sends only HEARTBEAT unasked (:mod:`ftlbo_mav.ardupilot.streams`). Commands are sent with a timeout and a retry
 budget and fail with :class:`FlightError` naming the vehicle and the step.
 """
 
@@ -16,7 +17,8 @@ from dataclasses import dataclass, field
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..errors import FtlboError
-from ..link.modes import CopterMode, mode_name
+from ..ardupilot.modes import CopterMode, mode_name
+from ..ardupilot.streams import flight_streams
 
 
 class FlightError(FtlboError):
@@ -51,7 +53,8 @@ class FlightVehicle:
 
     def __init__(self, name: str, sysid: int, link, *,
                  on_position: Callable[[FlightVehicle], None] | None = None,
-                 command_timeout_s: float = 1.5, command_retries: int = 5) -> None:
+                 command_timeout_s: float = 1.5, command_retries: int = 5,
+                 position_hz: float = 10.0) -> None:
         self.name, self.sysid, self.link = name, sysid, link
         self.status = Status()
         self.on_position = on_position
@@ -63,6 +66,7 @@ class FlightVehicle:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._pump, name=f"{name} status", daemon=True)
         self._thread.start()
+        self.request_streams(position_hz)
 
     def close(self) -> None:
         self._stop.set()
@@ -143,13 +147,10 @@ class FlightVehicle:
         raise FlightError(self.name, self.sysid, step,
                           f"no COMMAND_ACK after {retries + 1} tries, {timeout_s:g} s each")
 
-    def request_position_rate(self, hz: float) -> None:
-        """MAV_CMD_SET_MESSAGE_INTERVAL for GLOBAL_POSITION_INT (a refusal is not fatal)."""
-        try:
-            self.command(R.MAV_CMD_SET_MESSAGE_INTERVAL, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT,
-                         1e6 / hz, step="position stream", retries=2)
-        except FlightError:
-            pass
+    def request_streams(self, position_hz: float) -> None:
+        """Ask for everything a flight reads (GLOBAL_POSITION_INT at ``position_hz``,
+        SYS_STATUS, GPS_RAW_INT, MISSION_CURRENT); the link re-asks until they arrive."""
+        self.link.want(self.sysid, flight_streams(position_hz))
 
     def send_mode(self, mode: str) -> None:
         """Ask for ``mode`` without waiting (MAV_CMD_DO_SET_MODE, custom mode)."""

@@ -8,48 +8,54 @@ a mission read back is compared in that encoding, never in the file's float text
 from __future__ import annotations
 
 import math
-import struct
 from collections.abc import Sequence
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..ardupilot import storage
+from ..ardupilot.storage import WireItem
 from ..mission.items import MissionItem
 
 MISSION_TYPE_MISSION = 0
 
-# The *_INT frames say "x, y are 1e-7 integers", which MISSION_ITEM_INT says anyway:
-# ArduPilot stores GLOBAL_RELATIVE_ALT_INT (6) as GLOBAL_RELATIVE_ALT (3) and returns 3 on
-# read-back (AP_Mission::mavlink_int_to_mission_cmd / mission_cmd_to_mavlink_int keep only
-# the altitude frame), likewise 5 -> 0 and 11 -> 10.
-_FRAME_TWIN = {5: 0, 6: 3, 11: 10}
+# Kept for readers of the emulator: the commands whose item carries a position
+# (AP_Mission::stored_in_location); any other command comes back in frame 0.
+POSITION_COMMANDS = storage.LOCATION_COMMANDS
 
-# Commands whose item carries a position (AP_Mission::stored_in_location, libraries/
-# AP_Mission/AP_Mission.cpp). For any other command (DO_CHANGE_SPEED, RETURN_TO_LAUNCH...)
-# the frame means nothing: ArduPilot returns frame 0 (GLOBAL) whatever was sent.
-POSITION_COMMANDS = frozenset(getattr(mavlink2, f"MAV_CMD_{name}") for name in (
-    "NAV_WAYPOINT", "NAV_LOITER_UNLIM", "NAV_LOITER_TURNS", "NAV_LOITER_TIME", "NAV_LAND",
-    "NAV_TAKEOFF", "NAV_CONTINUE_AND_CHANGE_ALT", "NAV_LOITER_TO_ALT", "NAV_SPLINE_WAYPOINT",
-    "NAV_GUIDED_ENABLE", "DO_SET_HOME", "DO_LAND_START", "DO_GO_AROUND", "DO_SET_ROI",
-    "NAV_VTOL_TAKEOFF", "NAV_VTOL_LAND", "NAV_PAYLOAD_PLACE",
-))
-
-# ArduPilot keeps altitudes as int32 centimetres (Location::alt, libraries/AP_Common/Location.h):
-# an altitude comes back rounded to the centimetre.
-ALT_TOLERANCE_M = 0.01
-PARAM_TOLERANCE = 1e-4
+# Altitudes: ArduPilot truncates ``z * 100.0f`` (float32) to whole centimetres, so 0.53 m
+# is kept as 52 cm (0.53f * 100.0f = 52.999996); a read-back stored once more can lose
+# another centimetre, and a vehicle that keeps items as sent has not truncated at all:
+# altitudes compare within 1 cm.
+ALT_TOLERANCE_CM = 1
 
 
 def degrees_to_e7(deg: float) -> int:
     return round(deg * 1e7)
 
 
+def to_wire(item: MissionItem) -> WireItem:
+    """``item`` exactly as MISSION_ITEM_INT will carry it (1e-7 integers, float32)."""
+    f = storage.f32
+    return WireItem(seq=item.seq, command=item.command, frame=item.frame,
+                    x=degrees_to_e7(item.lat_deg), y=degrees_to_e7(item.lon_deg),
+                    z=f(item.alt_m), param1=f(item.param1), param2=f(item.param2),
+                    param3=f(item.param3), param4=f(item.param4), current=item.current,
+                    autocontinue=item.autocontinue)
+
+
+def from_wire(w: WireItem) -> MissionItem:
+    return MissionItem(seq=w.seq, command=w.command, frame=w.frame, lat_deg=w.x * 1e-7,
+                       lon_deg=w.y * 1e-7, alt_m=w.z, param1=w.param1, param2=w.param2,
+                       param3=w.param3, param4=w.param4, current=w.current,
+                       autocontinue=w.autocontinue)
+
+
 def encode_item(item: MissionItem, *, target_system: int, target_component: int):
     """One item as a MISSION_ITEM_INT message (frames as in the file)."""
+    w = to_wire(item)
     return mavlink2.MAVLink_mission_item_int_message(
-        target_system, target_component, item.seq, item.frame, item.command,
-        item.current, item.autocontinue,
-        item.param1, item.param2, item.param3, item.param4,
-        degrees_to_e7(item.lat_deg), degrees_to_e7(item.lon_deg), item.alt_m,
+        target_system, target_component, w.seq, w.frame, w.command, w.current,
+        w.autocontinue, w.param1, w.param2, w.param3, w.param4, w.x, w.y, w.z,
         MISSION_TYPE_MISSION,
     )
 
@@ -66,38 +72,37 @@ def decode_item(msg) -> MissionItem:
     )
 
 
-def _f32(x: float) -> float:
-    return struct.unpack("<f", struct.pack("<f", x))[0]
+def kept(item: MissionItem) -> WireItem:
+    """What an ArduCopter keeps of ``item`` (:func:`ftlbo_mav.ardupilot.storage.stored`);
+    an item it would refuse stays as sent (the upload itself reports the refusal)."""
+    w = to_wire(item)
+    if storage.check(w) != mavlink2.MAV_MISSION_ACCEPTED:
+        return w
+    return storage.stored(w)
 
 
-def _same_param(a: float, b: float) -> bool:
-    a, b = _f32(a), _f32(b)
-    if math.isnan(a) or math.isnan(b):
-        return math.isnan(a) and math.isnan(b)
-    return abs(a - b) <= PARAM_TOLERANCE * max(1.0, abs(a))
-
-
-def same_frame(a: int, b: int) -> bool:
-    return _FRAME_TWIN.get(a, a) == _FRAME_TWIN.get(b, b)
+def _same(a: float, b: float) -> bool:
+    return (math.isnan(a) and math.isnan(b)) or a == b
 
 
 def item_differences(expected: MissionItem, actual: MissionItem) -> list[str]:
-    """What differs between two items, compared as MISSION_ITEM_INT carries them."""
+    """What differs between two items once both are in the form an ArduCopter keeps
+    (:mod:`ftlbo_mav.ardupilot.storage`): a read-back from ArduPilot and one from a
+    vehicle that stores items as sent compare alike."""
+    want, got = kept(expected), kept(actual)
     out = []
-    if actual.command != expected.command:
-        out.append(f"command {actual.command}, expected {expected.command}")
-    if expected.command in POSITION_COMMANDS and not same_frame(actual.frame, expected.frame):
-        out.append(f"frame {actual.frame}, expected {expected.frame}")
-    for name in ("lat_deg", "lon_deg"):
-        got, want = degrees_to_e7(getattr(actual, name)), degrees_to_e7(getattr(expected, name))
-        if got != want:
-            out.append(f"{name[:3]} {got * 1e-7:.7f}, expected {want * 1e-7:.7f}")
-    if abs(_f32(actual.alt_m) - _f32(expected.alt_m)) > ALT_TOLERANCE_M:
+    if got.command != want.command:
+        return [f"command {got.command}, expected {want.command}"]
+    if got.frame != want.frame:
+        out.append(f"frame {got.frame}, expected {want.frame}")
+    for name, a, b in (("lat", got.x, want.x), ("lon", got.y, want.y)):
+        if a != b:
+            out.append(f"{name} {a * 1e-7:.7f}, expected {b * 1e-7:.7f}")
+    if abs(storage.altitude_cm(got.z) - storage.altitude_cm(want.z)) > ALT_TOLERANCE_CM:
         out.append(f"alt {actual.alt_m:.2f} m, expected {expected.alt_m:.2f} m")
-    for k in (1, 2, 3, 4):
-        got, want = getattr(actual, f"param{k}"), getattr(expected, f"param{k}")
-        if not _same_param(got, want):
-            out.append(f"param{k} {got:g}, expected {want:g}")
+    for k, (a, b) in enumerate(zip(got.params, want.params), start=1):
+        if not _same(a, b):
+            out.append(f"param{k} {a:.7g}, expected {b:.7g} (as stored)")
     return out
 
 
@@ -117,3 +122,14 @@ def mission_differences(expected: Sequence[MissionItem],
         if diff:
             problems.append(f"item {want.seq}: " + "; ".join(diff))
     return problems
+
+
+def storage_warnings(items: Sequence[MissionItem]) -> list[str]:
+    """One line per item whose stored form loses something that matters to the flight
+    (:func:`ftlbo_mav.ardupilot.storage.storage_notes`), item 0 (home) excepted."""
+    out = []
+    for item in items[1:]:
+        notes = storage.storage_notes(to_wire(item))
+        if notes:
+            out.append(f"item {item.seq} ({item.name}): " + "; ".join(notes))
+    return out

@@ -15,6 +15,7 @@ import click
 from ..cli_errors import user_errors
 from ..errors import FtlboError, MissionFileError
 from ..mission.waypoints import read_waypoints, write_waypoints
+from .codec import storage_warnings
 from .endpoints import (
     BadInput,
     LinkError,
@@ -139,6 +140,10 @@ def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, di
     key = load_key(signing_key) if signing_key else None
     urls = _urls(connect) or default_urls_for(sysids)
     assignments = [Assignment(f.stem, s, m) for f, s, m in zip(files, sysids, missions)]
+    for a in assignments:  # what ArduCopter will not keep, said before anything is sent
+        for line in storage_warnings(a.items):
+            click.echo(f"note: {a.name}: {line} (ArduCopter keeps only this; the "
+                       "read-back is verified against it)", err=True)
     board = ProgressBoard([(a.name, a.sysid) for a in assignments])
     results = upload_swarm(assignments, urls, signing_key=key,
                            timing=_timing(timeout, retries, ready_timeout),

@@ -22,6 +22,7 @@ from typing import Self
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..ardupilot.streams import READINESS, StreamRequests
 from ..errors import FtlboError
 
 GCS_SYSID = 255
@@ -157,6 +158,9 @@ class Link:
         # called with every message received (from the reader thread): a ground-station
         # relay forwards them (flight/forward.py)
         self.taps: list = []
+        # per system id: the telemetry asked for on this link (ardupilot/streams.py)
+        self.streams: dict[int, StreamRequests] = {}
+        self._streams_lock = threading.Lock()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
         self._thread.start()
@@ -187,6 +191,29 @@ class Link:
         with self._send_lock:
             self._conn.write(data)
 
+    def want(self, sysid: int, rates) -> None:
+        """Have vehicle ``sysid`` send these messages (``{msgid: hz}``) on this link,
+        asking (and re-asking until they arrive) from the reader thread."""
+        with self._streams_lock:
+            beat = self.heartbeats.get(sysid)
+            req = self.streams.setdefault(
+                sysid, StreamRequests(sysid, beat.compid if beat else 1))
+            req.want(rates)
+
+    def missing_streams(self, sysid: int) -> list[str]:
+        with self._streams_lock:
+            req = self.streams.get(sysid)
+            return req.missing(time.monotonic()) if req else []
+
+    def _ask_streams(self, now: float) -> None:
+        with self._streams_lock:
+            out = [m for req in self.streams.values() for m in req.due(now)]
+        for m in out:
+            try:
+                self.send(m)
+            except OSError:
+                return
+
     def channel(self, sysid: int) -> Channel:
         """The messages of vehicle ``sysid`` on this link, from now on."""
         return Channel(self, sysid)
@@ -213,6 +240,7 @@ class Link:
                         mavlink2.MAV_STATE_ACTIVE, 3))
                 except OSError:
                     pass
+            self._ask_streams(now)
             try:
                 self._conn.select(0.05)
                 while (msg := self._conn.recv_msg()) is not None:
@@ -232,6 +260,13 @@ class Link:
         for tap in self.taps:
             tap(msg)
         src = msg.get_srcSystem()
+        req = self.streams.get(src)
+        if req is not None:
+            with self._streams_lock:
+                req.seen(msg.get_msgId(), time.monotonic())
+                if (kind == "COMMAND_ACK"
+                        and msg.command == mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL):
+                    req.on_ack(None, msg.result)
         if kind == "HEARTBEAT" and _is_vehicle(msg):
             self.heartbeats[src] = Heartbeat(
                 sysid=src, compid=msg.get_srcComponent(), vehicle_type=msg.type,
@@ -334,11 +369,27 @@ def is_ready(link: Link, sysid: int) -> bool:
     return state.get("gps_fix", 0) >= mavlink2.GPS_FIX_TYPE_3D_FIX and state.get("prearm", False)
 
 
+def readiness_problems(link: Link, sysid: int) -> list[str]:
+    """Why vehicle ``sysid`` is not ready to arm, as far as its telemetry tells."""
+    state = link.readiness.get(sysid, {})
+    why = []
+    if state.get("gps_fix", 0) < mavlink2.GPS_FIX_TYPE_3D_FIX:
+        why.append(f"no 3D GPS fix (fix type {state.get('gps_fix', 'unknown')})")
+    if not state.get("prearm", False):
+        why.append("pre-arm checks failing" if "prearm" in state else "pre-arm state unknown")
+    silent = link.missing_streams(sysid)
+    if silent:
+        why.append("not receiving " + ", ".join(silent) + " although requested")
+    return why
+
+
 def wait_ready(links: Sequence[Link], sysids: Sequence[int], *, timeout_s: float) -> None:
     """Wait until every vehicle has a GPS fix and is ready to arm; LinkError naming the
-    ones that are not after ``timeout_s``. (ArduPilot streams GPS_RAW_INT and SYS_STATUS
-    when SRn_EXT_STAT is set, as ``sitl/`` does.)"""
+    ones that are not after ``timeout_s``. GPS_RAW_INT and SYS_STATUS are requested from
+    each vehicle on its link (ArduPilot sends neither unasked)."""
     found, missing = discover(links, sysids, timeout_s=timeout_s)
+    for s, link in found.items():
+        link.want(s, READINESS)
     deadline = time.monotonic() + timeout_s
     while True:
         waiting = [s for s in sysids if s not in missing and not is_ready(found[s], s)]
@@ -346,9 +397,7 @@ def wait_ready(links: Sequence[Link], sysids: Sequence[int], *, timeout_s: float
             return
         if missing or time.monotonic() >= deadline:
             what = [f"{s} (no HEARTBEAT)" for s in missing] + [
-                f"{s} (GPS fix {found[s].readiness.get(s, {}).get('gps_fix', 'unknown')}, "
-                f"pre-arm {'ok' if found[s].readiness.get(s, {}).get('prearm') else 'failing'})"
-                for s in waiting]
+                f"{s} ({'; '.join(readiness_problems(found[s], s))})" for s in waiting]
             raise LinkError(f"not ready after {timeout_s:g} s: system id {', '.join(what)}")
         time.sleep(0.1)
 

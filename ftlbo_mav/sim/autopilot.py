@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
-from ..link.modes import CopterMode, mode_name
+from ..ardupilot.modes import CopterMode, mode_name
 from ..mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_NAV_LAND,

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from ..link.modes import CopterMode
+from ..ardupilot.modes import CopterMode
 from ..mission.items import MissionItem
 from .autopilot import Autopilot, AutopilotOptions
 from .mission_server import MissionServer, MissionServerOptions

@@ -12,7 +12,7 @@ from ftlbo_mav.link.codec import (
     encode_item,
     item_differences,
     mission_differences,
-    same_frame,
+    storage_warnings,
 )
 from ftlbo_mav.mission.items import MissionItem
 from tests.link.support import make_mission
@@ -39,15 +39,47 @@ def test_coordinates_compare_after_the_1e7_integer_encoding():
     assert diff.startswith("lat 12.2332100, expected 12.2332099")
 
 
-def test_frame_6_equals_frame_3_and_5_equals_0_but_not_across():
-    assert same_frame(6, 3) and same_frame(3, 6) and same_frame(5, 0) and same_frame(11, 10)
-    assert not same_frame(3, 0) and not same_frame(6, 10)
+@given(st.sampled_from([(6, 3), (3, 6), (5, 0), (0, 2), (11, 10)]))
+def test_frames_compare_as_arducopter_keeps_them(pair):
+    item = MissionItem(seq=2, command=16, frame=pair[0], lat_deg=12.2, lon_deg=109.1, alt_m=6)
+    assert item_differences(item, replace(item, frame=pair[1])) == []
+
+
+def test_altitude_frames_that_differ_are_named():
+    item = MissionItem(seq=2, command=16, frame=3, lat_deg=12.2, lon_deg=109.1, alt_m=6)
+    assert item_differences(item, replace(item, frame=0)) == ["frame 0, expected 3"]
+    assert item_differences(item, replace(item, frame=10)) == ["frame 10, expected 3"]
 
 
 def test_altitude_is_compared_to_the_centimetre_and_params_as_float32():
-    item = MissionItem(seq=1, command=16, alt_m=20.37, param2=0.1)
-    assert item_differences(item, replace(item, alt_m=20.37499, param2=0.10000001)) == []
-    assert item_differences(item, replace(item, alt_m=20.40)) == ["alt 20.40 m, expected 20.37 m"]
+    item = MissionItem(seq=1, command=178, param1=1, param2=0.1, param3=-1)
+    assert item_differences(item, replace(item, param2=0.100000001)) == []
+    assert item_differences(item, replace(item, param2=0.1001)) == [
+        "param2 0.1001, expected 0.1 (as stored)"]
+    waypoint = MissionItem(seq=1, command=16, alt_m=20.37)
+    assert item_differences(waypoint, replace(waypoint, alt_m=20.37499)) == []
+    assert item_differences(waypoint, replace(waypoint, alt_m=20.40)) == [
+        "alt 20.40 m, expected 20.37 m"]
+
+
+def test_an_arducopter_read_back_verifies_what_was_sent():
+    """What ArduPilot returns (recorded: NAV_LAND param4 0 -> 1, waypoint hold 2.7 -> 2,
+    frame 6 -> 3, altitude truncated to the centimetre) is not a difference."""
+    land = MissionItem(seq=14, command=21, frame=6, lat_deg=12.23347400, lon_deg=109.1151763)
+    assert item_differences(land, replace(land, frame=3, param4=1.0)) == []
+    hold = MissionItem(seq=3, command=16, lat_deg=12.2, lon_deg=109.1, alt_m=6.009, param1=2.7,
+                       param4=float("nan"))
+    assert item_differences(hold, replace(hold, param1=2.0, param4=0.0, alt_m=6.0)) == []
+    assert item_differences(hold, replace(hold, param1=3.0)) == [
+        "param1 3, expected 2 (as stored)"]
+
+
+def test_what_a_copter_would_not_keep_is_named_before_upload():
+    items = make_mission()
+    assert storage_warnings(items) == []
+    held = items[:3] + [replace(items[3], param1=2.5)] + items[4:]
+    (line,) = storage_warnings(held)
+    assert line.startswith("item 3 (WAYPOINT): param1 (hold time) 2.5 is stored as 2")
 
 
 def test_item_zero_is_not_compared_but_length_and_every_other_item_are():

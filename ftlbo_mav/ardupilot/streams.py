@@ -1,0 +1,146 @@
+"""The telemetry a ground station must ask ArduPilot for, and how it asks.
+
+ArduPilot sends a link nothing but HEARTBEAT (1 Hz), TIMESYNC (every 10 s) and, once
+home is set, HOME_POSITION and GPS_GLOBAL_ORIGIN, until someone asks (recorded on
+ArduCopter 4.5.6 SITL with copter.parm: ``tests/data/ardupilot-4.5.6/boot.json``). Rates
+are per link (per serial port), set by
+
+- MAV_CMD_SET_MESSAGE_INTERVAL, one message at a time (GCS_MAVLINK::
+  handle_command_set_message_interval, libraries/GCS_MAVLink/GCS_Common.cpp), or
+- REQUEST_DATA_STREAM, a whole group of messages (GCS_MAVLINK::handle_request_data_stream;
+  the groups are ArduCopter/GCS_Mavlink.cpp's ``STREAM_*_msgs``), the older way, kept as
+  the fallback for firmware that refuses the first.
+
+SITL acknowledges an interval set in its first ~40 ms after a client connects and then
+drops it, so a request is not done when acknowledged, only when the message arrives:
+:class:`StreamRequests` re-asks until it does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+# What ArduPilot sends on a link that has asked for nothing (GCS_MAVLINK::update_send:
+# HEARTBEAT and TIMESYNC are sent unconditionally; HOME_POSITION / GPS_GLOBAL_ORIGIN once
+# when home is set, AP_AHRS). STATUSTEXT goes to a link only once it has sent something.
+UNASKED = frozenset({"HEARTBEAT", "TIMESYNC", "HOME_POSITION", "GPS_GLOBAL_ORIGIN"})
+
+# ArduCopter/GCS_Mavlink.cpp: the REQUEST_DATA_STREAM group each message belongs to
+STREAM_OF = {
+    R.MAVLINK_MSG_ID_SYS_STATUS: R.MAV_DATA_STREAM_EXTENDED_STATUS,
+    R.MAVLINK_MSG_ID_GPS_RAW_INT: R.MAV_DATA_STREAM_EXTENDED_STATUS,
+    R.MAVLINK_MSG_ID_MISSION_CURRENT: R.MAV_DATA_STREAM_EXTENDED_STATUS,
+    R.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT: R.MAV_DATA_STREAM_EXTENDED_STATUS,
+    R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: R.MAV_DATA_STREAM_POSITION,
+    R.MAVLINK_MSG_ID_LOCAL_POSITION_NED: R.MAV_DATA_STREAM_POSITION,
+    R.MAVLINK_MSG_ID_ATTITUDE: R.MAV_DATA_STREAM_EXTRA1,
+    R.MAVLINK_MSG_ID_VFR_HUD: R.MAV_DATA_STREAM_EXTRA2,
+    R.MAVLINK_MSG_ID_EKF_STATUS_REPORT: R.MAV_DATA_STREAM_EXTRA3,
+    R.MAVLINK_MSG_ID_SYSTEM_TIME: R.MAV_DATA_STREAM_EXTRA3,
+}
+
+# What each part of ftlbo-mav reads, messages per second.
+# Readiness to fly: the 3D fix (GPS_RAW_INT) and the pre-arm bit (SYS_STATUS).
+READINESS: Mapping[int, float] = {
+    R.MAVLINK_MSG_ID_SYS_STATUS: 2.0,
+    R.MAVLINK_MSG_ID_GPS_RAW_INT: 2.0,
+}
+
+
+def flight_streams(position_hz: float) -> dict[int, float]:
+    """A flight's needs: readiness, the position at ``position_hz`` and the current item."""
+    return {**READINESS, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: position_hz,
+            R.MAVLINK_MSG_ID_MISSION_CURRENT: 2.0}
+
+
+def message_name(msgid: int) -> str:
+    cls = R.mavlink_map.get(msgid)
+    return cls.msgname if cls is not None else str(msgid)
+
+
+@dataclass
+class _Want:
+    hz: float
+    last_seen: float | None = None
+    last_asked: float | None = None
+    asked: int = 0
+    refused: bool = False  # SET_MESSAGE_INTERVAL answered with anything but ACCEPTED
+
+
+@dataclass
+class StreamRequests:
+    """The streams one vehicle on one link should send us, and what to send to get them.
+
+    A pure state machine (no I/O): :meth:`want` adds messages and rates, :meth:`seen` and
+    :meth:`on_ack` feed what arrives, :meth:`due` returns the requests to send now. A
+    message that has not arrived within ``patience(hz)`` of being asked is asked again
+    every ``retry_s``; from the ``legacy_after``-th try, or once SET_MESSAGE_INTERVAL is
+    refused, REQUEST_DATA_STREAM for its group goes with it.
+    """
+
+    sysid: int
+    compid: int = 1
+    retry_s: float = 2.0
+    legacy_after: int = 3
+    wants: dict[int, _Want] = field(default_factory=dict)
+
+    def want(self, rates: Mapping[int, float]) -> None:
+        """Ask for each message at (at least) its rate; a higher rate asks again at once."""
+        for msgid, hz in rates.items():
+            w = self.wants.get(msgid)
+            if w is None:
+                self.wants[msgid] = _Want(hz=hz)
+            elif hz > w.hz:
+                w.hz, w.last_asked, w.last_seen = hz, None, None
+
+    def seen(self, msgid: int, now: float) -> None:
+        w = self.wants.get(msgid)
+        if w is not None:
+            w.last_seen = now
+
+    def on_ack(self, msgid: int | None, result: int) -> None:
+        """A COMMAND_ACK of SET_MESSAGE_INTERVAL (ArduPilot's ack names no message: a
+        refusal marks every message asked for and not yet flowing)."""
+        if result == R.MAV_RESULT_ACCEPTED:
+            return
+        for m, w in self.wants.items():
+            if msgid in (None, m) and w.last_seen is None:
+                w.refused = True
+
+    @staticmethod
+    def patience(hz: float) -> float:
+        """How long a message may be missing before it is asked for again."""
+        return max(1.5, 3.0 / hz)
+
+    def flowing(self, msgid: int, now: float) -> bool:
+        w = self.wants.get(msgid)
+        return (w is not None and w.last_seen is not None
+                and now - w.last_seen <= self.patience(w.hz))
+
+    def due(self, now: float) -> list:
+        """The requests to send now (COMMAND_LONG and REQUEST_DATA_STREAM messages)."""
+        out, groups = [], {}
+        for msgid, w in self.wants.items():
+            if self.flowing(msgid, now):
+                continue
+            if w.last_asked is not None and now - w.last_asked < self.retry_s:
+                continue
+            w.last_asked, w.asked = now, w.asked + 1
+            out.append(R.MAVLink_command_long_message(
+                self.sysid, self.compid, R.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msgid,
+                1e6 / w.hz, 0, 0, 0, 0, 0))
+            if (w.refused or w.asked >= self.legacy_after) and msgid in STREAM_OF:
+                group = STREAM_OF[msgid]
+                groups[group] = max(groups.get(group, 0), w.hz)
+        for group, hz in groups.items():
+            out.append(R.MAVLink_request_data_stream_message(
+                self.sysid, self.compid, group, max(1, round(hz)), 1))
+        return out
+
+    def missing(self, now: float) -> list[str]:
+        """Names of the wanted messages not arriving, with how often each was asked."""
+        return [f"{message_name(m)} (asked {w.asked}x)" for m, w in self.wants.items()
+                if not self.flowing(m, now)]
