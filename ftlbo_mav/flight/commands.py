@@ -18,10 +18,12 @@ from ..link.commands import _timing, _urls, timing_options
 from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
 from ..mission.files import write_atomic
+from .control import DEFAULT_CONTROL_PORT, ControlServer, request_abort
 from .fly import Fleet, FlyOptions, abort, fly
 from .monitor import LiveView, Monitor
 from .planned import PlannedFlight, load_planned_flight
 from .report import render_report_png, summarize
+from .vehicle import FlightAborted
 
 _link_options = [
     click.option("--sysid", "sysid_text", required=True,
@@ -45,6 +47,21 @@ def _fleet_args(planned: PlannedFlight | None, sysid_text: str, connect) -> tupl
                        f"names {len(sysids)} vehicles")
     names = list(planned.names) if planned else [f"uav{i + 1}" for i in range(len(sysids))]
     return names, sysids, _urls(connect) or default_urls_for(sysids)
+
+
+def _control(port: int, fleet: Fleet):
+    """The control endpoint of a flight (flight/control.py); ``port`` 0 turns it off."""
+    if not port:
+        return contextlib.nullcontext()
+
+    def on_abort(mode: str, sysids) -> tuple[dict, list]:
+        wanted = [v for v in fleet.vehicles if sysids is None or v.sysid in sysids]
+        held = {v.sysid for v in fleet.vehicles}
+        late = set(abort(wanted, mode=mode))
+        results = {v.sysid: "NOT CONFIRMED" if v.name in late else mode for v in wanted}
+        return results, [s for s in (sysids or []) if s not in held]
+
+    return ControlServer(on_abort, port=port)
 
 
 def _forwarding(url: str | None, fleet: Fleet):
@@ -91,6 +108,9 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
               help="Where the flight log and report go (default PLAN_DIR/flight).")
 @click.option("--abort-mode", type=click.Choice(["RTL", "LAND"]), default="RTL",
               show_default=True, help="Where Ctrl-C sends every vehicle.")
+@click.option("--control-port", type=click.IntRange(0, 65535), default=DEFAULT_CONTROL_PORT,
+              show_default=True,
+              help="127.0.0.1 port where `ftlbo-mav abort` reaches this flight (0: none).")
 @click.option("--arm-budget", type=click.FloatRange(min=0), default=60.0, show_default=True,
               help="Seconds to keep retrying a refused arm (EKF still converging).")
 @click.option("--preflight-timeout", type=click.FloatRange(min=0),
@@ -100,14 +120,15 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
               show_default=True, help="Abort if the missions have not ended by then.")
 @timing_options
 @user_errors
-def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, arm_budget,
-                preflight_timeout, flight_timeout, timeout, retries, ready_timeout,
+def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
+                arm_budget, preflight_timeout, flight_timeout, timeout, retries, ready_timeout,
                 discover_timeout, signing_key):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
     armed unless every vehicle passes the pre-flight checks. Ctrl-C sends every vehicle
-    to RTL (or --abort-mode LAND).
+    to RTL (or --abort-mode LAND); so does `ftlbo-mav abort` from another terminal,
+    through the control endpoint on 127.0.0.1:--control-port.
     """
     planned = load_planned_flight(plan_dir)
     names, sysids, urls = _fleet_args(planned, sysid_text, connect)
@@ -117,7 +138,8 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, arm
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode)
     out_dir = log_dir or plan_dir / "flight"
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
-               on_position=monitor) as fleet, _forwarding(forward, fleet):
+               on_position=monitor) as fleet, _forwarding(forward, fleet), \
+            _control(control_port, fleet):
         monitor.vehicles = fleet.vehicles
         view = LiveView(monitor, sys.stderr)
         try:
@@ -129,6 +151,11 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, arm
             summary = write_flight_report(planned, monitor, out_dir, sysids)
             _print_summary(summary, out_dir)
             sys.exit(130)
+        except FlightAborted as exc:
+            summary = write_flight_report(planned, monitor, out_dir, sysids)
+            click.echo(f"flight aborted: every vehicle sent to {exc.mode}")
+            _print_summary(summary, out_dir)
+            sys.exit(1)
     summary = write_flight_report(planned, monitor, out_dir, sysids)
     click.echo("all vehicles finished their missions")
     _print_summary(summary, out_dir)
@@ -185,20 +212,37 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
 @click.command(name="abort")
 @link_options
 @click.option("--land", is_flag=True, help="LAND where they are instead of RTL.")
+@click.option("--control-port", type=click.IntRange(0, 65535), default=DEFAULT_CONTROL_PORT,
+              show_default=True,
+              help="Reach a running `ftlbo-mav fly` here first (0: open links directly).")
 @click.option("--discover-timeout", type=click.FloatRange(min=0.1), default=5.0,
               show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
 @user_errors
-def abort_command(sysid_text, connect, land, discover_timeout, signing_key):
-    """Send every vehicle to RTL (or LAND) at once and confirm the switch."""
+def abort_command(sysid_text, connect, land, control_port, discover_timeout, signing_key):
+    """Send every vehicle to RTL (or LAND) at once and confirm the switch.
+
+    While `ftlbo-mav fly` runs it holds the vehicles' links (SITL's TCP ports take one
+    client), so the abort goes through its control endpoint; vehicles no flight holds
+    are reached on their own links.
+    """
     names, sysids, urls = _fleet_args(None, sysid_text, connect)
-    key = load_key(signing_key) if signing_key else None
     mode = "LAND" if land else "RTL"
-    with Fleet(names, sysids, urls, signing_key=key,
-               discover_timeout_s=discover_timeout) as fleet:
-        late = abort(fleet.vehicles, mode=mode)
-    for name, s in zip(names, sysids):
-        click.echo(f"sysid {s}: {'NOT CONFIRMED' if name in late else mode}")
-    if late:
+    results: dict[int, str] = {}
+    reply = request_abort(mode, sysids, port=control_port) if control_port else None
+    if reply is not None:
+        results, _unknown = reply
+        click.echo(f"through the running flight (127.0.0.1:{control_port})", err=True)
+    rest = [(n, s, u) for n, s, u in zip(names, sysids, urls) if s not in results]
+    if rest:
+        key = load_key(signing_key) if signing_key else None
+        with Fleet([n for n, _, _ in rest], [s for _, s, _ in rest], [u for _, _, u in rest],
+                   signing_key=key, discover_timeout_s=discover_timeout,
+                   position_hz=1.0) as fleet:
+            late = set(abort(fleet.vehicles, mode=mode))
+        results.update({s: "NOT CONFIRMED" if n in late else mode for n, s, _ in rest})
+    for s in sysids:
+        click.echo(f"sysid {s}: {results[s]}")
+    if any(results[s] != mode for s in sysids):
         sys.exit(1)

@@ -40,7 +40,7 @@ from ..link.mission_protocol import download_mission
 from ..link.transfer import Timing
 from ..mission.items import CMD_NAV_LOITER_UNLIM, CMD_NAV_TAKEOFF
 from .planned import PlannedFlight
-from .vehicle import FlightError, FlightVehicle
+from .vehicle import FlightAborted, FlightError, FlightVehicle
 
 LOITER_REACHED_M = 2.0  # ArduCopter's default waypoint radius (WPNAV_RADIUS)
 
@@ -177,7 +177,8 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options:
     try:
         _concurrently(launch, list(zip(vehicles, targets)))
     except FlightError:
-        abort(vehicles, mode="LAND")
+        if not aborted(vehicles):
+            abort(vehicles, mode="LAND")
         raise
 
     def hovering(alt: float):
@@ -186,6 +187,8 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options:
 
     deadline = time.monotonic() + options.takeoff_timeout_s
     while True:
+        if aborted(vehicles):
+            raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         pending = [v for v, alt in zip(vehicles, targets) if not hovering(alt)(v.status)]
         if not pending:
             return
@@ -204,6 +207,8 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) ->
     """
     starts = [takeoff_item(m)[0] + 1 for m in planned.missions]
     _concurrently(lambda p: p[0].set_current(p[1]), list(zip(vehicles, starts)))
+    if aborted(vehicles):
+        raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     t = time.monotonic()
     for v in vehicles:
         v.send_mode("AUTO")
@@ -233,16 +238,25 @@ def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> bool:
 
 def abort(vehicles: Sequence[FlightVehicle], *, mode: str = "RTL",
           timeout_s: float = 3.0) -> list[str]:
-    """Send every vehicle to ``mode`` at once; returns the names of those not confirmed."""
+    """Send every vehicle to ``mode`` at once (one burst), then confirm each; returns the
+    names of those not confirmed. From then on the flight sends the vehicles nothing else
+    (:class:`FlightAborted`)."""
     for v in vehicles:
-        v.send_mode(mode)
-    late = []
-    for v in vehicles:
+        v.abort_to(mode)
+
+    def confirm(v: FlightVehicle) -> str | None:
         try:
             v.set_mode(mode, timeout_s=timeout_s)
         except FlightError:
-            late.append(v.name)
-    return late
+            return v.name
+        return None
+
+    return [name for name in _concurrently(confirm, list(vehicles)) if name]
+
+
+def aborted(vehicles: Sequence[FlightVehicle]) -> str | None:
+    """The mode of an abort already under way, if any."""
+    return next((v.aborted_to for v in vehicles if v.aborted_to), None)
 
 
 def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_s: float,
@@ -250,7 +264,21 @@ def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_
     """Until every vehicle is done; ``tick`` runs a few times a second. False on timeout."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
+        if aborted(vehicles):
+            raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         if finished(planned, vehicles):
+            return True
+        tick()
+        time.sleep(0.1)
+    return False
+
+
+def watch_abort(vehicles: Sequence[FlightVehicle], *, timeout_s: float,
+                tick: Callable[[], None]) -> bool:
+    """After an abort: watch until every vehicle has landed (disarmed). False on timeout."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if not any(v.status.armed for v in vehicles):
             return True
         tick()
         time.sleep(0.1)
@@ -266,6 +294,8 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     """
     say("pre-flight: missions, GPS, pre-arm checks")
     preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s)
+    if aborted(vehicles):
+        raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     try:
         take_off(planned, vehicles, options, say)
         say("all hovering at their altitudes: starting the missions together")
@@ -277,6 +307,10 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
                               f"vehicle to {options.abort_mode}" + (f" (unconfirmed: {late})"
                                                                    if late else ""))
         return started
+    except FlightAborted as exc:
+        say(f"aborted: every vehicle sent to {exc.mode}; watching until they have landed")
+        watch_abort(vehicles, timeout_s=options.flight_timeout_s, tick=tick)
+        raise
     except KeyboardInterrupt:
         late = abort(vehicles, mode=options.abort_mode)
         say(f"interrupted: every vehicle sent to {options.abort_mode}"

@@ -3,8 +3,9 @@
 A :class:`FlightVehicle` owns a channel of a :class:`~ftlbo_mav.link.endpoints.Link`
 and a reader thread that keeps :class:`Status` up to date (HEARTBEAT, GLOBAL_POSITION_INT,
 MISSION_CURRENT, COMMAND_ACK, STATUSTEXT); it asks the vehicle for those streams on its
-link, since ArduPilot sends only HEARTBEAT unasked (:mod:`ftlbo_mav.ardupilot.streams`). Commands are sent with a timeout and a retry
-budget and fail with :class:`FlightError` naming the vehicle and the step.
+link, since ArduPilot sends only HEARTBEAT unasked (:mod:`ftlbo_mav.ardupilot.streams`).
+Commands are sent with a timeout and a retry budget and fail with :class:`FlightError`
+naming the vehicle and the step.
 """
 
 from __future__ import annotations
@@ -16,9 +17,9 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
-from ..errors import FtlboError
 from ..ardupilot.modes import CopterMode, mode_name
 from ..ardupilot.streams import flight_streams
+from ..errors import FtlboError
 
 
 class FlightError(FtlboError):
@@ -27,6 +28,15 @@ class FlightError(FtlboError):
     def __init__(self, name: str, sysid: int, step: str, problem: str) -> None:
         self.name, self.sysid, self.step = name, sysid, step
         super().__init__(f"{name} (sysid {sysid}): {step}: {problem}")
+
+
+class FlightAborted(FtlboError):
+    """The flight was aborted (Ctrl-C, ``ftlbo-mav abort``): no more commands but the
+    abort's own mode change go to the vehicle."""
+
+    def __init__(self, name: str, sysid: int, mode: str) -> None:
+        self.name, self.sysid, self.mode = name, sysid, mode
+        super().__init__(f"{name} (sysid {sysid}): flight aborted, vehicle sent to {mode}")
 
 
 @dataclass
@@ -62,6 +72,8 @@ class FlightVehicle:
         self.command_retries = command_retries
         self._changed = threading.Condition()
         self._requested_mode: str | None = None
+        # set by an abort: from then on only this mode may be asked for
+        self.aborted_to: str | None = None
         self._channel = link.channel(sysid)
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._pump, name=f"{name} status", daemon=True)
@@ -135,6 +147,8 @@ class FlightVehicle:
         Resent (with the confirmation field counting up) when no ack arrives within
         ``timeout_s``; FlightError after ``retries`` resends.
         """
+        if self.aborted_to is not None:
+            raise FlightAborted(self.name, self.sysid, self.aborted_to)
         timeout_s = self.command_timeout_s if timeout_s is None else timeout_s
         retries = self.command_retries if retries is None else retries
         p = list(params) + [0.0] * (7 - len(params))
@@ -152,8 +166,16 @@ class FlightVehicle:
         SYS_STATUS, GPS_RAW_INT, MISSION_CURRENT); the link re-asks until they arrive."""
         self.link.want(self.sysid, flight_streams(position_hz))
 
+    def abort_to(self, mode: str) -> None:
+        """Mark the flight aborted and ask for ``mode`` at once; confirm with set_mode."""
+        self.aborted_to = mode
+        self.send_mode(mode)
+
     def send_mode(self, mode: str) -> None:
-        """Ask for ``mode`` without waiting (MAV_CMD_DO_SET_MODE, custom mode)."""
+        """Ask for ``mode`` without waiting (MAV_CMD_DO_SET_MODE, custom mode). After an
+        abort only the abort's mode may be asked for (FlightAborted otherwise)."""
+        if self.aborted_to is not None and mode != self.aborted_to:
+            raise FlightAborted(self.name, self.sysid, self.aborted_to)
         self._requested_mode = mode
         self.send(R.MAVLink_command_long_message(
             self.sysid, 1, R.MAV_CMD_DO_SET_MODE, 0, R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,

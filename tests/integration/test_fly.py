@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import json
 import shutil
+import socket
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -37,6 +40,12 @@ def plan_dir(tmp_path) -> Path:
     return folder
 
 
+def free_tcp_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
 def _emulator_options():
     return {} if BACKEND == "sitl" else {"options": OPTIONS}
 
@@ -51,6 +60,7 @@ def test_fly_the_example_all_land_at_the_goal_in_formation(plan_dir):
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
         _upload(plan_dir, fleet.urls)
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--control-port", "0",
                                            "--connect", " ".join(fleet.urls)])
         assert result.exit_code == 0, result.output
     assert "all vehicles finished their missions" in result.stdout
@@ -93,6 +103,7 @@ def test_fly_refuses_before_arming_when_a_mission_differs(plan_dir, tmp_path):
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
         _upload(wrong, fleet.urls)  # vehicle 2 now holds uav3's mission
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--control-port", "0",
                                            "--connect", " ".join(fleet.urls)])
         assert result.exit_code == 1
         assert "pre-flight failed, nothing armed" in result.stderr
@@ -173,6 +184,7 @@ def test_a_mission_ending_in_loiter_finishes_when_every_vehicle_holds_there(tmp_
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
         _upload(plan_dir, fleet.urls)
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--control-port", "0",
                                            "--connect", " ".join(fleet.urls),
                                            "--flight-timeout", "60"])
         assert result.exit_code == 0, result.output
@@ -183,3 +195,45 @@ def test_a_mission_ending_in_loiter_finishes_when_every_vehicle_holds_there(tmp_
             abort(watching.vehicles, mode="LAND")
     summary = json.loads((plan_dir / "flight" / "summary.json").read_text())
     assert max(summary["final_distance_to_goal_m"]) < 2.0
+
+
+def test_abort_from_another_terminal_reaches_a_running_flight(plan_dir):
+    """`fly` holds the vehicles' links (SITL serves one client per port); `abort` typed
+    elsewhere goes through fly's control endpoint and every vehicle confirms RTL."""
+    control = free_tcp_port()
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        _upload(plan_dir, fleet.urls)
+        flying = subprocess.Popen(
+            [sys.executable, "-m", "ftlbo_mav", "fly", str(plan_dir), "--sysid", "1..3",
+             "--control-port", str(control), "--connect", " ".join(fleet.urls)],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            for line in flying.stderr:
+                if "starting the missions together" in line:
+                    break
+            else:
+                pytest.fail(f"fly ended before the start: {flying.communicate()}")
+            time.sleep(2.0)
+            result = CliRunner().invoke(main, ["abort", "--sysid", "1..3",
+                                               "--control-port", str(control)])
+            out, _err = flying.communicate(timeout=300)
+        finally:
+            if flying.poll() is None:
+                flying.kill()
+        assert result.exit_code == 0, result.output
+        assert "through the running flight" in result.stderr
+        assert [line for line in result.stdout.splitlines()] == [
+            "sysid 1: RTL", "sysid 2: RTL", "sysid 3: RTL"]
+    assert flying.returncode == 1
+    assert "flight aborted: every vehicle sent to RTL" in out
+    assert (plan_dir / "flight" / "summary.json").exists()
+
+
+def test_abort_with_no_flight_running_opens_the_links_itself(plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        result = CliRunner().invoke(main, ["abort", "--sysid", "1..3", "--land",
+                                           "--control-port", str(free_tcp_port()),
+                                           "--connect", " ".join(fleet.urls)])
+    assert result.exit_code == 0, result.output
+    assert "through the running flight" not in result.stderr
+    assert result.stdout.count("LAND") == 3
