@@ -10,7 +10,9 @@ ARDUPILOT_SITL is set) twice:
   current item, then switch all to AUTO in one burst (``flight.fly.start_together``).
 
 Prints formation error (RMS and worst, waypoint legs) and smallest separation per
-strategy and writes ``flight-benchmark.json``. Run: ``python benchmarks/flight.py``.
+strategy and writes ``flight-benchmark.json``. Stops (exit 1) if any upload fails to
+verify. Run: ``python benchmarks/flight.py``; on SITL set ``ARDUPILOT_SITL`` (and
+``ARDUPILOT_SITL_DEFAULTS`` to ArduPilot's copter.parm).
 """
 
 from __future__ import annotations
@@ -63,9 +65,7 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
     with Fleet(planned.names, [1, 2, 3], urls, on_position=monitor) as fleet:
-        monitor.vehicles = fleet.vehicles
-        for v in fleet.vehicles:
-            v.request_position_rate(10.0)
+        monitor.vehicles = fleet.vehicles  # Fleet asks each vehicle for 10 Hz positions
         if strategy == "naive":
             for v, m in zip(fleet.vehicles, planned.missions):
                 v.set_mode("GUIDED")
@@ -110,7 +110,13 @@ def main() -> int:
                 with swarm as vehicles:
                     assignments = [Assignment(n, i + 1, m) for i, (n, m) in
                                    enumerate(zip(planned.names, planned.missions))]
-                    upload_swarm(assignments, vehicles.urls, timing=Timing())
+                    results = upload_swarm(assignments, vehicles.urls, timing=Timing())
+                    failed = [r for r in results if not r.verified]
+                    if failed:  # flying a vehicle without its mission measures nothing
+                        for r in failed:
+                            print(f"upload failed: {r.name} -> sysid {r.sysid}: {r.message}",
+                                  file=sys.stderr)
+                        return 1
                     summary = fly_once(plan_dir, vehicles.urls, strategy)
                 rows[strategy].append(summary)
                 print(f"run {run} {strategy:>12}: formation error "
