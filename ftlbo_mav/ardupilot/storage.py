@@ -345,7 +345,13 @@ def check_jump(item: WireItem, *, stored_count: int, last_seq: int) -> int:
 _HARMLESS = {(R.MAV_CMD_NAV_LAND, 4)}
 
 
+# Short names where MAVLink's own description is a sentence
+_LABELS = {(R.MAV_CMD_NAV_WAYPOINT, 3): "pass radius", (R.MAV_CMD_NAV_WAYPOINT, 4): "yaw"}
+
+
 def _label(command: int, k: int) -> str:
+    if (command, k) in _LABELS:
+        return f"param{k} ({_LABELS[command, k]})"
     entry = R.enums["MAV_CMD"].get(command)
     text = (entry.param.get(k, "") if entry is not None else "") or ""
     text = text.split(". ")[0].split(" (")[0].rstrip(".").strip()

@@ -115,3 +115,20 @@ def test_notes_name_what_a_copter_loses_and_nothing_else():
     assert storage.storage_notes(land) == [] and storage.storage_notes(plain) == []
     assert "always continues" in storage.storage_notes(
         WireItem(seq=2, command=16, frame=3, x=1, y=2, z=6.0, autocontinue=0))[0]
+
+
+def test_our_own_sitl_read_back_is_what_the_model_predicts():
+    """Recorded on our SITL build (tests/data/ardupilot-4.5.6/README.md): every item of the
+    read-back is what :func:`storage.stored` makes of the item sent."""
+    from ftlbo_mav.link.codec import kept, mission_differences, to_wire
+    from ftlbo_mav.mission.waypoints import read_waypoints
+
+    sent = read_waypoints(DATA.with_name("quirks-sent.waypoints"))
+    back = read_waypoints(DATA.with_name("quirks-read-back.waypoints"))
+    assert mission_differences(sent, back) == []
+    for s, b in zip(sent[1:], back[1:]):
+        want, got = kept(s), to_wire(b)
+        assert (want.command, want.frame, want.x, want.y, want.params) == (
+            got.command, got.frame, got.x, got.y, got.params)
+        assert want.z == pytest.approx(got.z, abs=1e-6)  # the file keeps 6 decimals
+    assert back[3].alt_m == pytest.approx(0.52) and back[2].param1 == 2.0
