@@ -14,8 +14,9 @@ from . import __version__
 from .cli_errors import user_errors
 from .mission.export import FORMATS, read_plan, write_plan
 from .planning.optimizers import OPTIMIZERS
+from .planning.planner import AUTO_TARGET
 from .planning.planner import plan as plan_scenario
-from .scenario import load_scenario
+from .scenario import AUTO, load_scenario
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -42,6 +43,26 @@ def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
     return tuple(dict.fromkeys(names))
 
 
+class WaypointCount(click.ParamType):
+    """``--waypoints``: an integer >= 1, or ``auto``."""
+
+    name = "M|auto"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, int) or value == AUTO:
+            return value
+        try:
+            count = int(value)
+        except ValueError:
+            count = 0
+        if count < 1:
+            self.fail(f"{value!r} is neither an integer >= 1 nor {AUTO}", param, ctx)
+        return count
+
+
+WAYPOINTS = WaypointCount()
+
+
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=str))
 @click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
@@ -49,7 +70,9 @@ def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
 @click.option("--seed", type=click.IntRange(min=0), help="Random seed (default: the scenario's).")
 @click.option("--iterations", type=click.IntRange(min=1), help="Iterations L.")
 @click.option("--students", type=click.IntRange(min=4), help="Class size (population).")
-@click.option("--waypoints", type=click.IntRange(min=1), help="Free waypoints m per path.")
+@click.option("--waypoints", type=WAYPOINTS,
+              help="Free waypoints m per leg, or auto: per leg the fewest within 0.5% of "
+                   "its lower bound.")
 @click.option("--algorithm", type=click.Choice(sorted(OPTIMIZERS)),
               help="Optimizer (default: the scenario's [planner] algorithm, else "
                    "ftlbo-seeded; ftlbo is the paper's).")
@@ -67,15 +90,32 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
     """Plan SCENARIO (TOML) and write one Mission Planner mission per UAV."""
     scn = load_scenario(scenario)
     settings = scn.planner
-    total = iterations or settings.iterations
-    with click.progressbar(length=total, label="planning", file=sys.stderr,
+    per_leg = iterations or settings.iterations
+    legs = len(scn.via) + 1
+    said: list[str] = []  # one line per leg, after the bar (at once with -q)
+
+    def tell(line: str) -> None:
+        click.echo(line, err=True)
+
+    with click.progressbar(length=legs * per_leg, label="planning", file=sys.stderr,
                            hidden=quiet) as bar:
+        done = [0]  # legs finished
+
         def progress(it: int, _iterations: int, _best: float) -> None:
-            bar.update(it - bar.pos)
+            bar.update(max(done[0] * per_leg + it - bar.pos, 0))
+
+        def on_leg(k: int, count: int, leg) -> None:
+            done[0] = k + 1
+            bar.update(max(done[0] * per_leg - bar.pos, 0))
+            if count > 1 or leg.tried:
+                line = format_leg(k, count, leg)
+                tell(line) if quiet else said.append(line)
 
         result = plan_scenario(scn, seed=seed, iterations=iterations, students=students,
                                waypoints=waypoints, algorithm=algorithm, progress=progress,
-                               notice=lambda line: click.echo(line, err=True))
+                               notice=tell, on_leg=on_leg)
+    for line in said:
+        click.echo(line, err=True)
     paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible, formats=formats)
     if make_plots:
         from .plots import write_figures  # matplotlib only when asked: a faster start
@@ -97,6 +137,13 @@ def format_summary(result) -> str:
     c = result.cost
     s = result.settings
     status = "feasible" if result.feasible else f"INFEASIBLE ({len(result.violations)} violations)"
+    legs = result.legs
+    shape = ""
+    if len(legs) > 1 or s.waypoints == AUTO:
+        counts = ", ".join(str(leg.waypoints) for leg in legs)
+        shape = (f"; {len(legs)} leg{'s' if len(legs) > 1 else ''}, "
+                 f"{result.waypoint_count} points between start and goal"
+                 + (f" (auto waypoints per leg: {counts})" if s.waypoints == AUTO else ""))
     return (
         f"{s.algorithm} seed {s.seed}: {status}; cost {c.total:.2f} = length {c.length:.2f} m"
         f" + safety {c.safety:.3f} + task {c.task:.3f}; {result.evaluations} evaluations"
@@ -106,7 +153,31 @@ def format_summary(result) -> str:
             if result.lower_bound_length is not None
             else "; no route: no lower bound"
         )
+        + shape
     )
+
+
+def format_leg(index: int, count: int, leg) -> str:
+    """One line per planned leg: its ends, waypoints (what auto chose), length and bound."""
+    head = f"leg {index + 1}/{count} {leg.start_name} -> {leg.goal_name}: "
+    noun = "waypoint" if leg.waypoints == 1 else "waypoints"
+    if leg.tried:
+        within = leg.feasible and leg.length_ratio is not None and (
+            leg.length_ratio <= 1 + AUTO_TARGET)
+        if leg.lower_bound_length is None:
+            count_text = f"{leg.waypoints} {noun} (auto: no route to measure against)"
+        elif within:
+            count_text = f"{leg.waypoints} {noun} (auto)"
+        else:
+            count_text = (f"{leg.waypoints} {noun} (auto: no plan within "
+                          f"{AUTO_TARGET:.1%} of the bound with "
+                          f"{', '.join(map(str, leg.tried))} waypoints; kept the nearest)")
+    else:
+        count_text = f"{leg.waypoints} {noun}"
+    status = "" if leg.feasible else f", INFEASIBLE ({len(leg.violations)} violations)"
+    bound = ("no route" if leg.lower_bound_length is None else
+             f"bound {leg.lower_bound_length:.2f} m (x{leg.length_ratio:.4f})")
+    return f"{head}{count_text}, {leg.cost.length:.2f} m, {bound}{status}"
 
 
 @main.command("plot")
@@ -144,7 +215,8 @@ main.add_command(sim)
 @click.option("--iterations", type=click.IntRange(min=1),
               help="Iterations L (default: scenario's).")
 @click.option("--students", type=click.IntRange(min=4), help="Class size (default: scenario's).")
-@click.option("--waypoints", type=click.IntRange(min=1), help="Waypoints m (default: scenario's).")
+@click.option("--waypoints", type=WAYPOINTS,
+              help="Waypoints m per leg, or auto (default: scenario's).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
 @user_errors
 def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, students,

@@ -94,7 +94,7 @@ class Comparison:
     scenario: str
     algorithms: tuple[str, ...]
     students: int
-    waypoints: int
+    waypoints: int | str
     iterations: int
     lower_bound_length: float | None
     runs: tuple[Run, ...]
@@ -128,7 +128,7 @@ def first_feasible_iteration(history: Sequence[float]) -> int | None:
 
 
 def run_one(scenario: Scenario, algorithm: str, seed: int, *, students: int | None = None,
-            iterations: int | None = None, waypoints: int | None = None) -> Run:
+            iterations: int | None = None, waypoints: int | str | None = None) -> Run:
     """Plan ``scenario`` once and keep the numbers a comparison needs."""
     p = plan(scenario, algorithm=algorithm, seed=seed, students=students,
              iterations=iterations, waypoints=waypoints)
@@ -200,7 +200,7 @@ def compare(
     runs: int = 30,
     students: int | None = None,
     iterations: int | None = None,
-    waypoints: int | None = None,
+    waypoints: int | str | None = None,
     processes: int | None = None,
     progress: Callable[[Run], None] | None = None,
 ) -> Comparison:
@@ -245,12 +245,12 @@ def compare(
     )
 
 
-def plan_bound(scenario: Scenario, *, waypoints: int | None = None) -> float | None:
-    """The scenario's lower bound on the centroid length (metres), ``None``: no route."""
-    from .planning.geometric import lower_bound
-    from .planning.problem import problem_from_scenario
+def plan_bound(scenario: Scenario, *, waypoints: int | str | None = None) -> float | None:
+    """The scenario's lower bound on the centroid length (metres; the sum of its legs'),
+    ``None``: no route. ``waypoints`` is not used (the bound does not depend on it)."""
+    from .planning.planner import route_lower_bound
 
-    return lower_bound(problem_from_scenario(scenario, waypoints=waypoints))
+    return route_lower_bound(scenario)
 
 
 # --------------------------------------------------------------------------- rendering

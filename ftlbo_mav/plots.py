@@ -2,7 +2,8 @@
 
 - ``plan-3d.png``: the centroid's and every UAV's path among the obstacle cylinders, the
   formation drawn at each waypoint (figures 3-4);
-- ``plan-ground.png``: the projection on the ground, x-y (figure 5);
+- ``plan-ground.png``: the projection on the ground, x-y (figure 5), with the survey's
+  lanes and the via points;
 - ``plan-vertical.png``: the projections on the vertical planes, x-z and y-z (figure 6);
 - ``convergence.png``: the best cost per iteration (figure 8, for one plan).
 
@@ -36,7 +37,35 @@ def _title(plan: Plan, what: str) -> str:
     s = plan.settings
     name = plan.scenario.name or Path(plan.scenario.source).stem
     status = "feasible" if plan.feasible else f"INFEASIBLE ({len(plan.violations)} violations)"
-    return f"{name}: {what}\n{s.algorithm}, seed {s.seed}, {s.waypoints} waypoints; {status}"
+    legs = len(plan.legs)
+    if legs > 1 or s.waypoints == "auto":
+        shape = (f"{legs} leg{'s' if legs > 1 else ''}, {plan.waypoint_count} points"
+                 + (" (auto waypoints)" if s.waypoints == "auto" else
+                    f" ({s.waypoints} waypoints per leg)"))
+    else:
+        shape = f"{s.waypoints} waypoints"
+    return f"{name}: {what}\n{s.algorithm}, seed {s.seed}, {shape}; {status}"
+
+
+LANE_STYLE = dict(color="#1f5fbf", linewidth=7, alpha=0.18, solid_capstyle="butt")
+VIA_STYLE = dict(color="#1f5fbf", marker="D", markersize=6, linestyle="none")
+
+
+def _lanes(plan: Plan) -> list[np.ndarray]:
+    """Each survey lane as ``(2, 3)`` metres ENU (entry, exit), in flight order."""
+    survey = plan.scenario.survey
+    if survey is None or not survey.lanes:
+        return []
+    frame = plan.scenario.frame
+    ends = [p for lane in survey.lanes for p in lane]
+    enu = frame.to_enu(lat_deg=[p.lat_deg for p in ends], lon_deg=[p.lon_deg for p in ends],
+                       alt_m=[p.alt_m for p in ends]).reshape(-1, 2, 3)
+    return list(enu)
+
+
+def _via(plan: Plan) -> np.ndarray:
+    """The via points ``(V, 3)`` metres ENU (lane ends included)."""
+    return plan.scenario.route_enu()[1:-1]
 
 
 def _new_figure(width_in: float, height_in: float) -> Figure:
@@ -67,6 +96,12 @@ def _legend_handles(plan: Plan, *, ground: bool) -> list:
     if ground:
         handles.append(Line2D([], [], color=OBSTACLE_COLOUR, linestyle=":",
                               label=f"+ clearance {plan.scenario.clearance_m:g} m"))
+    if len(plan.scenario.via):
+        handles.append(Line2D([], [], label="via point", **VIA_STYLE))
+    if plan.scenario.survey is not None:
+        sv = plan.scenario.survey
+        handles.append(Line2D([], [], label=f"survey lane ({len(sv.lanes)}, "
+                              f"{sv.spacing_m:g} m apart)", **LANE_STYLE))
     handles += [
         Line2D([], [], color="green", marker="^", linestyle="none", markersize=9, label="start"),
         Line2D([], [], color="#c00000", marker="s", linestyle="none", markersize=8, label="goal"),
@@ -150,6 +185,13 @@ def _paths_3d(ax, plan: Plan) -> None:
     for n, path in enumerate(paths):
         ax.plot(path[:, 0], path[:, 1], path[:, 2], color=uav_colour(n), linewidth=2,
                 marker="o", markersize=3)
+    for lane in _lanes(plan):
+        ax.plot(lane[:, 0], lane[:, 1], 0.0, color=LANE_STYLE["color"], linewidth=3,
+                alpha=0.35)
+    via = _via(plan)
+    if len(via):
+        ax.scatter(via[:, 0], via[:, 1], via[:, 2], color=VIA_STYLE["color"], marker="D",
+                   s=25, depthshade=False)
     ax.scatter(*c[0], color="green", marker="^", s=80, depthshade=False)
     ax.scatter(*c[-1], color="#c00000", marker="s", s=60, depthshade=False)
 
@@ -180,6 +222,10 @@ def figure_ground(plan: Plan) -> Figure:
         ax.annotate(str(k + 1), (c[0], c[1] + r + clearance), textcoords="offset points",
                     xytext=(0, 2), ha="center", va="bottom", fontsize=8, color=OBSTACLE_COLOUR,
                     zorder=6, bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
+    for k, lane in enumerate(_lanes(plan)):
+        ax.plot(lane[:, 0], lane[:, 1], zorder=1, **LANE_STYLE)
+        ax.annotate(f"lane {k + 1}", lane[0, :2], textcoords="offset points", xytext=(3, 3),
+                    fontsize=8, color=LANE_STYLE["color"], zorder=6)
     _paths_2d(ax, plan, 0, 1)
     ax.set_xlim(view_lo[0], view_hi[0])
     ax.set_ylim(view_lo[1], view_hi[1])
@@ -204,6 +250,9 @@ def _paths_2d(ax, plan: Plan, i: int, k: int) -> None:
         ax.plot(path[:, i], path[:, k], color=uav_colour(n), linewidth=1.8, marker="o",
                 markersize=3.5, zorder=3)
     ax.plot(c[:, i], c[:, k], zorder=4, **CENTROID_STYLE)
+    via = _via(plan)
+    if len(via):
+        ax.plot(via[:, i], via[:, k], zorder=5, **VIA_STYLE)
     ax.plot(c[0, i], c[0, k], color="green", marker="^", markersize=11, linestyle="none",
             zorder=5)
     ax.plot(c[-1, i], c[-1, k], color="#c00000", marker="s", markersize=9, linestyle="none",

@@ -21,11 +21,15 @@ from .errors import ScenarioError
 from .formation import PLANES, regular_formation
 from .geo import LocalFrame
 from .mission.gis import read_obstacle_geojson
+from .planning.survey import formation_width, lay_lanes
 
 ALGORITHMS = ("ftlbo-seeded", "ftlbo", "tlbo", "ga", "theta-pso")
 """Every name in planning.optimizers.OPTIMIZERS; the first is the default. ``ftlbo`` is
 the paper's FTLBO; ``ftlbo-seeded`` is FTLBO from geometric seed routes (docs/planning.md)."""
 END_ACTIONS = ("land", "rtl", "loiter")
+AUTO = "auto"
+"""``waypoints = "auto"``: per leg, the fewest waypoints whose plan is within
+:data:`ftlbo_mav.planning.planner.AUTO_TARGET` of the leg's lower bound."""
 
 
 @dataclass(frozen=True)
@@ -35,6 +39,30 @@ class GeoPoint:
     lat_deg: float
     lon_deg: float
     alt_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class ViaPoint:
+    """A point the centroid passes between start and goal: degrees WGS84, metres above
+    home, and a label (``"via 1"``, ``"lane 2 start"``... when the file gives none)."""
+
+    lat_deg: float
+    lon_deg: float
+    alt_m: float
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Survey:
+    """A ``[survey]``: lanes ``spacing_m`` apart along ``heading_deg`` (degrees clockwise
+    from north), ``margin_m`` inside the area's sides, flown at ``alt_m``. ``lanes``:
+    each lane's (entry, exit) in flight order; its ends are the scenario's via points."""
+
+    spacing_m: float
+    heading_deg: float
+    margin_m: float
+    alt_m: float
+    lanes: tuple[tuple[GeoPoint, GeoPoint], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -63,7 +91,8 @@ class PlannerSettings:
 
     algorithm: str = ALGORITHMS[0]
     students: int = 100
-    waypoints: int = 10
+    waypoints: int | str = 10
+    """Free waypoints per leg, or :data:`AUTO`."""
     iterations: int = 150
     seed: int = 0
     weights: Weights = field(default_factory=Weights)
@@ -79,7 +108,9 @@ class MissionSettings:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A survey: area, altitude band, start and goal of the centroid, formation, obstacles."""
+    """A survey: area, altitude band, start, via points and goal of the centroid,
+    formation, obstacles. ``via``: every point passed between start and goal in flight
+    order (the ``[[via]]`` points, then the lane ends of ``survey``)."""
 
     corner_a: GeoPoint
     corner_b: GeoPoint
@@ -94,6 +125,8 @@ class Scenario:
     mission: MissionSettings = field(default_factory=MissionSettings)
     name: str = ""
     source: str = "<scenario>"
+    via: tuple[ViaPoint, ...] = ()
+    survey: Survey | None = None
 
     @cached_property
     def frame(self) -> LocalFrame:
@@ -137,6 +170,18 @@ class Scenario:
         return self.frame.to_enu(
             lat_deg=self.goal.lat_deg, lon_deg=self.goal.lon_deg, alt_m=self.goal.alt_m
         )
+
+    def route_enu(self) -> np.ndarray:
+        """Start, every via point and the goal, ``(V + 2, 3)`` metres ENU: leg ``k`` runs
+        from row ``k`` to row ``k + 1``."""
+        points = [self.start, *self.via, self.goal]
+        return self.frame.to_enu(lat_deg=[p.lat_deg for p in points],
+                                 lon_deg=[p.lon_deg for p in points],
+                                 alt_m=[p.alt_m for p in points]).reshape(-1, 3)
+
+    def route_names(self) -> tuple[str, ...]:
+        """``"start"``, each via point's name, ``"goal"``: the ends of the legs."""
+        return ("start", *(v.name for v in self.via), "goal")
 
     def obstacles_enu(self) -> tuple[np.ndarray, np.ndarray]:
         """Cylinder axes ``(K, 2)`` metres east/north and radii ``(K,)`` metres (no clearance)."""
@@ -302,6 +347,9 @@ def parse_scenario(
 
     obstacles = _read_obstacles(root.raw("obstacles", []), source)
     obstacles_file = root.string("obstacles_file", "")
+    via = _read_via(root.raw("via", []), source)
+    survey_t = root.table("survey", required=False)
+    survey = _read_survey(survey_t, default_alt=start.alt_m) if survey_t else None
     planner = _read_planner(root.table("planner", required=False))
     mission = _read_mission(root.table("mission", required=False))
     root.done()
@@ -320,6 +368,7 @@ def parse_scenario(
         mission=mission,
         name=name,
         source=source,
+        via=via,
     )
     if obstacles_file:
         # obstacles_file (optional): a GeoJSON file of obstacles, relative to the scenario
@@ -328,6 +377,8 @@ def parse_scenario(
         path = (base_dir if base_dir is not None else Path(".")) / obstacles_file
         extra = read_obstacle_geojson(path, frame=scenario.frame)
         scenario = replace(scenario, obstacles=scenario.obstacles + extra)
+    if survey is not None:
+        scenario = _with_lanes(scenario, survey)
     _check_geometry(scenario)
     return scenario
 
@@ -371,12 +422,89 @@ def _read_obstacles(rows: Any, source: str) -> tuple[Cylinder, ...]:
     return tuple(cylinders)
 
 
+def _read_via(rows: Any, source: str) -> tuple[ViaPoint, ...]:
+    if not isinstance(rows, list):
+        raise ScenarioError(source, "via", "must be an array of tables ([[via]])")
+    points = []
+    for i, row in enumerate(rows):
+        t = _Table(row, f"via[{i}]", source)
+        point = t.point()
+        label = t.string("name", f"via {i + 1}")
+        t.done()
+        points.append(ViaPoint(point.lat_deg, point.lon_deg, point.alt_m, label))
+    return tuple(points)
+
+
+def _read_survey(t: _Table, *, default_alt: float) -> Survey:
+    spacing = t.number("spacing", lo=0.0, lo_open=True)
+    heading = t.number("heading")
+    margin = t.number("margin", spacing / 2, lo=0.0)
+    alt = t.number("alt", default_alt)
+    t.done()
+    return Survey(spacing_m=spacing, heading_deg=heading, margin_m=margin, alt_m=alt)
+
+
+def _with_lanes(s: Scenario, survey: Survey) -> Scenario:
+    """Lay the survey's lanes (:func:`~.planning.survey.lay_lanes`) and append their ends
+    to the via points.
+
+    The lanes stay ``margin`` inside the area's sides and where the centroid keeps every
+    UAV inside the area; a lane end on a tree is moved along the lane until every UAV
+    clears it. The survey begins from the last ``[[via]]`` point, or the start.
+    """
+    lower, upper = s.area_bounds_enu()
+    offsets = s.offsets_m
+    inset = 1e-3  # a millimetre inside: lane ends survive the round trip through lat/lon
+    lo = np.maximum(lower + survey.margin_m, lower - offsets[:, :2].min(axis=0)) + inset
+    hi = np.minimum(upper - survey.margin_m, upper - offsets[:, :2].max(axis=0)) - inset
+    if np.any(lo >= hi):
+        raise ScenarioError(
+            s.source, "survey.margin",
+            f"leaves no room for a lane: the area is {upper[0] - lower[0]:.1f} m x "
+            f"{upper[1] - lower[1]:.1f} m, the margin {survey.margin_m:g} m on every side and "
+            "the formation must stay inside (reduce the margin)")
+    centres, radii = s.obstacles_enu()
+    discs_c = (centres[None, :, :] - offsets[None, :, :2].transpose(1, 0, 2)).reshape(-1, 2)
+    discs_r = np.tile(radii + s.clearance_m, len(offsets))
+    begin = s.frame.to_enu(lat_deg=(s.via[-1] if s.via else s.start).lat_deg,
+                           lon_deg=(s.via[-1] if s.via else s.start).lon_deg)
+    lanes = lay_lanes(lower=lo, upper=hi, spacing_m=survey.spacing_m,
+                      heading_deg=survey.heading_deg, begin=begin[:2], centres=discs_c,
+                      radii=discs_r)
+    if not lanes:
+        raise ScenarioError(s.source, "survey", "no lane fits inside the area with this "
+                            "margin, spacing and heading clear of the obstacles")
+    ends = np.array([end for lane in lanes for end in lane])
+    enu = np.column_stack([ends, np.full(len(ends), survey.alt_m)])
+    lat, lon, _ = s.frame.to_lla(enu)
+    points = [GeoPoint(float(a), float(o), survey.alt_m) for a, o in zip(lat, lon)]
+    lanes_ll = tuple((points[2 * k], points[2 * k + 1]) for k in range(len(lanes)))
+    via = tuple(
+        ViaPoint(p.lat_deg, p.lon_deg, p.alt_m, f"lane {k // 2 + 1} {('start', 'end')[k % 2]}")
+        for k, p in enumerate(points)
+    )
+    return replace(s, via=s.via + via, survey=replace(survey, lanes=lanes_ll))
+
+
+def survey_width(s: Scenario) -> float | None:
+    """The formation's width across the survey's lanes (metres), ``None`` without one."""
+    if s.survey is None:
+        return None
+    return formation_width(s.offsets_m, s.survey.heading_deg)
+
+
 def _read_planner(t: _Table | None) -> PlannerSettings:
     if t is None:
         return PlannerSettings()
     algorithm = t.string("algorithm", ALGORITHMS[0], choices=ALGORITHMS)
     students = t.integer("students", 100, lo=4)
-    waypoints = t.integer("waypoints", 10, lo=1)
+    if t.raw("waypoints", 10) == AUTO:
+        waypoints = AUTO
+    else:
+        value = t.raw("waypoints")
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise t.error("waypoints", f'must be an integer >= 1 or "{AUTO}", got {value!r}')
+        waypoints = value
     iterations = t.integer("iterations", 150, lo=1)
     seed = t.integer("seed", 0, lo=0)
     weights = Weights()
@@ -403,39 +531,65 @@ def _read_mission(t: _Table | None) -> MissionSettings:
 
 
 def _check_geometry(s: Scenario) -> None:
-    """Start and goal inside the area; every UAV clear of every obstacle and in the band."""
+    """Start, via points and goal inside the area, every UAV clear of every obstacle and
+    in the band; no two consecutive points at one place; a loop needs via points."""
+    points = [("start", s.start), *((_via_field(s, i), v) for i, v in enumerate(s.via)),
+              ("goal", s.goal)]
+    enus = s.route_enu()
+    for (key, point), enu in zip(points, enus):
+        _check_point(s, key, point, enu)
+    for k in range(1, len(points)):
+        if np.hypot(*(enus[k, :2] - enus[k - 1, :2])) < 0.01:
+            key, before = points[k][0], points[k - 1][0]
+            if not s.via:
+                raise ScenarioError(s.source, "goal", "is the start: a loop needs [[via]] "
+                                    "points (or a [survey]) to pass between them")
+            raise ScenarioError(s.source, key, f"is at the same place as {before} (within "
+                                "1 cm): every leg needs two different places")
+
+
+def _via_field(s: Scenario, i: int) -> str:
+    """How errors name via point ``i``: ``via[i]``, or ``survey (lane 2 start)``."""
+    v = s.via[i]
+    lane_points = 2 * len(s.survey.lanes) if s.survey is not None else 0
+    if i >= len(s.via) - lane_points:
+        return f"survey ({v.name})"
+    return f"via[{i}]"
+
+
+def _check_point(s: Scenario, key: str, point, enu: np.ndarray) -> None:
     lower, upper = s.area_bounds_enu()
     centres, radii = s.obstacles_enu()
     offsets = s.offsets_m
-    for key, point, enu in (("start", s.start, s.start_enu()), ("goal", s.goal, s.goal_enu())):
-        lat_ok = min(s.corner_a.lat_deg, s.corner_b.lat_deg) <= point.lat_deg <= max(
-            s.corner_a.lat_deg, s.corner_b.lat_deg
-        )
-        lon_ok = min(s.corner_a.lon_deg, s.corner_b.lon_deg) <= point.lon_deg <= max(
-            s.corner_a.lon_deg, s.corner_b.lon_deg
-        )
-        if not (lat_ok and lon_ok):
-            field_name = f"{key}.lat" if not lat_ok else f"{key}.lon"
-            raise ScenarioError(s.source, field_name, "is outside the area")
-        uavs = enu + offsets
-        for n, uav in enumerate(uavs, start=1):
-            alt = uav[2]
-            if not s.min_altitude_m - 1e-6 <= alt <= s.max_altitude_m + 1e-6:
+    alt_key = "survey.alt" if key.startswith("survey") else f"{key}.alt"
+    lat_ok = min(s.corner_a.lat_deg, s.corner_b.lat_deg) <= point.lat_deg <= max(
+        s.corner_a.lat_deg, s.corner_b.lat_deg
+    )
+    lon_ok = min(s.corner_a.lon_deg, s.corner_b.lon_deg) <= point.lon_deg <= max(
+        s.corner_a.lon_deg, s.corner_b.lon_deg
+    )
+    if not (lat_ok and lon_ok):
+        field_name = f"{key}.lat" if not lat_ok else f"{key}.lon"
+        raise ScenarioError(s.source, field_name, "is outside the area")
+    uavs = enu + offsets
+    for n, uav in enumerate(uavs, start=1):
+        alt = uav[2]
+        if not s.min_altitude_m - 1e-6 <= alt <= s.max_altitude_m + 1e-6:
+            raise ScenarioError(
+                s.source,
+                alt_key,
+                f"puts UAV {n} at {alt:.2f} m, outside the altitude band "
+                f"[{s.min_altitude_m:g}, {s.max_altitude_m:g}] m",
+            )
+        if np.any(uav[:2] < lower - 1e-6) or np.any(uav[:2] > upper + 1e-6):
+            raise ScenarioError(s.source, key, f"puts UAV {n} outside the area")
+        if len(radii):
+            dist = np.hypot(*(centres - uav[:2]).T)
+            k = int(np.argmin(dist - radii))
+            if dist[k] <= radii[k] + s.clearance_m:
                 raise ScenarioError(
                     s.source,
-                    f"{key}.alt",
-                    f"puts UAV {n} at {alt:.2f} m, outside the altitude band "
-                    f"[{s.min_altitude_m:g}, {s.max_altitude_m:g}] m",
+                    key,
+                    f"puts UAV {n} {dist[k]:.2f} m from the axis of obstacles[{k}] "
+                    f"(radius {radii[k]:g} m + clearance {s.clearance_m:g} m)",
                 )
-            if np.any(uav[:2] < lower - 1e-6) or np.any(uav[:2] > upper + 1e-6):
-                raise ScenarioError(s.source, key, f"puts UAV {n} outside the area")
-            if len(radii):
-                dist = np.hypot(*(centres - uav[:2]).T)
-                k = int(np.argmin(dist - radii))
-                if dist[k] <= radii[k] + s.clearance_m:
-                    raise ScenarioError(
-                        s.source,
-                        key,
-                        f"puts UAV {n} {dist[k]:.2f} m from the axis of obstacles[{k}] "
-                        f"(radius {radii[k]:g} m + clearance {s.clearance_m:g} m)",
-                    )

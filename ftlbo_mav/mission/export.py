@@ -9,16 +9,16 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import MissionFileError
 from ..planning.cost import CostTerms
-from ..planning.planner import Plan
+from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
-from ..scenario import Cylinder, GeoPoint, PlannerSettings, Scenario
+from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
 from .files import write_atomic
 from .gis import render_geojson, render_kml
 from .items import MissionItem, build_mission
@@ -68,30 +68,53 @@ def _points(lla) -> list[dict]:
     ]
 
 
+def _cost(terms: CostTerms) -> dict:
+    return {k: _finite(getattr(terms, k)) for k in ("total", "length", "safety", "task")}
+
+
+def _round(value: float | None, digits: int) -> float | None:
+    return None if value is None else round(value, digits)
+
+
+def _leg_document(leg: Leg, first: int) -> dict:
+    return {
+        "from": leg.start_name,
+        "to": leg.goal_name,
+        "first_point": first,
+        "waypoints": leg.waypoints,
+        "waypoints_tried": list(leg.tried),
+        "feasible": leg.feasible,
+        "cost": _cost(leg.cost),
+        "lower_bound_length": _round(leg.lower_bound_length, 4),
+        "length_ratio": _round(leg.length_ratio, 6),
+        "evaluations": leg.evaluations,
+        "seconds": round(leg.seconds, 4),
+    }
+
+
 def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> dict:
-    """The ``plan.json`` content. ``written``: whether the mission files were written."""
+    """The ``plan.json`` content. ``written``: whether the mission files were written.
+
+    Totals at the top (cost, bound, evaluations, seconds: sums over the legs), one entry
+    per leg in ``legs`` (``first_point``: index of the leg's start in ``centroid``)."""
     s, sc = plan.settings, plan.scenario
+    firsts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs[:-1]])
+    survey = sc.survey
     return {
         "scenario": plan.scenario.name or plan.scenario.source,
         "algorithm": s.algorithm,
         "seed": s.seed,
         "students": s.students,
         "waypoints": s.waypoints,
+        "waypoint_count": plan.waypoint_count,
         "iterations": s.iterations,
         "feasible": plan.feasible,
         "violations": list(plan.violations),
-        "cost": {
-            "total": _finite(plan.cost.total),
-            "length": _finite(plan.cost.length),
-            "safety": _finite(plan.cost.safety),
-            "task": _finite(plan.cost.task),
-        },
+        "cost": _cost(plan.cost),
         "seconds": round(plan.seconds, 4),
         "evaluations": plan.evaluations,
-        "lower_bound_length": (
-            None if plan.lower_bound_length is None else round(plan.lower_bound_length, 4)
-        ),
-        "length_ratio": None if plan.length_ratio is None else round(plan.length_ratio, 6),
+        "lower_bound_length": _round(plan.lower_bound_length, 4),
+        "length_ratio": _round(plan.length_ratio, 6),
         "history": [_finite(h) for h in plan.history],
         "clearance": plan.scenario.clearance_m,
         "area": {
@@ -104,6 +127,16 @@ def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> d
             {"lat": c.lat_deg, "lon": c.lon_deg, "radius": c.radius_m, "name": c.name}
             for c in sc.obstacles
         ],
+        "via": [{"name": v.name, "lat": v.lat_deg, "lon": v.lon_deg, "alt": v.alt_m}
+                for v in sc.via],
+        "survey": None if survey is None else {
+            "spacing": survey.spacing_m,
+            "heading": survey.heading_deg,
+            "margin": survey.margin_m,
+            "alt": survey.alt_m,
+            "lanes": [[[a.lat_deg, a.lon_deg], [b.lat_deg, b.lon_deg]] for a, b in survey.lanes],
+        },
+        "legs": [_leg_document(leg, int(f)) for leg, f in zip(plan.legs, firsts)],
         "centroid": _points(plan.lla(plan.centroid)),
         "uavs": [
             {
@@ -158,15 +191,26 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
     """Rebuild a :class:`Plan` from ``plan.json`` content (the inverse of :func:`plan_document`).
 
     The scenario is rebuilt from what ``plan.json`` carries: area, band, obstacles,
-    clearance, offsets, and the centroid's first and last points as start and goal. Paths
-    come from the file as written (8 decimals: about a millimetre). The planner weights
-    are not recorded and read as the defaults. Raises :class:`MissionFileError`.
+    clearance, offsets, via points and survey lanes, and the centroid's first and last
+    points as start and goal. Paths come from the file as written (8 decimals: about a
+    millimetre). The planner weights are not recorded and read as the defaults; a file
+    without ``legs`` (written before surveys) is one leg. Raises :class:`MissionFileError`.
     """
     try:
         area = doc["area"]
         centroid = doc["centroid"]
         uavs = doc["uavs"]
         start, goal = (GeoPoint(p["lat"], p["lon"], p["alt"]) for p in (centroid[0], centroid[-1]))
+        via = tuple(ViaPoint(float(v["lat"]), float(v["lon"]), float(v["alt"]), str(v["name"]))
+                    for v in doc.get("via", []))
+        survey = doc.get("survey")
+        if survey is not None:
+            survey = Survey(
+                spacing_m=float(survey["spacing"]), heading_deg=float(survey["heading"]),
+                margin_m=float(survey["margin"]), alt_m=float(survey["alt"]),
+                lanes=tuple((GeoPoint(*map(float, a), float(survey["alt"])),
+                             GeoPoint(*map(float, b), float(survey["alt"])))
+                            for a, b in survey["lanes"]))
         scenario = Scenario(
             corner_a=GeoPoint(*map(float, area["corner_a"])),
             corner_b=GeoPoint(*map(float, area["corner_b"])),
@@ -182,43 +226,69 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
             ),
             name=str(doc.get("scenario", "")),
             source=source,
+            via=via,
+            survey=survey,
         )
+        waypoints = doc["waypoints"]
         settings = PlannerSettings(
             algorithm=doc["algorithm"], students=int(doc["students"]),
-            waypoints=int(doc["waypoints"]), iterations=int(doc["iterations"]),
-            seed=int(doc["seed"]),
+            waypoints=AUTO if waypoints == AUTO else int(waypoints),
+            iterations=int(doc["iterations"]), seed=int(doc["seed"]),
         )
         frame = scenario.frame
 
         def enu(points) -> np.ndarray:
             return frame.to_enu(lat_deg=[p["lat"] for p in points],
                                 lon_deg=[p["lon"] for p in points],
-                                alt_m=[p["alt"] for p in points])
+                                alt_m=[p["alt"] for p in points]).reshape(-1, 3)
 
         centroid_enu = enu(centroid)
         uav_paths = np.stack([enu(u["waypoints"]) for u in uavs])
-        cost = CostTerms(*(_infinite(doc["cost"][k]) for k in CostTerms._fields))
+        cost = _cost_terms(doc["cost"])
         history = np.array([_infinite(h) for h in doc["history"]], float)
         violations = tuple(str(v) for v in doc["violations"])
         feasible_flag = bool(doc["feasible"])
         evaluations, seconds = int(doc["evaluations"]), float(doc["seconds"])
         bound = doc.get("lower_bound_length")
         bound = None if bound is None else float(bound)
+        leg_docs = doc.get("legs") or [{
+            "from": "start", "to": "goal", "first_point": 0,
+            "waypoints": len(centroid) - 2, "waypoints_tried": [], "cost": doc["cost"],
+            "lower_bound_length": bound, "evaluations": evaluations, "seconds": seconds,
+            "feasible": feasible_flag}]
+        problem = problem_from_scenario(scenario, waypoints=max(len(centroid_enu) - 2, 1))
+        legs = []
+        for leg in leg_docs:
+            first, m = int(leg["first_point"]), int(leg["waypoints"])
+            path = centroid_enu[first : first + m + 2]
+            if len(path) != m + 2:
+                raise ValueError("legs do not fit the centroid")
+            leg_bound = leg["lower_bound_length"]
+            legs.append(Leg(
+                start_name=str(leg["from"]), goal_name=str(leg["to"]),
+                problem=replace(problem, start=path[0], goal=path[-1], waypoints=m),
+                centroid=path, cost=_cost_terms(leg["cost"]),
+                violations=() if leg["feasible"] else ("infeasible (see plan.json)",),
+                history=history if len(leg_docs) == 1 else np.zeros(0),
+                evaluations=int(leg["evaluations"]),
+                seconds=float(leg["seconds"]),
+                lower_bound_length=None if leg_bound is None else float(leg_bound),
+                tried=tuple(int(t) for t in leg.get("waypoints_tried", []))))
     except (KeyError, TypeError, ValueError, IndexError) as exc:
         raise MissionFileError(
             f"{source}: not a plan.json this version of ftlbo-mav can read (missing or bad "
             f"{exc}); plan again with `ftlbo-mav plan`"
         ) from None
-    if len(centroid_enu) != settings.waypoints + 2 or uav_paths.shape != (
-        len(uavs), len(centroid_enu), 3
-    ):
-        raise MissionFileError(f"{source}: the paths do not have waypoints + 2 points each")
+    ends = sum(leg.waypoints + 1 for leg in legs) + 1
+    if len(centroid_enu) != ends or uav_paths.shape != (len(uavs), len(centroid_enu), 3):
+        raise MissionFileError(f"{source}: the paths do not have the legs' waypoints + via "
+                               "points + start and goal each")
     if feasible_flag == bool(violations):
         raise MissionFileError(f"{source}: 'feasible' disagrees with 'violations'")
     return Plan(
         scenario=scenario,
         settings=settings,
-        problem=problem_from_scenario(scenario, waypoints=settings.waypoints),
+        problem=problem,
         centroid=centroid_enu,
         uav_paths=uav_paths,
         cost=cost,
@@ -227,7 +297,12 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         evaluations=evaluations,
         seconds=seconds,
         lower_bound_length=bound,
+        legs=tuple(legs),
     )
+
+
+def _cost_terms(doc: dict) -> CostTerms:
+    return CostTerms(*(_infinite(doc[k]) for k in CostTerms._fields))
 
 
 def _infinite(value) -> float:

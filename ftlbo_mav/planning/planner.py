@@ -1,6 +1,9 @@
 """``plan(scenario) -> Plan``: the centroid path, every UAV's path, cost and feasibility.
 
-Pure computation: no files, no printing (progress goes to an optional callback).
+A scenario's route runs start -> via points -> goal; each leg between two route points
+is planned on its own (:func:`plan_leg`) and the legs are joined into one path
+(:func:`combine`). Pure computation: no files, no printing (progress goes to optional
+callbacks).
 """
 
 from __future__ import annotations
@@ -11,22 +14,73 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..scenario import PlannerSettings, Scenario
+from ..scenario import AUTO, PlannerSettings, Scenario
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
 from .geometric import lower_bound, shortest_routes
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import Progress
 from .problem import PlanningProblem, problem_from_scenario
-from .seeds import seed_waypoints
+from .seeds import RouteChains, seed_waypoints
+
+AUTO_TARGET = 0.005
+"""``waypoints = "auto"``: a leg's plan may be this much (relative) above its bound."""
+AUTO_TRIES = 4
+"""``waypoints = "auto"``: waypoint counts planned per leg, from the geometric choice up,
+before the best plan is kept even though it misses :data:`AUTO_TARGET`."""
+AUTO_MAX = 256
+"""``waypoints = "auto"``: the most waypoints looked at for one leg."""
+AUTO_NO_ROUTE = PlannerSettings().waypoints
+"""``waypoints = "auto"`` on a leg with no route (nothing to measure against): the
+paper's 10."""
+
+
+@dataclass(frozen=True, eq=False)
+class Leg:
+    """One leg of a plan: the centroid from one route point (start or via) to the next.
+
+    ``problem``: the leg's own problem (its start, goal and waypoint count ``m``).
+    ``centroid``: ``(m+2, 3)`` metres ENU. ``tried``: with ``waypoints = "auto"``, the
+    waypoint counts planned, in order (the last one kept is ``waypoints``); else empty.
+    ``evaluations`` and ``seconds`` count every try.
+    """
+
+    start_name: str
+    goal_name: str
+    problem: PlanningProblem
+    centroid: np.ndarray
+    cost: CostTerms
+    violations: tuple[str, ...]
+    history: np.ndarray
+    evaluations: int
+    seconds: float
+    lower_bound_length: float | None = None
+    tried: tuple[int, ...] = ()
+
+    @property
+    def waypoints(self) -> int:
+        return self.problem.waypoints
+
+    @property
+    def feasible(self) -> bool:
+        return not self.violations
+
+    @property
+    def length_ratio(self) -> float | None:
+        if not self.lower_bound_length:
+            return None
+        return float(self.cost.length / self.lower_bound_length)
 
 
 @dataclass(frozen=True, eq=False)
 class Plan:
-    """A planned formation flight.
+    """A planned formation flight: one or more legs flown as one continuous path.
 
-    ``centroid``: ``(m+2, 3)`` metres ENU, start to goal.
-    ``uav_paths``: ``(N, m+2, 3)`` metres ENU: ``centroid + offset_n`` (eq. 4).
+    ``centroid``: ``(P, 3)`` metres ENU, start, every leg's waypoints and via points,
+    goal (``P = sum(m_k + 1) + 1``). ``uav_paths``: ``(N, P, 3)``: ``centroid +
+    offset_n`` (eq. 4). ``problem``: the whole route's (start, goal, ``P - 2`` points).
+    ``cost``, ``evaluations``, ``seconds``, ``lower_bound_length`` are the legs' sums;
+    ``history`` the sum of the legs' best costs per iteration.
     """
 
     scenario: Scenario
@@ -40,8 +94,9 @@ class Plan:
     evaluations: int
     seconds: float
     lower_bound_length: float | None = None
-    """Metres no feasible centroid path can beat (:func:`.geometric.lower_bound`);
-    ``None`` when no route exists for the formation."""
+    """Metres no feasible centroid path can beat (:func:`.geometric.lower_bound`, summed
+    over the legs); ``None`` when some leg has no route for the formation."""
+    legs: tuple[Leg, ...] = ()
 
     @property
     def feasible(self) -> bool:
@@ -54,10 +109,19 @@ class Plan:
             return None
         return float(self.cost.length / self.lower_bound_length)
 
+    @property
+    def waypoint_count(self) -> int:
+        """Points between start and goal: every leg's waypoints and the via points."""
+        return len(self.centroid) - 2
+
     def lla(self, enu: np.ndarray) -> np.ndarray:
         """ENU ``(..., 3)`` -> ``(..., 3)`` rows of (lat_deg, lon_deg, alt_m above home)."""
         lat, lon, alt = self.scenario.frame.to_lla(enu)
         return np.stack([lat, lon, alt], axis=-1)
+
+
+LegDone = Callable[[int, int, Leg], None]
+"""``on_leg(index, legs, leg)``: called after each leg is planned (index 0-based)."""
 
 
 def plan(
@@ -67,14 +131,19 @@ def plan(
     seed: int | None = None,
     iterations: int | None = None,
     students: int | None = None,
-    waypoints: int | None = None,
+    waypoints: int | str | None = None,
     progress: Progress | None = None,
     notice: Callable[[str], None] | None = None,
+    on_leg: LegDone | None = None,
 ) -> Plan:
     """Plan the centroid path for ``scenario``; keyword arguments override its ``[planner]``.
 
-    ``notice(line)`` is called before optimizing when no route exists (the formation
-    cannot pass between the obstacles inside the area); the plan is still attempted.
+    Every leg (start -> via 1 -> ... -> goal) is planned on its own with the chosen
+    algorithm and waypoints (``"auto"``: per leg, see :func:`plan_leg`); one random
+    generator, seeded with ``seed``, serves the legs in turn. ``progress`` is called per
+    iteration of each leg's optimizer, ``on_leg`` after each leg. ``notice(line)`` is
+    called before optimizing a leg for which no route exists (the formation cannot pass
+    between the obstacles inside the area); the plan is still attempted.
     """
     settings = scenario.planner
     overrides = {
@@ -85,12 +154,50 @@ def plan(
         "waypoints": waypoints,
     }
     settings = replace(settings, **{k: v for k, v in overrides.items() if v is not None})
+    _check_settings(settings)
+    points, names = scenario.route_enu(), scenario.route_names()
+    base = problem_from_scenario(scenario, waypoints=_count(settings))
+    rng = np.random.default_rng(settings.seed)
+    count = len(points) - 1
+    legs = []
+    for k in range(count):
+        problem = replace(base, start=points[k], goal=points[k + 1])
+        where = f"leg {k + 1}/{count} ({names[k]} -> {names[k + 1]}): " if count > 1 else ""
+        leg = plan_leg(problem, settings, rng=rng, progress=progress, names=names[k : k + 2],
+                       notice=None if notice is None else (lambda line, w=where: notice(w + line)))
+        legs.append(leg)
+        if on_leg is not None:
+            on_leg(k, count, leg)
+    return combine(scenario, settings, legs)
+
+
+def route_lower_bound(scenario: Scenario) -> float | None:
+    """The sum of the legs' lower bounds (metres): no feasible centroid path through
+    every via point is shorter; ``None`` when some leg has no route."""
+    points = scenario.route_enu()
+    base = problem_from_scenario(scenario, waypoints=1)
+    total = 0.0
+    for k in range(len(points) - 1):
+        bound = lower_bound(replace(base, start=points[k], goal=points[k + 1]))
+        if bound is None:
+            return None
+        total += bound
+    return total
+
+
+def _check_settings(settings: PlannerSettings) -> None:
     if settings.algorithm not in OPTIMIZERS:
         raise ValueError(
             f"unknown algorithm {settings.algorithm!r}; known: {', '.join(sorted(OPTIMIZERS))}"
         )
-    problem = problem_from_scenario(scenario, waypoints=settings.waypoints)
-    return solve(problem, scenario, settings, progress=progress, notice=notice)
+    m = settings.waypoints
+    if m != AUTO and (isinstance(m, bool) or not isinstance(m, int) or m < 1):
+        raise ValueError(f'waypoints must be an integer >= 1 or "{AUTO}", got {m!r}')
+
+
+def _count(settings: PlannerSettings) -> int:
+    """The waypoint count to build problems with (``auto`` picks its own per leg)."""
+    return AUTO_NO_ROUTE if settings.waypoints == AUTO else int(settings.waypoints)
 
 
 SEED_ROUTES = 4
@@ -111,17 +218,84 @@ def solve(
     progress: Progress | None = None,
     notice: Callable[[str], None] | None = None,
 ) -> Plan:
-    """Run ``settings.algorithm`` on ``problem`` and package the result.
+    """Run ``settings.algorithm`` on the one-leg ``problem`` and package the result
+    (``scenario`` is only carried along; ``settings.waypoints = "auto"`` chooses the
+    count, else ``problem.waypoints`` is used). See :func:`plan_leg`."""
+    _check_settings(settings)
+    rng = np.random.default_rng(settings.seed)
+    leg = plan_leg(problem, settings, rng=rng, progress=progress, notice=notice)
+    return combine(scenario, settings, [leg])
 
-    ``Plan.seconds`` is the optimizer's wall time; for a seeded optimizer it includes the
-    routes and seeds (the lower bound alone is not counted for the others).
+
+def plan_leg(
+    problem: PlanningProblem,
+    settings: PlannerSettings,
+    *,
+    rng: np.random.Generator,
+    progress: Progress | None = None,
+    notice: Callable[[str], None] | None = None,
+    names: tuple[str, str] = ("start", "goal"),
+) -> Leg:
+    """Plan one leg, from ``problem.start`` to ``problem.goal``.
+
+    Fixed ``settings.waypoints``: ``problem.waypoints`` waypoints (the paper's setting).
+    ``"auto"``: the fewest waypoints whose seed polygon near the shortest route
+    (:class:`.seeds.RouteChains`) is within :data:`AUTO_TARGET` of the leg's bound; that
+    count is planned, and if the plan misses the target the next counts up to
+    :data:`AUTO_TRIES` in all; the first plan within the target is kept, else the
+    feasible one nearest the bound. ``Leg.seconds`` is the optimizer's wall time; for a
+    seeded optimizer, and with ``"auto"``, it includes the routes (and the seeds).
     """
+    auto = settings.waypoints == AUTO
     t_routes = time.perf_counter()
     routes = shortest_routes(problem, count=SEED_ROUTES)
-    route_seconds = time.perf_counter() - t_routes
     bound = lower_bound(problem, routes[0]) if routes else None
+    chains = [RouteChains(problem, r) for r in routes] if auto else None
+    choice = _auto_count(chains[0], bound) if auto and routes else None
+    route_seconds = time.perf_counter() - t_routes
     if not routes and notice is not None:
         notice(NO_ROUTE)
+    seeded = getattr(OPTIMIZERS[settings.algorithm], "wants_seeds", False)
+    if not auto:
+        leg = _optimize(problem, settings, rng, routes, None, progress)
+        extra = route_seconds if seeded else 0.0
+        return replace(leg, start_name=names[0], goal_name=names[1], lower_bound_length=bound,
+                       seconds=leg.seconds + extra)
+    first = choice if choice is not None else AUTO_NO_ROUTE
+    tries: list[Leg] = []
+    for m in range(first, min(first + AUTO_TRIES, AUTO_MAX + 1)):
+        leg = _optimize(replace(problem, waypoints=m), settings, rng, routes, chains, progress)
+        tries.append(replace(leg, lower_bound_length=bound))
+        if bound is None or (leg.feasible and leg.cost.length <= (1 + AUTO_TARGET) * bound):
+            break
+    kept = tries[-1]
+    if bound is not None and not (kept.feasible
+                                  and kept.cost.length <= (1 + AUTO_TARGET) * bound):
+        feasible = [t for t in tries if t.feasible]
+        kept = min(feasible, key=lambda t: t.cost.length) if feasible else kept
+    return replace(kept, start_name=names[0], goal_name=names[1],
+                   tried=tuple(t.waypoints for t in tries),
+                   evaluations=sum(t.evaluations for t in tries),
+                   seconds=route_seconds + sum(t.seconds for t in tries))
+
+
+def _auto_count(chains: RouteChains, bound: float) -> int | None:
+    """The fewest waypoints whose clear chain is within :data:`AUTO_TARGET` of ``bound``;
+    else the count of the shortest clear chain found; ``None`` when none is clear."""
+    m = 8
+    while True:
+        lengths = chains.lengths(m)
+        within = np.flatnonzero(lengths <= (1 + AUTO_TARGET) * bound)
+        if len(within):
+            return int(within[0]) + 1
+        if m >= AUTO_MAX:
+            return int(np.argmin(lengths)) + 1 if np.isfinite(lengths).any() else None
+        m = min(2 * m, AUTO_MAX)
+
+
+def _optimize(problem: PlanningProblem, settings: PlannerSettings, rng: np.random.Generator,
+              routes: list, chains: list | None, progress: Progress | None) -> Leg:
+    """One optimizer run on ``problem`` (its ``waypoints``); names and bound left blank."""
     m = problem.waypoints
     lower, upper = problem.bounds()
 
@@ -129,13 +303,11 @@ def solve(
         return search_cost(problem, x.reshape(-1, m, 3))
 
     objective = Objective(cost, lower, upper)
-    rng = np.random.default_rng(settings.seed)
     optimizer = OPTIMIZERS[settings.algorithm]
     t0 = time.perf_counter()
     extra = {}
-    seeded = getattr(optimizer, "wants_seeds", False)
-    if seeded:  # timed: the routes and the seeds are part of this planner
-        seeds = seed_waypoints(problem, routes=routes)
+    if getattr(optimizer, "wants_seeds", False):  # timed: the seeds are part of this planner
+        seeds = seed_waypoints(problem, routes=routes, chains=chains)
         extra["seeds"] = seeds.reshape(len(seeds), 3 * m)
     result = optimizer(
         objective,
@@ -145,20 +317,47 @@ def solve(
         progress=progress,
         **extra,
     )
-    seconds = time.perf_counter() - t0 + (route_seconds if seeded else 0.0)
+    seconds = time.perf_counter() - t0
     best = result.x.reshape(1, m, 3)
     terms = CostTerms(*(float(t[0]) for t in cost_terms(problem, best)))
     centroid = problem.full_paths(best)[0]
-    return Plan(
-        scenario=scenario,
-        settings=settings,
+    return Leg(
+        start_name="start",
+        goal_name="goal",
         problem=problem,
         centroid=centroid,
-        uav_paths=centroid[None, :, :] + problem.offsets[:, None, :],
         cost=terms,
         violations=tuple(violations(problem, centroid)),
         history=np.where(result.history >= INFEASIBLE, np.inf, result.history),
         evaluations=result.evaluations,
         seconds=seconds,
-        lower_bound_length=bound,
+    )
+
+
+def combine(scenario: Scenario, settings: PlannerSettings, legs: list[Leg]) -> Plan:
+    """The legs ``[Leg, ...]`` (each starting where the previous ended) as one Plan."""
+    centroid = np.concatenate([legs[0].centroid] + [leg.centroid[1:] for leg in legs[1:]])
+    whole = replace(legs[0].problem, start=centroid[0], goal=centroid[-1],
+                    waypoints=len(centroid) - 2)
+    many = len(legs) > 1
+    messages = tuple(
+        (f"leg {k + 1} ({leg.start_name} -> {leg.goal_name}): {v}" if many else v)
+        for k, leg in enumerate(legs) for v in leg.violations
+    )
+    bounds = [leg.lower_bound_length for leg in legs]
+    with np.errstate(invalid="ignore"):
+        history = np.sum([leg.history for leg in legs], axis=0)
+    return Plan(
+        scenario=scenario,
+        settings=settings,
+        problem=whole,
+        centroid=centroid,
+        uav_paths=centroid[None, :, :] + whole.offsets[:, None, :],
+        cost=CostTerms(*(float(sum(leg.cost[i] for leg in legs)) for i in range(4))),
+        violations=messages,
+        history=history,
+        evaluations=sum(leg.evaluations for leg in legs),
+        seconds=sum(leg.seconds for leg in legs),
+        lower_bound_length=None if any(b is None for b in bounds) else float(sum(bounds)),
+        legs=tuple(legs),
     )

@@ -132,28 +132,48 @@ def _candidates(route: Route, margin: float) -> tuple[np.ndarray, np.ndarray]:
     return np.array(points), np.array(keys)
 
 
+class _Layers:
+    """Shortest chains from point 0 to the last over ``clear`` forward links ``(P, P)``,
+    one layer per number of links, extended on demand (a dynamic programme over links:
+    layer ``L`` holds the shortest chain of exactly ``L`` links to every point)."""
+
+    def __init__(self, points: np.ndarray, clear: np.ndarray) -> None:
+        P = len(points)
+        length = np.hypot(*(points[None, :, :] - points[:, None, :]).transpose(2, 0, 1))
+        self.weight = np.where(clear, length, np.inf)
+        self.best = np.full(P, np.inf)
+        self.best[0] = 0.0
+        self.parents: list[np.ndarray] = []
+        self.finals: list[float] = []  # length of the shortest chain of L + 1 links
+
+    def extend(self, links: int) -> None:
+        """Compute the layers up to ``links`` links."""
+        P = len(self.best)
+        while len(self.finals) < links:
+            total = self.best[:, None] + self.weight
+            parent = np.argmin(total, axis=0)
+            self.best = total[parent, np.arange(P)]
+            self.parents.append(parent)
+            self.finals.append(float(self.best[-1]))
+
+    def chain(self, max_links: int) -> list[int] | None:
+        """Indices of the shortest chain of at most ``max_links`` links, or ``None``."""
+        self.extend(max_links)
+        finals = self.finals[:max_links]
+        links = int(np.argmin(finals))
+        if not np.isfinite(finals[links]):
+            return None
+        P = len(self.best)
+        chain = [P - 1]
+        for layer in range(links, -1, -1):
+            chain.append(int(self.parents[layer][chain[-1]]))
+        return chain[::-1]
+
+
 def _fewest_metres_polygon(points, clear, max_links: int) -> list[int] | None:
     """Indices of the shortest chain from point 0 to the last over ``clear`` forward
     links ``(P, P)`` with at most ``max_links`` links; ``None`` when there is none."""
-    P = len(points)
-    length = np.hypot(*(points[None, :, :] - points[:, None, :]).transpose(2, 0, 1))
-    weight = np.where(clear, length, np.inf)
-    best = np.full(P, np.inf)
-    best[0] = 0.0
-    parents, finals = [], []
-    for _ in range(max_links):
-        total = best[:, None] + weight
-        parent = np.argmin(total, axis=0)
-        best = total[parent, np.arange(P)]
-        parents.append(parent)
-        finals.append(best[-1])
-    links = int(np.argmin(finals))
-    if not np.isfinite(finals[links]):
-        return None
-    chain = [P - 1]
-    for layer in range(links, -1, -1):
-        chain.append(int(parents[layer][chain[-1]]))
-    return chain[::-1]
+    return _Layers(points, clear).chain(max_links)
 
 
 def _pad(vertices: np.ndarray, count: int) -> np.ndarray:
@@ -194,33 +214,69 @@ def _route_polygon(problem: PlanningProblem, route: Route, waypoints: int, *,
     Altitudes go linearly from start to goal along the polygon, inside the bounds.
     Returns the waypoints ``(m, 3)`` and whether the clear chain was found.
     """
-    m = waypoints
-    margin = seed_margin(problem) if margin is None else margin
-    start, goal = problem.start, problem.goal
+    return RouteChains(problem, route, margin=margin).polygon(waypoints)
+
+
+class RouteChains:
+    """The clear polygons near one route, for any number of waypoints (see
+    :func:`_route_polygon`): the candidate vertices and their clear links are computed
+    once; :meth:`polygon` and :meth:`lengths` extend one dynamic programme over the
+    number of links as far as they are asked."""
+
+    def __init__(self, problem: PlanningProblem, route: Route, *,
+                 margin: float | None = None) -> None:
+        self.problem, self.route = problem, route
+        self.margin = seed_margin(problem) if margin is None else margin
+        points, keys = _candidates(route, self.margin)
+        points = points[np.argsort(keys, kind="stable")]
+        rect_lo, rect_hi = centroid_rectangle(problem)
+        widened = Discs(route.discs.centres, route.discs.radii + 0.5 * self.margin,
+                        route.discs.cylinder, route.discs.uav)
+        # A vertex beyond the area's side (a route along the side) is moved onto it; the
+        # legs' clearance decides whether it is usable.
+        self.points = np.clip(points, rect_lo, rect_hi)
+        P = len(self.points)
+        i, j = np.triu_indices(P, 1)
+        clear = np.zeros((P, P), bool)
+        clear[i, j] = segments_clear(self.points[i], self.points[j], widened)
+        self._layers = _Layers(self.points, clear)
+
+    @property
+    def candidates(self) -> int:
+        return len(self.points)
+
+    def lengths(self, waypoints: int) -> np.ndarray:
+        """``(waypoints,)``: entry ``m - 1`` is the 3D length (metres, altitude linear from
+        start to goal) of the shortest clear chain with at most ``m`` waypoints, ``inf``
+        where there is none."""
+        self._layers.extend(waypoints + 1)
+        flat = np.minimum.accumulate(np.array(self._layers.finals[: waypoints + 1]))[1:]
+        dz = float(self.problem.goal[2] - self.problem.start[2])
+        return np.hypot(flat, dz)
+
+    def polygon(self, waypoints: int) -> tuple[np.ndarray, bool]:
+        """Waypoints ``(m, 3)`` and whether they follow a clear chain (see
+        :func:`_route_polygon`)."""
+        m = waypoints
+        problem, start, goal = self.problem, self.problem.start, self.problem.goal
+        lower, upper = _bounds(problem, m)
+        chain = self._layers.chain(m + 1)
+        if chain is None:
+            xy = _allocated_polygon(self.route, m, self.margin)
+        else:
+            xy = _pad(self.points[chain], m)
+        full = np.vstack([start[:2], xy, goal[:2]])
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(full, axis=0).T))])
+        frac = along[1:-1] / max(along[-1], 1e-12)
+        z = start[2] + frac * (goal[2] - start[2])
+        return np.clip(np.column_stack([xy, z]), lower, upper), chain is not None
+
+
+def _bounds(problem: PlanningProblem, waypoints: int) -> tuple[np.ndarray, np.ndarray]:
+    """The problem's bounds ``(m, 3)`` for ``waypoints`` waypoints (the same per row)."""
     lower, upper = problem.bounds()
-    points, keys = _candidates(route, margin)
-    order = np.argsort(keys, kind="stable")
-    points = points[order]
-    rect_lo, rect_hi = centroid_rectangle(problem)
-    widened = Discs(route.discs.centres, route.discs.radii + 0.5 * margin,
-                    route.discs.cylinder, route.discs.uav)
-    # A vertex beyond the area's side (a route along the side) is moved onto it; the
-    # legs' clearance decides whether it is usable.
-    points = np.clip(points, rect_lo, rect_hi)
-    P = len(points)
-    i, j = np.triu_indices(P, 1)
-    clear = np.zeros((P, P), bool)
-    clear[i, j] = segments_clear(points[i], points[j], widened)
-    chain = _fewest_metres_polygon(points, clear, m + 1)
-    if chain is None:
-        xy = _allocated_polygon(route, m, margin)
-    else:
-        xy = _pad(points[chain], m)
-    full = np.vstack([start[:2], xy, goal[:2]])
-    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(full, axis=0).T))])
-    frac = along[1:-1] / max(along[-1], 1e-12)
-    z = start[2] + frac * (goal[2] - start[2])
-    return np.clip(np.column_stack([xy, z]), lower, upper), chain is not None
+    return (np.broadcast_to(lower[:1], (waypoints, 3)),
+            np.broadcast_to(upper[:1], (waypoints, 3)))
 
 
 def _resample(line: np.ndarray, count: int) -> np.ndarray:
@@ -258,20 +314,23 @@ def seed_margin(problem: PlanningProblem) -> float:
 
 
 def seed_waypoints(
-    problem: PlanningProblem, *, count: int = 4, routes: list[Route] | None = None
+    problem: PlanningProblem, *, count: int = 4, routes: list[Route] | None = None,
+    chains: list[RouteChains] | None = None,
 ) -> np.ndarray:
     """Waypoints ``(R, m, 3)`` near up to ``count`` short routes (or the given
-    ``routes``), kept :func:`seed_margin` off the discs (:func:`route_waypoints`): the
-    clear ones first, shortest route first among equals; ``(0, m, 3)`` when no route
-    exists."""
-    if routes is None:
-        routes = shortest_routes(problem, count=count)
+    ``routes``, or the routes of the given ``chains``), kept :func:`seed_margin` off the
+    discs (:func:`route_waypoints`): the clear ones first, shortest route first among
+    equals; ``(0, m, 3)`` when no route exists."""
     m = problem.waypoints
-    if not routes:
+    if chains is None:
+        if routes is None:
+            routes = shortest_routes(problem, count=count)
+        chains = [RouteChains(problem, r) for r in routes]
+    if not chains:
         return np.zeros((0, m, 3))
-    polygons = [_route_polygon(problem, r, m) for r in routes]
+    polygons = [c.polygon(m) for c in chains]
     if not any(clear for _, clear in polygons):
-        polygon = _straighter_polygon(problem, routes[0].length)
+        polygon = _straighter_polygon(problem, chains[0].route.length)
         if polygon is not None:
             polygons.insert(0, (polygon, True))
     # clear polygons first (stable: shortest route first among them)
