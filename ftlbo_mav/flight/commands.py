@@ -19,7 +19,8 @@ from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
 from ..mission.files import write_atomic
 from .control import DEFAULT_CONTROL_PORT, ControlServer, request_abort
-from .fly import Fleet, FlyOptions, abort, fly
+from .fly import Fleet, FlyOptions, abort, fly, make_keeper
+from .keeper import KeeperOptions
 from .monitor import LiveView, Monitor
 from .planned import PlannedFlight, load_planned_flight
 from .report import render_report_png, summarize
@@ -73,11 +74,16 @@ def _forwarding(url: str | None, fleet: Fleet):
 
 
 def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
-                        sysids: list[int]) -> dict:
+                        sysids: list[int], *, keeper=None) -> dict:
     """flight.csv, summary.json and report.png in ``out_dir``; returns the summary."""
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)
     summary = summarize(planned, times, positions, seqs)
     summary["position_rate_hz"] = {str(s): round(monitor.record.rate_hz(s), 2) for s in sysids}
+    if keeper is not None:
+        summary["keeper"] = {"enabled": keeper.options.enabled,
+                             "off_reason": keeper.off_reason,
+                             "planned_speed_m_s": keeper.planned_speed_m_s,
+                             "vehicles": keeper.log.as_dict(planned.names)}
     write_atomic(out_dir / "flight.csv", monitor.record.to_csv())
     write_atomic(out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")
     if len(times):
@@ -96,6 +102,15 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
                f"{m('min_separation_legs_m')} on the legs, {m('min_separation_airborne_m')} in "
                f"the air (planned {m('planned_min_separation_m')}); "
                f"smallest clearance {m('min_clearance_m')}")
+    keeper = summary.get("keeper")
+    if keeper and keeper["off_reason"]:
+        click.echo(f"formation keeper off: {keeper['off_reason']}")
+    elif keeper and keeper["enabled"]:
+        nudged = {n: v for n, v in keeper["vehicles"].items() if v["speed_commands"]}
+        click.echo("formation keeper: " + ("; ".join(
+            f"{n} slowed {v['seconds_slowed']:.1f} s (down to {v['slowest_speed_m_s']} m/s, "
+            f"{v['speed_commands']} commands)" for n, v in nudged.items())
+            if nudged else "no vehicle needed slowing"))
     click.echo(f"flight log, summary and report in {out_dir}/")
 
 
@@ -111,6 +126,8 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @click.option("--control-port", type=click.IntRange(0, 65535), default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="127.0.0.1 port where `ftlbo-mav abort` reaches this flight (0: none).")
+@click.option("--no-keeper", is_flag=True,
+              help="Fly without the formation keeper (no speed nudges in flight).")
 @click.option("--arm-budget", type=click.FloatRange(min=0), default=60.0, show_default=True,
               help="Seconds to keep retrying a refused arm (EKF still converging).")
 @click.option("--preflight-timeout", type=click.FloatRange(min=0),
@@ -121,8 +138,8 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @timing_options
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
-                arm_budget, preflight_timeout, flight_timeout, timeout, retries, ready_timeout,
-                discover_timeout, signing_key):
+                no_keeper, arm_budget, preflight_timeout, flight_timeout, timeout, retries,
+                ready_timeout, discover_timeout, signing_key):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
@@ -135,7 +152,9 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     key = load_key(signing_key) if signing_key else None
     monitor = Monitor(planned)
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
-                         flight_timeout_s=flight_timeout, abort_mode=abort_mode)
+                         flight_timeout_s=flight_timeout, abort_mode=abort_mode,
+                         keeper=KeeperOptions(enabled=not no_keeper))
+    keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
                on_position=monitor) as fleet, _forwarding(forward, fleet), \
@@ -145,18 +164,18 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
         try:
             fly(planned, fleet.vehicles, options=options,
                 timing=_timing(timeout, retries, ready_timeout), say=view.message,
-                tick=view.update)
+                tick=view.update, keeper=keeper)
             view.update(force=True)
         except KeyboardInterrupt:
-            summary = write_flight_report(planned, monitor, out_dir, sysids)
+            summary = write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper)
             _print_summary(summary, out_dir)
             sys.exit(130)
         except FlightAborted as exc:
-            summary = write_flight_report(planned, monitor, out_dir, sysids)
+            summary = write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper)
             click.echo(f"flight aborted: every vehicle sent to {exc.mode}")
             _print_summary(summary, out_dir)
             sys.exit(1)
-    summary = write_flight_report(planned, monitor, out_dir, sysids)
+    summary = write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper)
     click.echo("all vehicles finished their missions")
     _print_summary(summary, out_dir)
 

@@ -10,11 +10,12 @@ The steps, each with a timeout and a clear error naming the vehicle:
 3. Wait until every vehicle is within a tolerance of its altitude *and* has stopped
    climbing: a naive start (switch to AUTO as soon as all are near altitude) lets one
    copter still climbing start late and fly the legs behind the others.
-4. Synchronized start: every vehicle's current item is set to the first item after the
-   takeoff (confirmed by MISSION_CURRENT); then every vehicle is switched to AUTO in one
-   burst of messages, and only afterwards are the switches confirmed, so that the
-   formation leaves as one.
-5. Watch until every vehicle has landed (disarmed) or ended its mission.
+4. Synchronized start: every vehicle's current item is set to its first real leg, the
+   waypoint after the start point it already hovers at (:func:`first_leg`); then every
+   vehicle is switched to AUTO in one burst of messages, and only afterwards are the
+   switches confirmed, so that the formation leaves as one.
+5. Watch until every vehicle has landed (disarmed) or ended its mission, the formation
+   keeper (:mod:`.keeper`) trimming the leaders' speeds on the legs.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..errors import FtlboError
 from ..link.codec import mission_differences
@@ -38,7 +40,13 @@ from ..link.endpoints import (
 )
 from ..link.mission_protocol import download_mission
 from ..link.transfer import Timing
-from ..mission.items import CMD_NAV_LOITER_UNLIM, CMD_NAV_TAKEOFF
+from ..mission.items import (
+    CMD_DO_CHANGE_SPEED,
+    CMD_NAV_LOITER_UNLIM,
+    CMD_NAV_TAKEOFF,
+    CMD_NAV_WAYPOINT,
+)
+from .keeper import FormationKeeper, KeeperOptions, planned_speed
 from .planned import PlannedFlight
 from .vehicle import FlightAborted, FlightError, FlightVehicle
 
@@ -63,6 +71,7 @@ class FlyOptions:
     position_hz: float = 10.0
     flight_timeout_s: float = 900.0
     abort_mode: str = "RTL"
+    keeper: KeeperOptions = KeeperOptions()
 
 
 class Fleet:
@@ -200,13 +209,55 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options:
         pending[0].wait_for(hovering(targets[vehicles.index(pending[0])]), 0.2)
 
 
-def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> float:
-    """Set every current item to the one after the takeoff, then AUTO in one burst.
+def first_leg(mission, *, hold_m: float = 0.5) -> tuple[int, list]:
+    """``(seq, speed items)``: where AUTO starts, and the DO_CHANGE_SPEED items it skips.
 
-    Returns the monotonic time of the burst.
+    After the takeoff each vehicle already hovers at its start point, which is also the
+    mission's first waypoint. Starting AUTO there makes ArduCopter fly a zero-length leg
+    first, whose jerk-limited S-curve lasts about a second and differs from copter to
+    copter with its residual altitude error (on SITL the higher copter began the real legs
+    0.4 s late: 0.44 m RMS formation error; starting at the first real leg: 0.09 m). So AUTO
+    starts at the first waypoint that is not the start point; DO_CHANGE_SPEED items in
+    between are sent as commands instead, so the missions' cruise speed still holds.
     """
-    starts = [takeoff_item(m)[0] + 1 for m in planned.missions]
-    _concurrently(lambda p: p[0].set_current(p[1]), list(zip(vehicles, starts)))
+    seq, _alt = takeoff_item(mission)
+    home = mission[0]
+    takeoff = next(it for it in mission if it.seq == seq)
+    speeds = []
+    for it in mission[seq + 1:]:
+        if it.command == CMD_DO_CHANGE_SPEED:
+            speeds.append(it)
+            continue
+        at_start = (it.command == CMD_NAV_WAYPOINT and it.param1 == 0
+                    and _ground_distance(it, home) <= hold_m
+                    and abs(it.alt_m - takeoff.alt_m) <= hold_m)
+        if at_start and it.seq + 1 < len(mission):
+            continue
+        return it.seq, speeds
+    return seq + 1, []
+
+
+def _ground_distance(a, b) -> float:
+    """Metres between two items' positions (small distances, spherical earth)."""
+    lat = np.radians((a.lat_deg + b.lat_deg) / 2)
+    dn = np.radians(a.lat_deg - b.lat_deg) * 6_371_000.0
+    de = np.radians(a.lon_deg - b.lon_deg) * 6_371_000.0 * np.cos(lat)
+    return float(np.hypot(dn, de))
+
+
+def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> float:
+    """Set every current item to the first real leg (:func:`first_leg`), then AUTO in
+    one burst. Returns the monotonic time of the burst."""
+    starts = [first_leg(m) for m in planned.missions]
+
+    def prepare(pair) -> None:
+        v, (seq, speeds) = pair
+        for it in speeds:
+            v.command(R.MAV_CMD_DO_CHANGE_SPEED, it.param1, it.param2, it.param3,
+                      step="cruise speed")
+        v.set_current(seq)
+
+    _concurrently(prepare, list(zip(vehicles, starts)))
     if aborted(vehicles):
         raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     t = time.monotonic()
@@ -259,17 +310,68 @@ def aborted(vehicles: Sequence[FlightVehicle]) -> str | None:
     return next((v.aborted_to for v in vehicles if v.aborted_to), None)
 
 
+def make_keeper(planned: PlannedFlight, options: KeeperOptions) -> FormationKeeper:
+    """A keeper for this plan; its cruise speed is learnt at pre-flight (cruise_speed)."""
+    return FormationKeeper(planned.paths, planned_speed(planned.missions), options)
+
+
+def cruise_speed(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> float | None:
+    """The speed the vehicles fly their legs at when nobody slows them: the missions'
+    DO_CHANGE_SPEED, else every vehicle's WPNAV_SPEED (read from it; None when a vehicle
+    does not answer or they differ: the keeper cannot give a speed back it does not know)."""
+    speed = planned_speed(planned.missions)
+    if speed is not None:
+        return speed
+    values = _concurrently(lambda v: v.read_param("WPNAV_SPEED"), list(vehicles))
+    if any(v is None for v in values) or len({round(v) for v in values}) != 1:
+        return None
+    return values[0] / 100.0  # cm/s
+
+
+def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
+                   keeper: FormationKeeper) -> bool:
+    """One step of the formation keeper; False once the legs are over (speeds released)."""
+    st = [v.status for v in vehicles]
+    last_leg = [m[-1].seq - 1 if m[-1].command != CMD_NAV_LOITER_UNLIM else m[-1].seq
+                for m in planned.missions]
+    if any(s.seq > last for s, last in zip(st, last_leg)) or any(
+            s.mode != "AUTO" for s in st):
+        for i, speed in keeper.release().items():
+            vehicles[i].send_speed(speed)
+        return False
+    if any(s.lat_deg is None for s in st):
+        return True
+    positions = planned.frame.to_enu(lat_deg=[s.lat_deg for s in st],
+                                     lon_deg=[s.lon_deg for s in st],
+                                     alt_m=[s.alt_m for s in st])
+    # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
+    # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
+    now = time.monotonic()
+    age = np.array([[now - s.position_t] for s in st])
+    positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)
+    speeds = np.array([s.ground_speed_m_s for s in st])
+    for i, speed in keeper.update(positions, speeds, now).items():
+        vehicles[i].send_speed(speed)
+    return True
+
+
 def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_s: float,
-          tick: Callable[[], None]) -> bool:
-    """Until every vehicle is done; ``tick`` runs a few times a second. False on timeout."""
+          tick: Callable[[], None], keeper: FormationKeeper | None = None) -> bool:
+    """Until every vehicle is done; ``tick`` runs a few times a second, the formation
+    keeper (if any) every 50 ms while the legs last. False on timeout."""
     deadline = time.monotonic() + timeout_s
+    next_tick = 0.0
     while time.monotonic() < deadline:
         if aborted(vehicles):
             raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         if finished(planned, vehicles):
             return True
-        tick()
-        time.sleep(0.1)
+        if keeper is not None and not keep_formation(planned, vehicles, keeper):
+            keeper = None
+        if time.monotonic() >= next_tick:
+            tick()
+            next_tick = time.monotonic() + 0.1
+        time.sleep(0.05)
     return False
 
 
@@ -286,21 +388,35 @@ def watch_abort(vehicles: Sequence[FlightVehicle], *, timeout_s: float,
 
 
 def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: FlyOptions,
-        timing: Timing, say: Callable[[str], None], tick: Callable[[], None]) -> float:
+        timing: Timing, say: Callable[[str], None], tick: Callable[[], None],
+        keeper: FormationKeeper | None = None) -> float:
     """The whole flight; returns the monotonic time of the synchronized start.
+
+    ``keeper``: the formation keeper to run on the legs (default: one made from
+    ``options.keeper``, none when that is disabled); pass one to read its log afterwards.
 
     On Ctrl-C (KeyboardInterrupt) every vehicle is sent to ``options.abort_mode`` before
     the interrupt propagates.
     """
     say("pre-flight: missions, GPS, pre-arm checks")
     preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s)
+    if keeper is None and options.keeper.enabled:
+        keeper = make_keeper(planned, options.keeper)
+    if keeper is not None and keeper.options.enabled and keeper.planned_speed_m_s is None:
+        keeper.planned_speed_m_s = cruise_speed(planned, vehicles)
+        if keeper.planned_speed_m_s is None:
+            keeper.off_reason = ("the vehicles' cruise speed is unknown (no DO_CHANGE_SPEED "
+                                 "in the missions, WPNAV_SPEED unanswered or not the same "
+                                 "on every vehicle)")
+            say(f"formation keeper off: {keeper.off_reason}")
     if aborted(vehicles):
         raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     try:
         take_off(planned, vehicles, options, say)
         say("all hovering at their altitudes: starting the missions together")
         started = start_together(planned, vehicles)
-        if not watch(planned, vehicles, timeout_s=options.flight_timeout_s, tick=tick):
+        if not watch(planned, vehicles, timeout_s=options.flight_timeout_s, tick=tick,
+                     keeper=keeper if keeper is not None and keeper.active else None):
             late = abort(vehicles, mode=options.abort_mode)
             raise FlightError(vehicles[0].name, vehicles[0].sysid, "flight",
                               f"not finished after {options.flight_timeout_s:g} s; sent every "

@@ -49,12 +49,15 @@ class Status:
     lon_deg: float | None = None
     alt_m: float = 0.0
     climb_m_s: float = 0.0
+    ground_speed_m_s: float = 0.0
+    velocity_enu: tuple[float, float, float] = (0.0, 0.0, 0.0)
     seq: int = -1
     position_t: float = 0.0
     position_boot_s: float = 0.0
     heartbeat_t: float = 0.0
     texts: list[str] = field(default_factory=list)
     acks: dict[int, int] = field(default_factory=dict)
+    params: dict[str, float] = field(default_factory=dict)
 
 
 class FlightVehicle:
@@ -104,6 +107,8 @@ class FlightVehicle:
                 s.lat_deg, s.lon_deg = msg.lat * 1e-7, msg.lon * 1e-7
                 s.alt_m = msg.relative_alt / 1000.0
                 s.climb_m_s = -msg.vz / 100.0
+                s.ground_speed_m_s = (msg.vx ** 2 + msg.vy ** 2) ** 0.5 / 100.0
+                s.velocity_enu = (msg.vy / 100.0, msg.vx / 100.0, -msg.vz / 100.0)
                 s.position_t = now
                 s.position_boot_s = msg.time_boot_ms / 1000.0
                 position = True
@@ -116,6 +121,8 @@ class FlightVehicle:
                     # ArduPilot switches before it acknowledges (GCS_Common.cpp
                     # handle_command_do_set_mode): no need to wait for the next HEARTBEAT
                     s.mode = self._requested_mode
+            elif kind == "PARAM_VALUE":
+                s.params[msg.param_id] = msg.param_value
             elif kind == "STATUSTEXT":
                 s.texts.append(msg.text)
                 del s.texts[:-20]
@@ -210,6 +217,24 @@ class FlightVehicle:
         result = self.command(R.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, alt_m, step="takeoff")
         if result != R.MAV_RESULT_ACCEPTED:
             raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
+
+    def read_param(self, name: str, *, timeout_s: float = 1.0, retries: int = 2) -> float | None:
+        """A parameter's value (PARAM_REQUEST_READ -> PARAM_VALUE), None if unanswered."""
+        with self._changed:
+            self.status.params.pop(name, None)
+        for _ in range(retries + 1):
+            self.send(R.MAVLink_param_request_read_message(self.sysid, 1, name.encode(), -1))
+            if self.wait_for(lambda s: name in s.params, timeout_s):
+                return self.status.params[name]
+        return None
+
+    def send_speed(self, speed_m_s: float) -> None:
+        """MAV_CMD_DO_CHANGE_SPEED (ground speed) without waiting; its COMMAND_ACK lands in
+        ``status.acks``. The formation keeper's nudge, repeated while it matters."""
+        if self.aborted_to is not None:
+            raise FlightAborted(self.name, self.sysid, self.aborted_to)
+        self.send(R.MAVLink_command_long_message(
+            self.sysid, 1, R.MAV_CMD_DO_CHANGE_SPEED, 0, 1, speed_m_s, -1, 0, 0, 0, 0))
 
     def set_current(self, seq: int, *, timeout_s: float = 5.0) -> None:
         """Make ``seq`` the current mission item.
