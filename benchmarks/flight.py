@@ -1,13 +1,15 @@
-"""Formation error of a naive start versus ftlbo-mav's synchronized start.
+"""Formation error of a naive start versus ftlbo-mav's ``fly``, without and with its keeper.
 
 Flies the shipped example on three emulated copters (or ArduPilot SITL copters when
-ARDUPILOT_SITL is set) twice:
+ARDUPILOT_SITL is set) three ways, each on freshly started vehicles:
 
-- naive: as soon as all are within 1 m of their takeoff altitude, set each vehicle's
-  current item and switch it to AUTO, one vehicle after the other, without waiting for
-  confirmations (the fastest a hand-written script goes);
-- ftlbo-mav: wait until every vehicle hovers (within 0.3 m, climb < 0.15 m/s), set every
-  current item, then switch all to AUTO in one burst (``flight.fly.start_together``).
+- naive: GUIDED takeoff one vehicle after the other; as soon as all are within 1 m of
+  their takeoff altitude, set each vehicle's current item and switch it to AUTO, one
+  after the other, without waiting for confirmations (the fastest a hand-written script
+  goes);
+- fly, no keeper: ``flight.fly.fly`` as ``ftlbo-mav fly --no-keeper`` runs it (settled
+  takeoff, AUTO from the first real leg for all in one burst);
+- fly: the same with the formation keeper (``ftlbo-mav fly``).
 
 Prints formation error (RMS and worst, waypoint legs) and smallest separation per
 strategy and writes ``flight-benchmark.json``. Stops (exit 1) if any upload fails to
@@ -33,15 +35,18 @@ from ftlbo_mav.flight.fly import (
     Fleet,
     FlyOptions,
     finished,
-    start_together,
-    take_off,
+    fly,
+    make_keeper,
     takeoff_item,
 )
+from ftlbo_mav.flight.keeper import KeeperOptions
 from ftlbo_mav.flight.monitor import Monitor
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.report import summarize
 from ftlbo_mav.link.swarm import Assignment, upload_swarm
 from ftlbo_mav.link.transfer import Timing
+from ftlbo_mav.mission.export import write_plan
+from ftlbo_mav.planning.planner import plan
 from ftlbo_mav.scenario import load_scenario
 from ftlbo_mav.sim.homes import scenario_homes
 
@@ -64,6 +69,7 @@ def naive_start(planned, vehicles) -> None:
 def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
+    keeper = None
     with Fleet(planned.names, [1, 2, 3], urls, on_position=monitor) as fleet:
         monitor.vehicles = fleet.vehicles  # Fleet asks each vehicle for 10 Hz positions
         if strategy == "naive":
@@ -72,14 +78,21 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
                 v.arm(budget_s=60)
                 v.takeoff(takeoff_item(m)[1])
             naive_start(planned, fleet.vehicles)
+            deadline = time.monotonic() + 300
+            while not finished(planned, fleet.vehicles) and time.monotonic() < deadline:
+                time.sleep(0.1)
         else:
-            take_off(planned, fleet.vehicles, FlyOptions(), say=lambda _t: None)
-            start_together(planned, fleet.vehicles)
-        deadline = time.monotonic() + 300
-        while not finished(planned, fleet.vehicles) and time.monotonic() < deadline:
-            time.sleep(0.1)
+            options = FlyOptions(keeper=KeeperOptions(enabled=strategy == "fly"))
+            keeper = make_keeper(planned, options.keeper)
+            fly(planned, fleet.vehicles, options=options, timing=Timing(),
+                say=lambda _t: None, tick=lambda: None, keeper=keeper)
     times, positions, seqs = monitor.record.grid([1, 2, 3], planned.frame)
-    return summarize(planned, times, positions, seqs)
+    summary = summarize(planned, times, positions, seqs)
+    if keeper is not None:
+        summary["keeper"] = {"active": keeper.off_reason is None,
+                             "off_reason": keeper.off_reason,
+                             "vehicles": keeper.log.as_dict(planned.names)}
+    return summary
 
 
 def main() -> int:
@@ -88,13 +101,21 @@ def main() -> int:
     parser.add_argument("--speedup", type=float, default=2.0,
                         help="emulator time scale / SITL --speedup")
     parser.add_argument("--out", default="flight-benchmark.json")
+    parser.add_argument("--scenario", type=Path, default=EXAMPLE,
+                        help="scenario to fly (default the shipped example); planned with "
+                             "the default planner unless a folder of its name holds missions")
     args = parser.parse_args()
-    homes = scenario_homes(load_scenario(EXAMPLE))
+    scenario = load_scenario(args.scenario)
+    homes = scenario_homes(scenario)
     binary = os.environ.get("ARDUPILOT_SITL")
-    rows = {"naive": [], "synchronized": []}
+    rows = {"naive": [], "fly, no keeper": [], "fly": []}
     with tempfile.TemporaryDirectory() as tmp:
         plan_dir = Path(tmp) / "plan"
-        shutil.copytree(EXAMPLE.with_suffix(""), plan_dir)
+        shipped = args.scenario.with_suffix("")
+        if (shipped / "plan.json").exists():
+            shutil.copytree(shipped, plan_dir)
+        else:
+            write_plan(plan(scenario), plan_dir)
         planned = load_planned_flight(plan_dir)
         for run in range(args.runs):
             for strategy in rows:
@@ -119,21 +140,28 @@ def main() -> int:
                         return 1
                     summary = fly_once(plan_dir, vehicles.urls, strategy)
                 rows[strategy].append(summary)
-                print(f"run {run} {strategy:>12}: formation error "
+                print(f"run {run} {strategy:>14}: formation error "
                       f"{summary['formation_error_rms_legs_m']:.3f} m RMS, "
-                      f"{summary['formation_error_max_legs_m']:.3f} m worst", flush=True)
-    print(f"\nback end: {'ArduPilot SITL' if binary else 'emulator'}, speedup {args.speedup:g}, "
-          f"{args.runs} runs each")
-    print("| start | formation error RMS (median) | worst (max) | smallest separation on legs |")
-    print("|---|---|---|---|")
+                      f"{summary['formation_error_max_legs_m']:.3f} m worst, clearance "
+                      f"{summary['min_clearance_m']:.2f} m, landing error "
+                      f"{max(summary['final_distance_to_goal_m']):.2f} m", flush=True)
+    print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "
+          f"speedup {args.speedup:g}, {args.runs} runs each")
+    print("| flight | formation error RMS (median) | worst (max) | smallest separation on "
+          "legs | smallest clearance | landing error (max) |")
+    print("|---|---|---|---|---|---|")
     result = {}
     for strategy, summaries in rows.items():
         rms = sorted(s["formation_error_rms_legs_m"] for s in summaries)
         worst = max(s["formation_error_max_legs_m"] for s in summaries)
         sep = min(s["min_separation_legs_m"] for s in summaries)
+        clear = min(s["min_clearance_m"] for s in summaries)
+        land = max(max(s["final_distance_to_goal_m"]) for s in summaries)
         result[strategy] = {"rms_median_m": rms[len(rms) // 2], "worst_m": worst,
-                            "min_separation_legs_m": sep, "runs": summaries}
-        print(f"| {strategy} | {rms[len(rms) // 2]:.3f} m | {worst:.3f} m | {sep:.2f} m |")
+                            "min_separation_legs_m": sep, "min_clearance_m": clear,
+                            "landing_error_m": land, "runs": summaries}
+        print(f"| {strategy} | {rms[len(rms) // 2]:.3f} m | {worst:.3f} m | {sep:.2f} m | "
+              f"{clear:.2f} m | {land:.2f} m |")
     Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
     print(f"wrote {args.out}")
     return 0
