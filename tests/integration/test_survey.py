@@ -1,0 +1,63 @@
+"""The shipped survey (missions/orchard-survey.toml), end to end: plan it, upload the
+missions, fly them on the emulator (or ArduPilot SITL when ARDUPILOT_SITL is set) and
+check on what the vehicles reported that every UAV flew every lane and came back."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from ftlbo_mav.cli import main
+from ftlbo_mav.flight.record import FlightRecord
+from ftlbo_mav.scenario import load_scenario
+from ftlbo_mav.sim.homes import scenario_homes
+from ftlbo_mav.sim.vehicle import VehicleOptions
+
+from ..conftest import ROOT
+from .fleet import BACKEND, vehicles
+
+pytestmark = [pytest.mark.sitl, pytest.mark.slow]
+
+SURVEY = ROOT / "missions" / "orchard-survey.toml"
+SPEEDUP = 4.0
+PASS_M = 3.0
+"""How near each UAV must come to each of its lane ends: ArduCopter's waypoint radius
+(WPNAV_RADIUS, 2 m) plus a margin for corner cutting at the turns."""
+
+
+def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
+    scenario = load_scenario(SURVEY)
+    out = tmp_path / "survey"
+    planned = CliRunner().invoke(main, ["plan", str(SURVEY), "-o", str(out), "-q"])
+    assert planned.exit_code == 0, planned.output
+    options = {} if BACKEND == "sitl" else {"options": VehicleOptions(heartbeat_s=0.25)}
+    with vehicles(3, homes=scenario_homes(scenario), speedup=SPEEDUP, **options) as fleet:
+        urls = " ".join(fleet.urls)
+        uploaded = CliRunner().invoke(main, ["upload", str(out), "--sysid", "1..3",
+                                             "--connect", urls])
+        assert uploaded.exit_code == 0, uploaded.output
+        flown = CliRunner().invoke(main, ["fly", str(out), "--sysid", "1..3",
+                                          "--control-port", "0", "--connect", urls])
+        assert flown.exit_code == 0, flown.output
+    assert "all vehicles finished their missions" in flown.stdout
+    summary = json.loads((out / "flight" / "summary.json").read_text())
+    assert summary["inside_obstacle"] is False and summary["min_clearance_m"] > 0
+    assert max(summary["final_distance_to_goal_m"]) < 1.0  # back where they took off
+    # every UAV passed each of its lane ends (via point + its offset), in order
+    record = FlightRecord.from_csv((out / "flight" / "flight.csv").read_text())
+    via = scenario.route_enu()[1:-1]
+    for n in range(3):
+        samples = record.of(n + 1)
+        track = scenario.frame.to_enu(lat_deg=[s.lat_deg for s in samples],
+                                      lon_deg=[s.lon_deg for s in samples])[:, :2]
+        targets = via[:, :2] + scenario.offsets_m[n, :2]
+        distance = np.hypot(*(track[None, :, :] - targets[:, None, :]).transpose(2, 0, 1))
+        assert distance.min(axis=1).max() < PASS_M, distance.min(axis=1)
+        after = 0  # lane after lane, in the planned order: each end reached after the last
+        for k, row in enumerate(distance):
+            near = np.flatnonzero(row[after:] < PASS_M)
+            assert len(near), f"uav{n + 1} did not reach {scenario.via[k].name} in order"
+            after += int(near[0])
