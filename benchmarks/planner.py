@@ -13,7 +13,13 @@ the figures, and every median is over several seeds or repeats.
    (6, 25, 100), UAVs (3, 10, 30) and waypoints (10, 20, 40), one factor at a time,
    normalised per UAV x obstacle x segment; the default planner's wall time on the same
    fields; peak memory of one class evaluation on the largest field.
-3. When the optional ``mealpy`` package is importable: its TLBO (``OriginalTLO``) on our
+3. Maps: the default planner on a set of different maps (the shipped example, the
+   orchard survey, random fields of 6, 25 and 100 trees, random orchards), with the
+   scenario's fixed waypoints (10) and with ``waypoints = "auto"`` side by side: centroid
+   length over the lower bound, wall seconds, waypoints, over seeds 0..2 (the same plan
+   for every seed says the planner is deterministic there); and ``auto`` on the dense
+   100-tree field timed alone (median of 5).
+4. When the optional ``mealpy`` package is importable: its TLBO (``OriginalTLO``) on our
    cost, one path per call as mealpy evaluates, at the same evaluation budget, next to
    ours (cost and time). mealpy pins numpy <= 1.26, so run it from its own virtual
    environment (docs/planning.md).
@@ -50,6 +56,7 @@ from ftlbo_mav.planning.problem import PlanningProblem, problem_from_scenario
 from ftlbo_mav.scenario import load_scenario
 
 EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
+SURVEY = ROOT / "missions" / "orchard-survey.toml"
 PAPER = dict(students=100, waypoints=10, iterations=150)
 
 
@@ -193,7 +200,91 @@ def bench_memory() -> dict:
                 peak_mib=peak / 2**20, one_unchunked_array_mib=unchunked / 2**20)
 
 
-# ----------------------------------------------------------------------- 3. mealpy
+# ----------------------------------------------------------------------- 3. maps
+
+
+def orchard(seed: int, offsets: np.ndarray) -> PlanningProblem:
+    """A random orchard on the example's area: 5-11 trees of radius 2-4.5 m (+1 m
+    clearance) between start and goal (as in tests/planning/test_seeded.py)."""
+    rng = np.random.default_rng(seed)
+    start, goal = np.array([8.0, 12.0, 4.0]), np.array([80.0, 40.0, 4.0])
+    centres, radii, count = [], [], rng.integers(5, 12)
+    while len(centres) < count:
+        c, r = rng.uniform([15, 5], [75, 45]), rng.uniform(2.0, 4.5)
+        if min(np.linalg.norm(c - start[:2]), np.linalg.norm(c - goal[:2])) > r + 7.0:
+            centres.append(c)
+            radii.append(r)
+    return PlanningProblem(
+        start=start, goal=goal, offsets=offsets, centres=np.array(centres),
+        radii=np.array(radii) + 1.0, h_min=2.0, h_max=7.0, area_lower=np.array([0.0, 0.0]),
+        area_upper=np.array([86.0, 49.5]), waypoints=10, weights=np.ones(3))
+
+
+def maps() -> list[tuple[str, object]]:
+    """(label, scenario path or PlanningProblem) of every map in the table."""
+    triangle = np.array([[0, 0, 2], [3, 0, -1], [-3, 0, -1]], float)
+    return [
+        ("nha-trang-orchard.toml (7 trees, 1 leg)", EXAMPLE),
+        ("orchard-survey.toml (33 obstacles, 9 legs)", SURVEY),
+        ("field: 6 trees, 3 UAVs", field(obstacles=6, uavs=3, waypoints=10)),
+        ("field: 25 trees, 3 UAVs", field(obstacles=25, uavs=3, waypoints=10)),
+        ("field: 100 trees, 3 UAVs (dense)", field(obstacles=100, uavs=3, waypoints=10)),
+        ("field: 6 trees, 10 UAVs", field(obstacles=6, uavs=10, waypoints=10)),
+        ("orchard 50: triangle", orchard(50, triangle)),
+        ("orchard 51: 4-ring r 3 m", orchard(51, regular_formation(count=4, radius_m=3.0,
+                                                                   plane="horizontal"))),
+        ("orchard 52: 6-ring r 4 m", orchard(52, regular_formation(count=6, radius_m=4.0,
+                                                                   plane="horizontal"))),
+    ]
+
+
+def run_map(target, *, waypoints, seed: int):
+    """One default plan of a map: (wall seconds, Plan)."""
+    from ftlbo_mav.planning.planner import solve
+    from ftlbo_mav.scenario import PlannerSettings
+
+    t0 = time.perf_counter()
+    if isinstance(target, Path):
+        p = plan(load_scenario(target), waypoints=waypoints, seed=seed)
+    else:
+        p = solve(target, load_scenario(EXAMPLE),
+                  PlannerSettings(waypoints=waypoints, seed=seed))
+    return time.perf_counter() - t0, p
+
+
+def bench_maps(seeds: int) -> list[dict]:
+    rows = []
+    for label, target in maps():
+        row = {"map": label}
+        for mode in (10, "auto"):
+            walls, ratios, counts, feasible = [], [], [], 0
+            for seed in range(seeds):
+                wall, p = run_map(target, waypoints=mode, seed=seed)
+                walls.append(wall)
+                feasible += p.feasible
+                ratios.append(p.length_ratio if p.length_ratio is not None else math.nan)
+                counts.append(p.waypoint_count)
+            row[str(mode)] = dict(wall_median_s=statistics.median(walls),
+                                  ratio_min=min(ratios), ratio_max=max(ratios),
+                                  points=counts[0], feasible=feasible, seeds=seeds,
+                                  same_for_every_seed=len(set(ratios)) == 1)
+        rows.append(row)
+    return rows
+
+
+def bench_dense_auto(repeats: int = 5) -> dict:
+    """``waypoints = "auto"`` on the 100-tree field, timed alone (issue 13's target)."""
+    problem = field(obstacles=100, uavs=3, waypoints=10)
+    walls, p = [], None
+    for seed in range(repeats):
+        wall, p = run_map(problem, waypoints="auto", seed=seed)
+        walls.append(wall)
+    return dict(wall_median_s=statistics.median(walls), wall_max_s=max(walls),
+                ratio=p.length_ratio, waypoints=p.legs[0].waypoints, feasible=p.feasible,
+                repeats=repeats)
+
+
+# ----------------------------------------------------------------------- 4. mealpy
 
 
 def bench_mealpy(seeds: int) -> list[dict] | None:
@@ -235,7 +326,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer seeds and repeats")
     parser.add_argument("--json", default="planner-benchmark.json", help="output JSON path")
-    parser.add_argument("--only", choices=("algorithms", "scaling", "mealpy"),
+    parser.add_argument("--only", choices=("algorithms", "scaling", "maps", "mealpy"),
                         help="run one part only")
     args = parser.parse_args()
     seeds, repeats = (3, 2) if args.quick else (7, 5)
@@ -250,6 +341,8 @@ def main() -> None:
         report_algorithms(doc, seeds)
     if part("scaling"):
         report_scaling(doc, seeds, repeats)
+    if part("maps"):
+        report_maps(doc, 3)
     if part("mealpy"):
         report_mealpy(doc, seeds)
     doc["load_after"] = load()
@@ -291,12 +384,39 @@ def report_scaling(doc: dict, seeds: int, repeats: int) -> None:
 
 
 
+def report_maps(doc: dict, seeds: int) -> None:
+    doc["maps"] = rows = bench_maps(seeds)
+    print(f"\n3. the default planner (ftlbo-seeded) on different maps, seeds 0..{seeds - 1}: "
+          "10 waypoints per leg vs auto")
+
+    def spread(r: dict) -> str:
+        return "0" if r["same_for_every_seed"] else f"{r['ratio_max'] - r['ratio_min']:.0e}"
+
+    print(table(
+        ["map", "10: length/bound", "spread", "s", "points", "auto: length/bound", "spread",
+         "s", "points", "feasible"],
+        [[r["map"], f"{r['10']['ratio_max']:.4f}", spread(r["10"]),
+          f"{r['10']['wall_median_s']:.2f}", r["10"]["points"],
+          f"{r['auto']['ratio_max']:.4f}", spread(r["auto"]),
+          f"{r['auto']['wall_median_s']:.2f}", r["auto"]["points"],
+          f"{r['10']['feasible']}/{seeds}, {r['auto']['feasible']}/{seeds}"] for r in rows]))
+    print("   length/bound: the worst seed's; spread: worst minus best over the seeds (0: the "
+          "same plan for every seed);\n   s: median wall seconds of the whole plan(); points: "
+          "points between start and goal (every leg's waypoints and the via points)")
+    doc["dense_auto"] = dense = bench_dense_auto()
+    print(f"\nwaypoints = auto on the dense 100-tree field: {dense['waypoints']} waypoints, "
+          f"length x{dense['ratio']:.4f} of the bound, "
+          f"{'feasible' if dense['feasible'] else 'INFEASIBLE'}; whole plan "
+          f"{dense['wall_median_s']:.2f} s median, {dense['wall_max_s']:.2f} s max over "
+          f"{dense['repeats']} seeds (target: within 1% in under 2 s)")
+
+
 def report_mealpy(doc: dict, seeds: int) -> None:
     doc["mealpy"] = rows = bench_mealpy(max(seeds // 2, 1))
     if rows is None:
-        print("\n3. mealpy not installed: `pip install mealpy` to compare its TLBO")
+        print("\n4. mealpy not installed: `pip install mealpy` to compare its TLBO")
     else:
-        print(f"\n3. mealpy's OriginalTLO (TLBO) vs our tlbo on the example, budget "
+        print(f"\n4. mealpy's OriginalTLO (TLBO) vs our tlbo on the example, budget "
               f"{evaluation_budget(100, 150)} evaluations (mealpy finishes its epoch)")
         print(table(["seed", "mealpy cost", "mealpy s", "mealpy evals", "ours cost", "ours s",
                      "ours evals"],
