@@ -29,18 +29,26 @@ ARDUCOPTER_WPNAV_SPEED_M_S = 10.0
 
 @dataclass(frozen=True)
 class KeeperOptions:
-    """``gain_per_s``: m/s of speed taken off per metre of lead beyond ``deadband_m``;
-    ``min_fraction``: the slowest a leader is asked to fly, as a fraction of its speed
-    now; ``period_s``: how often speeds are reconsidered; ``min_step_m_s``: a new command
-    only when it differs this much from the last one."""
+    """When a vehicle leads the group by more than ``engage_m`` it is slowed so that it
+    gives the lead back over ``horizon_s`` seconds, never below ``min_fraction`` of the
+    group's speed (nor 0.5 m/s); below ``release_m`` it gets its planned speed back.
+    Speeds are reconsidered every ``period_s`` and a new command goes out only when it
+    differs by ``min_step_m_s``, or every ``refresh_s`` while a vehicle is slowed (a lost
+    command is not final).
+
+    The gentleness is measured, not a taste: ArduCopter answers a new speed through its
+    jerk-limited S-curve (WPNAV_JERK 1 m/s^3: about 1.5 s to lose 0.6 m/s), and on SITL
+    a keeper that acted on 5 cm of lead within a quarter of a second overshot into 1.1 m
+    RMS formation error where no keeper gave 0.06 m."""
 
     enabled: bool = True
-    gain_per_s: float = 1.0
-    deadband_m: float = 0.05
-    min_fraction: float = 0.5
-    period_s: float = 0.25
-    min_step_m_s: float = 0.1
-    refresh_s: float = 2.0  # a slowed vehicle's command is repeated (a lost one is not final)
+    engage_m: float = 0.25
+    release_m: float = 0.08
+    horizon_s: float = 3.0
+    min_fraction: float = 0.7
+    period_s: float = 0.5
+    min_step_m_s: float = 0.15
+    refresh_s: float = 2.0
 
 
 @dataclass
@@ -134,30 +142,28 @@ class FormationKeeper:
         self._last_t = now
         s = self.progress(positions)
         lead = s - s.mean()
-        reference = float(np.mean(speeds_m_s))
+        reference = max(float(np.mean(speeds_m_s)), 0.0)
         out = {}
         for i, e in enumerate(lead):
             log.max_lead_m[i] = max(log.max_lead_m[i], float(abs(e)))
-            if e > o.deadband_m:
-                floor = o.min_fraction * max(reference, 0.0)
-                want = max(floor, reference - o.gain_per_s * (e - o.deadband_m), 0.5)
-                want = min(want, self.planned_speed_m_s)
-                log.slowed_s[i] += dt
-            else:
-                want = self.planned_speed_m_s
             last = self._sent[i]
-            released = want == self.planned_speed_m_s
-            if last is None and released:
-                continue  # never slowed: nothing to undo
-            stale = not released and now - self._sent_t[i] >= o.refresh_s
-            if last is None or abs(want - last) >= o.min_step_m_s or stale or (
-                    released and last != want):
-                out[i] = round(float(want), 2) if (last is None or not stale
-                                            or abs(want - last) >= o.min_step_m_s) else last
+            slowed = last is not None and last != self.planned_speed_m_s
+            if (slowed and e < o.release_m) or (not slowed and e <= o.engage_m):
+                if slowed:
+                    out[i] = self.planned_speed_m_s  # the lead is given back
+                    self._sent[i], self._sent_t[i] = out[i], now
+                    log.commands[i] += 1
+                continue
+            log.slowed_s[i] += dt if slowed else 0.0
+            give_back = max(e - o.release_m, 0.0) / o.horizon_s
+            want = max(reference - give_back, o.min_fraction * reference, 0.5)
+            want = round(min(want, self.planned_speed_m_s), 2)
+            if not slowed or abs(want - last) >= o.min_step_m_s or \
+                    now - self._sent_t[i] >= o.refresh_s:
+                out[i] = want if not slowed or abs(want - last) >= o.min_step_m_s else last
                 self._sent[i], self._sent_t[i] = out[i], now
                 log.commands[i] += 1
-                if not released:
-                    log.slowest_m_s[i] = min(log.slowest_m_s[i] or want, out[i])
+                log.slowest_m_s[i] = min(log.slowest_m_s[i] or out[i], out[i])
         return out
 
     def release(self) -> dict[int, float]:

@@ -98,3 +98,12 @@ def test_auto_starts_at_the_first_real_leg_and_keeps_the_cruise_speed():
     # a first waypoint elsewhere than the start point is a leg of its own: not skipped
     away = build_mission(home=(12.2332099, 109.1145051), takeoff_alt_m=4.0, path=path[1:])
     assert first_leg(away) == (2, [])
+
+
+def test_hysteresis_small_leads_are_left_alone_and_a_slowed_leader_waits_for_the_group():
+    keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0)
+    speeds = np.full(3, 2.8)
+    assert keeper.update(positions_at([5.3, 5.0, 5.0]), speeds, 0.0) == {}  # 0.2 m: no
+    assert list(keeper.update(positions_at([5.45, 5.0, 5.0]), speeds, 1.0)) == [0]  # 0.3 m
+    assert keeper.update(positions_at([5.2, 5.0, 5.0]), speeds, 2.0) == {}  # 0.13 m: waits
+    assert keeper.update(positions_at([5.05, 5.0, 5.0]), speeds, 3.0) == {0: 10.0}
