@@ -66,6 +66,26 @@ def naive_start(planned, vehicles) -> None:
         v.set_mode("AUTO")
 
 
+def set_params(urls, settings) -> None:
+    """``["2:WPNAV_JERK=0.8", ...]``: PARAM_SET on that vehicle, confirmed by PARAM_VALUE."""
+    from pymavlink.dialects.v20 import ardupilotmega as R
+
+    for text in settings:
+        sysid, _, assignment = text.partition(":")
+        name, _, value = assignment.partition("=")
+        sysid, value = int(sysid), float(value)
+        with Fleet([f"uav{sysid}"], [sysid], [urls[sysid - 1]], position_hz=1.0) as fleet:
+            v = fleet.vehicles[0]
+            for _ in range(5):
+                v.send(R.MAVLink_param_set_message(sysid, 1, name.encode(), value,
+                                                   R.MAV_PARAM_TYPE_REAL32))
+                got = v.read_param(name)
+                if got is not None and abs(got - value) < 1e-6:
+                    break
+            else:
+                raise SystemExit(f"could not set {name} = {value:g} on sysid {sysid}")
+
+
 def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
@@ -101,6 +121,11 @@ def main() -> int:
     parser.add_argument("--speedup", type=float, default=2.0,
                         help="emulator time scale / SITL --speedup")
     parser.add_argument("--out", default="flight-benchmark.json")
+    parser.add_argument("--set", dest="params", action="append", default=[],
+                        metavar="SYSID:NAME=VALUE",
+                        help="set a parameter on one vehicle before each flight (PARAM_SET, "
+                             "read back), e.g. 2:WPNAV_JERK=0.8 for a copter that is slower "
+                             "than the others; repeatable")
     parser.add_argument("--scenario", type=Path, default=EXAMPLE,
                         help="scenario to fly (default the shipped example); planned with "
                              "the default planner unless a folder of its name holds missions")
@@ -138,6 +163,7 @@ def main() -> int:
                             print(f"upload failed: {r.name} -> sysid {r.sysid}: {r.message}",
                                   file=sys.stderr)
                         return 1
+                    set_params(vehicles.urls, args.params)
                     summary = fly_once(plan_dir, vehicles.urls, strategy)
                 rows[strategy].append(summary)
                 print(f"run {run} {strategy:>14}: formation error "
@@ -146,7 +172,8 @@ def main() -> int:
                       f"{summary['min_clearance_m']:.2f} m, landing error "
                       f"{max(summary['final_distance_to_goal_m']):.2f} m", flush=True)
     print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "
-          f"speedup {args.speedup:g}, {args.runs} runs each")
+          f"speedup {args.speedup:g}, {args.runs} runs each"
+          + (f"; parameters set: {', '.join(args.params)}" if args.params else ""))
     print("| flight | formation error RMS (median) | worst (max) | smallest separation on "
           "legs | smallest clearance | landing error (max) |")
     print("|---|---|---|---|---|---|")
