@@ -144,3 +144,38 @@ class StreamRequests:
         """Names of the wanted messages not arriving, with how often each was asked."""
         return [f"{message_name(m)} (asked {w.asked}x)" for m, w in self.wants.items()
                 if not self.flowing(m, now)]
+
+
+# REQUEST_DATA_STREAM groups (ArduCopter/GCS_Mavlink.cpp ``STREAM_*_msgs`` and
+# ``all_stream_entries``), as the MAVLink messages they send; MAV_DATA_STREAM_ALL sets
+# every group (GCS_MAVLINK::handle_request_data_stream).
+STREAM_MESSAGES: Mapping[int, tuple[int, ...]] = {
+    R.MAV_DATA_STREAM_RAW_SENSORS: (
+        R.MAVLINK_MSG_ID_RAW_IMU, R.MAVLINK_MSG_ID_SCALED_IMU2, R.MAVLINK_MSG_ID_SCALED_IMU3,
+        R.MAVLINK_MSG_ID_SCALED_PRESSURE, R.MAVLINK_MSG_ID_SCALED_PRESSURE2,
+        R.MAVLINK_MSG_ID_SCALED_PRESSURE3),
+    R.MAV_DATA_STREAM_EXTENDED_STATUS: (
+        R.MAVLINK_MSG_ID_SYS_STATUS, R.MAVLINK_MSG_ID_POWER_STATUS, R.MAVLINK_MSG_ID_MEMINFO,
+        R.MAVLINK_MSG_ID_MISSION_CURRENT, R.MAVLINK_MSG_ID_GPS_RAW_INT,
+        R.MAVLINK_MSG_ID_GPS_RTK, R.MAVLINK_MSG_ID_GPS2_RAW, R.MAVLINK_MSG_ID_GPS2_RTK,
+        R.MAVLINK_MSG_ID_NAV_CONTROLLER_OUTPUT, R.MAVLINK_MSG_ID_FENCE_STATUS,
+        R.MAVLINK_MSG_ID_POSITION_TARGET_GLOBAL_INT),
+    R.MAV_DATA_STREAM_POSITION: (
+        R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, R.MAVLINK_MSG_ID_LOCAL_POSITION_NED),
+    R.MAV_DATA_STREAM_RC_CHANNELS: (
+        R.MAVLINK_MSG_ID_SERVO_OUTPUT_RAW, R.MAVLINK_MSG_ID_RC_CHANNELS),
+    R.MAV_DATA_STREAM_EXTRA1: (
+        R.MAVLINK_MSG_ID_ATTITUDE, R.MAVLINK_MSG_ID_SIMSTATE, R.MAVLINK_MSG_ID_AHRS2),
+    R.MAV_DATA_STREAM_EXTRA2: (R.MAVLINK_MSG_ID_VFR_HUD,),
+    R.MAV_DATA_STREAM_EXTRA3: (
+        R.MAVLINK_MSG_ID_AHRS, R.MAVLINK_MSG_ID_SYSTEM_TIME, R.MAVLINK_MSG_ID_WIND,
+        R.MAVLINK_MSG_ID_BATTERY_STATUS, R.MAVLINK_MSG_ID_EKF_STATUS_REPORT,
+        R.MAVLINK_MSG_ID_VIBRATION, R.MAVLINK_MSG_ID_ESC_TELEMETRY_1_TO_4),
+}
+
+
+def data_stream_messages(stream_id: int) -> tuple[int, ...]:
+    """The messages REQUEST_DATA_STREAM ``stream_id`` sets the rate of."""
+    if stream_id == R.MAV_DATA_STREAM_ALL:
+        return tuple(m for group in STREAM_MESSAGES.values() for m in group)
+    return STREAM_MESSAGES.get(stream_id, ())

@@ -31,6 +31,23 @@ from dataclasses import dataclass, field
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ..ardupilot.commands import (
+    ARMABLE_MODES,
+    ARMING_MOTORS,
+    DISARM_DELAY_S,
+    DISARMING_MOTORS,
+    FORCE_DISARM_MAGIC,
+    INSTANT_BOOT,
+    LAND_COMPLETE,
+    MISSING_TAKEOFF,
+    NEEDS_POSITION,
+    READY,
+    BootTimeline,
+    arm_refusals,
+    mode_change_failed,
+    mode_not_armable,
+    set_mode_base_ok,
+)
 from ..ardupilot.modes import CopterMode, mode_name
 from ..mission.items import (
     CMD_DO_CHANGE_SPEED,
@@ -51,19 +68,25 @@ FLOWN_MODES = frozenset({STABILIZE, CopterMode.ALT_HOLD, AUTO, GUIDED, LOITER, R
                          CopterMode.POSHOLD, BRAKE})
 
 RTL_ALT_M = 15.0
-DISARM_DELAY_S = 10.0
 STEP_S = 0.02
 _WGS84_A = 6378137.0
 _WGS84_E2 = 6.69437999014e-3
+_NAV_LAST = 95  # MAV_CMD_NAV_LAST: commands below are navigation commands (AP_Mission)
+_MISSION_TEXT = {CMD_NAV_TAKEOFF: "Takeoff", CMD_NAV_WAYPOINT: "WP", CMD_NAV_LAND: "Land",
+                 CMD_NAV_RETURN_TO_LAUNCH: "RTL", CMD_NAV_LOITER_UNLIM: "LoitUnlim"}
+
+
+def _text(severity_text: tuple[int, str]):
+    severity, text = severity_text
+    return R.MAVLink_statustext_message(severity, text.encode())
 
 
 @dataclass(frozen=True)
 class AutopilotOptions:
-    """``prearm_after_s``: pre-arm checks pass this long after boot;
-    ``position_after_s``: the EKF's position estimate is ready (arming allowed)."""
+    """``boot``: when the vehicle is ready, has home, passes pre-arm and may arm.
+    ``limits``: its navigation parameters."""
 
-    prearm_after_s: float = 0.0
-    position_after_s: float = 0.0
+    boot: BootTimeline = INSTANT_BOOT
     limits: FlightLimits = field(default_factory=FlightLimits)
 
 
@@ -97,6 +120,7 @@ class Autopilot:
                  options: AutopilotOptions = AutopilotOptions()) -> None:
         self.tangent = LocalTangent(*home)
         self.options = options
+        self.boot = options.boot
         self.boot_time = boot_time
         self.time = boot_time
         self.position = np.zeros(3)
@@ -105,22 +129,29 @@ class Autopilot:
         self.armed = False
         self.mission: list[MissionItem] = []
         self.current = 0
+        self.mission_started = False
         self.speed_m_s: float | None = None
         self._target: np.ndarray | None = None  # GUIDED / LOITER / mission hold point
         self._phase = ""  # within a mode: "climb", "return", "descend", "hold"
         self._armed_on_ground_since: float | None = None
-        self._announced_current = -1
+        self._announced_ready = False
+        self._pending: list = []  # announcements made outside advance()
+        self._takeoff_at: float | None = None  # spool-up: the climb starts then
+        self.nav = None  # the S-curve navigator of the current mission leg (physics)
 
     # -- what the vehicle knows about itself
     @property
     def landed(self) -> bool:
         return self.position[2] <= 0.05 and abs(self.velocity[2]) < 0.1
 
+    def since_boot(self, now: float) -> float:
+        return now - self.boot_time
+
     def prearm_ok(self, now: float) -> bool:
-        return now - self.boot_time >= self.options.prearm_after_s
+        return self.since_boot(now) >= self.boot.prearm_s
 
     def position_ok(self, now: float) -> bool:
-        return now - self.boot_time >= self.options.position_after_s
+        return self.since_boot(now) >= self.boot.armable_s
 
     def latlon(self) -> tuple[float, float]:
         return self.tangent.to_latlon(self.position[0], self.position[1])
@@ -128,33 +159,55 @@ class Autopilot:
     def mode_name(self) -> str:
         return mode_name(self.mode)
 
+    def mission_state(self) -> int:
+        """MISSION_CURRENT mission_state (AP_Mission::state)."""
+        if len(self.mission) <= 1:
+            return R.MISSION_STATE_NO_MISSION
+        if self.mode == AUTO and self.armed:
+            return R.MISSION_STATE_ACTIVE
+        if self.mode == AUTO:
+            return R.MISSION_STATE_ACTIVE
+        return R.MISSION_STATE_NOT_STARTED
+
     # -- commands
     def set_mission(self, items: list[MissionItem]) -> None:
         self.mission = list(items)
         self.current = min(self.current, max(len(self.mission) - 1, 0))
 
-    def mode_refusal(self, mode: int, now: float) -> str | None:
-        """Why ArduCopter would refuse ``mode`` now (its STATUSTEXT), or None.
+    def _starts_with_takeoff(self) -> bool:
+        """AP_Mission::starts_with_takeoff_cmd / is_takeoff_next: the first navigation
+        command from the current one is a takeoff."""
+        for item in self.mission[max(self.current, 1):]:
+            if item.command < _NAV_LAST:
+                return item.command == CMD_NAV_TAKEOFF
+        return False
 
-        Modes that need a position refuse until the EKF has one, AUTO refuses an empty
-        mission (ArduCopter/mode.cpp ``Copter::set_mode`` and ``mode_change_failed``:
-        "Mode change to GUIDED failed: requires position").
-        """
-        name = mode_name(mode)
+    def mode_refusal(self, mode: int, now: float) -> list[tuple[int, str]] | None:
+        """Why ArduCopter would refuse ``mode`` now (its STATUSTEXTs), or None
+        (ArduCopter/mode.cpp ``Copter::set_mode``: disarmed, every check is skipped
+        (``ignore_checks``); ModeAuto::init)."""
         if mode not in FLOWN_MODES:
-            return f"Mode change to {name} failed: unknown mode"
-        if mode in (AUTO, GUIDED, LOITER, RTL) and not self.position_ok(now):
-            return f"Mode change to {name} failed: requires position"
-        if mode == AUTO and len(self.mission) < 2:
-            return f"Mode change to {name} failed: init failed"
+            return [(R.MAV_SEVERITY_WARNING, f"No such mode {mode}")]
+        if not self.armed:
+            return None
+        if mode in NEEDS_POSITION and not self.position_ok(now):
+            return [mode_change_failed(mode, "requires position")]
+        if mode == AUTO:
+            if len(self.mission) <= 1:
+                return [mode_change_failed(mode, "init failed")]
+            if self.landed and not self._starts_with_takeoff():
+                return [MISSING_TAKEOFF, mode_change_failed(mode, "init failed")]
         return None
 
     def set_mode(self, mode: int, now: float) -> bool:
         """Switch mode; False when ArduCopter would refuse (see :meth:`mode_refusal`)."""
-        if self.mode_refusal(mode, now) is not None:
+        refusal = self.mode_refusal(mode, now)
+        if refusal is not None:
+            self._pending += [_text(t) for t in refusal]
             return False
         self.mode = mode
         self._phase = ""
+        self.nav = None
         self.speed_m_s = self.speed_m_s if mode == AUTO else None
         if mode in (GUIDED, LOITER, BRAKE):
             self._target = self.position.copy()
@@ -165,36 +218,105 @@ class Autopilot:
             self._phase, self._target = "climb", None
         return True
 
-    def arm(self, now: float) -> str | None:
-        """Arm; returns the reason when refused (ArduPilot's STATUSTEXT)."""
-        if not self.prearm_ok(now):
-            return "PreArm: GPS and AHRS not healthy"
+    def command_set_mode(self, base_mode: float, custom_mode: int, now: float):
+        """DO_SET_MODE / SET_MODE: ``(MAV_RESULT, STATUSTEXTs)`` (GCS_MAVLINK::
+        _set_mode_common: DENIED without the custom-mode flag, FAILED when refused)."""
+        if not set_mode_base_ok(base_mode):
+            return R.MAV_RESULT_DENIED, []
+        ok = self.set_mode(custom_mode, now)
+        return (R.MAV_RESULT_ACCEPTED if ok else R.MAV_RESULT_FAILED), self._take_pending()
+
+    def _take_pending(self) -> list:
+        out, self._pending = self._pending, []
+        return out
+
+    def arm(self, now: float) -> list[tuple[int, str]] | None:
+        """Arm; returns the refusal texts when refused (AP_Arming::arm: pre-arm checks,
+        then ArduCopter/AP_Arming.cpp arm_checks' mode check)."""
         if not self.position_ok(now):
-            return "Arm: Need Position Estimate"
-        if self.mode not in (GUIDED, LOITER, STABILIZE, AUTO):
-            return "Arm: Mode not armable"
+            return arm_refusals(self.since_boot(now), self.boot)
+        if self.mode not in ARMABLE_MODES:
+            return [mode_not_armable(self.mode)]
         self.armed = True
         self._armed_on_ground_since = now
         return None
 
     def disarm(self) -> None:
+        """AP_Arming::disarm; Copter::init_disarm_motors resets the mission to its start."""
         self.armed = False
         self.velocity[:] = 0.0
         self._armed_on_ground_since = None
+        self._takeoff_at = None
+        self.current = 0
+        self.nav = None
+        self._pending.append(_text(DISARMING_MOTORS))
 
-    def takeoff(self, alt_m: float) -> bool:
-        if not self.armed or self.mode != GUIDED or alt_m <= 0:
+    def takeoff(self, alt_m: float, now: float | None = None) -> bool:
+        """MAV_CMD_NAV_TAKEOFF: Mode::do_user_takeoff refuses unless armed, landed
+        (``ap.land_complete``) and in a mode that has a user takeoff (GUIDED here)."""
+        if not self.armed or self.mode != GUIDED or alt_m <= 0 or not self.landed:
             return False
         self._target = np.array([self.position[0], self.position[1], alt_m])
+        self._takeoff_at = (self.time if now is None else now) + self.options.limits.spool_up_s
         return True
 
     def set_current(self, seq: int) -> bool:
         if not 0 <= seq < len(self.mission):
             return False
-        self.current = max(seq, 1)
+        self.current = seq
         if self.mode == AUTO:
+            self.current = max(seq, 1)
+            self.nav = None
             self._start_item()
         return True
+
+    def command(self, cmd: int, p: list[float], now: float):
+        """A COMMAND_LONG: ``(MAV_RESULT, STATUSTEXTs)`` (ArduCopter/GCS_Mavlink.cpp
+        handle_command_long_packet and GCS_Common.cpp)."""
+        result = R.MAV_RESULT_FAILED
+        if cmd == R.MAV_CMD_COMPONENT_ARM_DISARM:
+            if p[0] >= 0.5:
+                if self.armed:
+                    result = R.MAV_RESULT_ACCEPTED
+                else:
+                    refusal = self.arm(now)
+                    if refusal:
+                        self._pending += [_text(t) for t in refusal]
+                    else:
+                        self._pending.append(_text(ARMING_MOTORS))
+                        result = R.MAV_RESULT_ACCEPTED
+            elif int(p[1]) == FORCE_DISARM_MAGIC or self.landed or not self.armed:
+                if self.armed:
+                    self.disarm()
+                    self.position[2] = 0.0  # a forced disarm in flight falls
+                result = R.MAV_RESULT_ACCEPTED
+        elif cmd == R.MAV_CMD_NAV_TAKEOFF:
+            result = R.MAV_RESULT_ACCEPTED if self.takeoff(float(p[6]), now) else result
+        elif cmd == R.MAV_CMD_DO_SET_MODE:
+            return self.command_set_mode(p[0], int(p[1]), now)
+        elif cmd == R.MAV_CMD_MISSION_START:
+            # ArduCopter/GCS_Mavlink.cpp: set_mode(AUTO); when already in AUTO, accepted
+            if self.mode == AUTO or self.set_mode(AUTO, now):
+                result = R.MAV_RESULT_ACCEPTED
+        elif cmd == R.MAV_CMD_DO_SET_MISSION_CURRENT:
+            seq = int(p[0])
+            if not 0 <= seq < len(self.mission):
+                result = R.MAV_RESULT_DENIED  # AP_Mission::is_valid_index
+            elif self.set_current(seq):
+                result = R.MAV_RESULT_ACCEPTED
+        elif cmd == R.MAV_CMD_NAV_RETURN_TO_LAUNCH:
+            result = R.MAV_RESULT_ACCEPTED if self.set_mode(RTL, now) else result
+        elif cmd == R.MAV_CMD_NAV_LAND:
+            result = R.MAV_RESULT_ACCEPTED if self.set_mode(LAND, now) else result
+        elif cmd == R.MAV_CMD_DO_CHANGE_SPEED:
+            if p[1] > 0:  # Copter::set_desired_speed via ModeAuto / ModeGuided
+                self.speed_m_s = float(p[1])
+                if self.nav is not None:
+                    self.nav.set_speed(float(p[1]))
+                result = R.MAV_RESULT_ACCEPTED
+        else:
+            result = R.MAV_RESULT_UNSUPPORTED
+        return result, self._take_pending()
 
     # -- mission execution
     def _item(self) -> MissionItem | None:
@@ -218,6 +340,9 @@ class Autopilot:
             self._target = self.position.copy()
             self._phase = "done"
             return
+        if item.command in _MISSION_TEXT:  # ModeAuto::start_command
+            self._pending.append(_text((R.MAV_SEVERITY_INFO,
+                                        f"Mission: {self.current} {_MISSION_TEXT[item.command]}")))
         if item.command == CMD_NAV_TAKEOFF:
             self._target = np.array([self.position[0], self.position[1], item.alt_m])
         elif item.command in (CMD_NAV_WAYPOINT, CMD_NAV_LOITER_UNLIM):
@@ -239,16 +364,20 @@ class Autopilot:
 
     # -- time
     def advance(self, now: float) -> list:
-        """Fly until ``now``; returns announcements."""
-        out: list = []
+        """Fly until ``now``; returns announcements (STATUSTEXT, MISSION_ITEM_REACHED)."""
+        out: list = self._take_pending()
+        if not self._announced_ready and self.since_boot(now) >= self.boot.ready_s:
+            # Copter::init_ardupilot ends with set_mode(STABILIZE) and "ArduPilot Ready":
+            # a mode set by a GCS before then is lost (boot.json)
+            self._announced_ready = True
+            if self.mode != STABILIZE and not self.armed:
+                self.mode, self._target, self._phase = STABILIZE, None, ""
+            out.append(_text(READY))
         while self.time < now - 1e-9:  # fixed steps, the last one shortened to end at now
             dt = min(STEP_S, now - self.time)
             self.time += dt
             self._step(dt, out)
-        if self.mode == AUTO and self.current != self._announced_current:
-            self._announced_current = self.current
-            out.append(R.MAVLink_mission_current_message(self.current))
-        return out
+        return out + self._take_pending()
 
     def _fly(self, target: np.ndarray, dt: float, *, stop: bool = True, speed=None) -> None:
         self.position, self.velocity = step_towards(
@@ -260,6 +389,10 @@ class Autopilot:
         if not self.armed:
             return
         limits = self.options.limits
+        if self._takeoff_at is not None:
+            if self.time < self._takeoff_at:  # motors spooling up (Mode::_TakeOff::start)
+                return
+            self._takeoff_at = None
         if self.mode in (GUIDED, LOITER, BRAKE) and self._target is not None:
             self._fly(self._target, dt)
         elif self.mode == LAND or (self.mode in (RTL, AUTO) and self._phase == "descend"):
@@ -324,6 +457,6 @@ class Autopilot:
             self.velocity[:] = 0.0
             if self.mode == AUTO and self._item() is not None:
                 out.append(R.MAVLink_mission_item_reached_message(self.current))
-            out.append(R.MAVLink_statustext_message(R.MAV_SEVERITY_INFO, b"Land complete"))
+            out.append(_text(LAND_COMPLETE))
             self.disarm()
             self._phase = "landed"

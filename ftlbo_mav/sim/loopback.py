@@ -48,6 +48,8 @@ class LoopbackChannel:
         self._gcs_parser = mavlink2.MAVLink(None)
         self._veh_parser = mavlink2.MAVLink(None)
         self.received: list = []  # every message the ground station was handed, in order
+        self.link = "loopback"
+        vehicle.link(self.link, self.now)
 
     def clock(self) -> float:
         return self.now
@@ -68,6 +70,8 @@ class LoopbackChannel:
 
     def _from_vehicle(self, msgs) -> None:
         for msg in msgs:
+            if not msg.get_type().startswith(("MISSION_", "COMMAND_")):
+                continue  # the channel carries the protocol, not the link's telemetry
             wire = self._wire(msg, self._veh, self._gcs_parser)
             for delay, m in self.down.route(wire):
                 self._push(self.now + ONE_WAY_S + delay, "gcs", m)
@@ -84,14 +88,14 @@ class LoopbackChannel:
             self.now = max(self.now, t)
             if t == self._next_tick and t < t_event:
                 self._next_tick += TICK_S
-                _periodic, replies = self.vehicle.tick(self.now)
+                out = self.vehicle.tick(self.now).get(self.link, [])
                 if not (self.faults.silent or self.faults.mute):
-                    self._from_vehicle(replies)
+                    self._from_vehicle(out)
                 continue
             _, _, where, msg = heapq.heappop(self._events)
             if where == "vehicle":
                 if not (self.faults.silent or self.faults.mute):
-                    self._from_vehicle(self.vehicle.handle(msg, self.now))
+                    self._from_vehicle(self.vehicle.handle(msg, self.now, self.link))
             elif getattr(msg, "target_system", 0) in (0, self.own_sysid):
                 self.received.append(msg)
                 return msg

@@ -23,6 +23,7 @@ class FlightLimits:
     descent_m_s: float = 1.5
     land_m_s: float = 0.5
     wp_radius_m: float = 2.0
+    spool_up_s: float = 0.0
 
 
 def step_towards(

@@ -14,7 +14,7 @@ import asyncio
 import signal
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from typing import Self
 
 import numpy as np
@@ -24,6 +24,9 @@ from .faults import Faults, FaultyPipe
 from .vehicle import Vehicle, VehicleOptions
 
 TICK_S = 0.02
+# replies to a request, which a muted vehicle (Faults.mute) does not send
+_ANSWERS = frozenset({"MISSION_REQUEST", "MISSION_ACK", "MISSION_COUNT", "MISSION_ITEM",
+                      "MISSION_ITEM_INT", "COMMAND_ACK"})
 
 
 def _signing_timestamp() -> int:
@@ -34,8 +37,10 @@ def _signing_timestamp() -> int:
 class _Attachment:
     """One client of one vehicle: its own parser (stream state, signature check) and writer."""
 
-    def __init__(self, write: Callable[[bytes], None], *, sysid: int, key: bytes | None):
+    def __init__(self, write: Callable[[bytes], None], *, sysid: int, key: bytes | None,
+                 link: Hashable):
         self.write = write
+        self.link = link  # the vehicle's serial port: its stream rates outlive a client
         self.parser = mavlink2.MAVLink(None, srcSystem=sysid, srcComponent=1)
         self.parser.robust_parsing = True  # bad CRC or signature -> BAD_DATA, not an exception
         if key is not None:
@@ -64,10 +69,10 @@ class VehicleRunner:
             self.packer.signing.sign_outgoing = True
             self.packer.signing.timestamp = _signing_timestamp()
         self.attachments: list[_Attachment] = []
-        self._mission_peer: _Attachment | None = None
 
-    def attach(self, write: Callable[[bytes], None]) -> _Attachment:
-        att = _Attachment(write, sysid=self.vehicle.sysid, key=self.key)
+    def attach(self, write: Callable[[bytes], None], link: Hashable = "SERIAL0") -> _Attachment:
+        att = _Attachment(write, sysid=self.vehicle.sysid, key=self.key, link=link)
+        self.vehicle.link(link, self.clock())
         self.attachments.append(att)
         return att
 
@@ -99,10 +104,7 @@ class VehicleRunner:
     def _handle(self, att: _Attachment, msg) -> None:
         if att not in self.attachments or self.faults.mute:
             return
-        replies = self.vehicle.handle(msg, self.clock())
-        if replies:
-            self._mission_peer = att
-        self._send(att, replies)
+        self._send(att, self.vehicle.handle(msg, self.clock(), att.link))
 
     def _send(self, att: _Attachment, msgs: list) -> None:
         for msg in msgs:
@@ -119,13 +121,14 @@ class VehicleRunner:
                 self.detach(att)
 
     def tick(self) -> None:
-        periodic, replies = self.vehicle.tick(self.clock())
+        out = self.vehicle.tick(self.clock())
         if self.faults.silent:
             return
         for att in list(self.attachments):
-            self._send(att, periodic)
-        if replies and not self.faults.mute and self._mission_peer in self.attachments:
-            self._send(self._mission_peer, replies)
+            msgs = out.get(att.link, [])
+            if self.faults.mute:  # a muted vehicle still streams, but answers nothing
+                msgs = [m for m in msgs if m.get_type() not in _ANSWERS]
+            self._send(att, msgs)
 
 
 class _SharedUdp(asyncio.DatagramProtocol):
@@ -138,7 +141,8 @@ class _SharedUdp(asyncio.DatagramProtocol):
 
     def connection_made(self, transport) -> None:
         for r in self.runners:
-            self.atts.append((r, r.attach(lambda d, t=transport: t.sendto(d, self.target))))
+            self.atts.append((r, r.attach(lambda d, t=transport: t.sendto(d, self.target),
+                                          link="UDP")))
 
     def datagram_received(self, data: bytes, addr) -> None:
         for r, att in self.atts:

@@ -1,48 +1,73 @@
 """An emulated ArduCopter: what it says about itself and how it answers, as messages.
 
-:class:`Vehicle` takes decoded messages and the time and returns messages (no sockets):
-``handle`` for what arrives, ``tick`` for what time brings (HEARTBEAT and telemetry once
-a period, the mission server's re-requests, the flight). Mission transfers go to the
+:class:`Vehicle` takes decoded messages, the link they came on and the time, and returns
+messages (no sockets): ``handle`` for what arrives (the replies for that link), ``tick``
+for what time brings, per link. Mission transfers go to the
 :class:`~ftlbo_mav.sim.mission_server.MissionServer`; modes, arming, takeoff and flying
 the stored mission to the :class:`~ftlbo_mav.sim.autopilot.Autopilot`.
+
+What each link receives follows ArduPilot's GCS_MAVLINK, one instance per serial port
+(libraries/GCS_MAVLink/GCS_Common.cpp): HEARTBEAT (1 Hz) and TIMESYNC (every 10 s)
+unconditionally, HOME_POSITION and GPS_GLOBAL_ORIGIN once when home is set, and
+nothing else until the link asks with MAV_CMD_SET_MESSAGE_INTERVAL (one message) or
+REQUEST_DATA_STREAM (a group, :data:`ftlbo_mav.ardupilot.streams.STREAM_MESSAGES`);
+STATUSTEXT only once the link has sent something (GCS_MAVLINK::is_active). Recorded on
+ArduCopter 4.5.6 SITL: ``tests/data/ardupilot-4.5.6/boot.json``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Hashable
 from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..ardupilot.commands import INSTANT_BOOT, BootTimeline
 from ..ardupilot.modes import CopterMode
+from ..ardupilot.streams import data_stream_messages
 from ..mission.items import MissionItem
 from .autopilot import Autopilot, AutopilotOptions
-from .mission_server import MissionServer, MissionServerOptions
+from .mission_server import EVERY_LINK, SENDER, MissionServer, MissionServerOptions
 from .physics import FlightLimits
 
 R = mavlink2
-
+Link = Hashable
 
 # Modes in which ArduCopter sets MAV_MODE_FLAG_GUIDED_ENABLED (GCS_Mavlink.cpp base_mode())
 _GUIDED_MODES = {CopterMode.AUTO, CopterMode.RTL, CopterMode.LOITER, CopterMode.AVOID_ADSB,
                  CopterMode.FOLLOW, CopterMode.GUIDED, CopterMode.CIRCLE, CopterMode.POSHOLD,
                  CopterMode.BRAKE, CopterMode.SMART_RTL}
+TIMESYNC_S = 10.0  # GCS_MAVLINK::update_send: TIMESYNC every 10 s, asked or not
 
 
 @dataclass(frozen=True)
 class VehicleOptions:
-    """``heartbeat_s``: period of HEARTBEAT and status telemetry (ArduPilot: 1 Hz heartbeat).
-    ``ready_after_s``: GPS 3D fix and pre-arm checks pass this long after boot.
-    ``position_after_s``: the EKF has a position estimate and arming is allowed (default:
-    with the pre-arm checks; ArduCopter SITL: about 24 s and 42 s after boot).
-    ``position_hz``: GLOBAL_POSITION_INT rate until a client asks for another with
-    MAV_CMD_SET_MESSAGE_INTERVAL. ``limits``: the copter's speeds and accelerations."""
+    """``heartbeat_s``: period of HEARTBEAT (ArduPilot: 1 Hz).
+    ``boot``: when the vehicle becomes ready, NO_SPACE ends, the GPS has a fix, home is
+    set, pre-arm passes and arming is allowed (:class:`BootTimeline`; the recorded one is
+    ``RECORDED_BOOT``, ``RECORDED_BOOT.scaled(0.05)`` keeps its order at 1/20 of the
+    time). Without it, ``ready_after_s`` (fix, home and pre-arm) and ``position_after_s``
+    (arming allowed; default: with the pre-arm checks) give a simpler timeline.
+    ``interval_drop_s``: a SET_MESSAGE_INTERVAL received this soon after boot is
+    acknowledged and then lost (SITL: the first request, sent as the first client
+    connects, is; one 24 ms later is kept). ``limits``: the copter's navigation
+    parameters."""
 
     heartbeat_s: float = 1.0
     ready_after_s: float = 0.0
     position_after_s: float | None = None
-    position_hz: float = 4.0
+    boot: BootTimeline | None = None
+    interval_drop_s: float = 0.02
     limits: FlightLimits = field(default_factory=FlightLimits)
     mission: MissionServerOptions = field(default_factory=MissionServerOptions)
+
+    def timeline(self) -> BootTimeline:
+        if self.boot is not None:
+            return self.boot
+        armable = self.ready_after_s if self.position_after_s is None else self.position_after_s
+        return BootTimeline(ready_s=INSTANT_BOOT.ready_s, storage_s=0.0,
+                            gps_fix_s=self.ready_after_s, home_s=self.ready_after_s,
+                            prearm_s=self.ready_after_s, armable_s=armable)
 
 
 @dataclass
@@ -57,6 +82,19 @@ class VehicleState:
     armed: bool = False
 
 
+@dataclass
+class LinkState:
+    """One GCS_MAVLINK instance: which messages it was asked for, at what period."""
+
+    active: bool = False  # has received something (STATUSTEXT goes to active links only)
+    periods: dict[int, float] = field(default_factory=dict)  # msgid -> seconds
+    due: dict[int, float] = field(default_factory=dict)
+    next_beat: float = 0.0
+    next_timesync: float = 0.0
+    home_sent: bool = False
+    outbox: list = field(default_factory=list)
+
+
 class Vehicle:
     """One emulated ArduCopter, system id ``sysid``, component 1 (the autopilot)."""
 
@@ -67,136 +105,200 @@ class Vehicle:
         self.sysid = sysid
         self.options = options
         self.boot_time = boot_time
+        self.boot = options.timeline()
         lat, lon, alt = home
+        self.home = (lat, lon, alt)
         self.state = VehicleState(lat_deg=lat, lon_deg=lon, alt_amsl_m=alt)
-        self.missions = MissionServer(sysid=sysid, home=home, options=options.mission,
+        mission_options = options.mission
+        if self.boot.storage_s > mission_options.boot_no_space_s:
+            mission_options = MissionServerOptions(
+                capacity=mission_options.capacity, rerequest_s=mission_options.rerequest_s,
+                upload_timeout_s=mission_options.upload_timeout_s,
+                boot_no_space_s=self.boot.storage_s)
+        self.missions = MissionServer(sysid=sysid, home=None, options=mission_options,
                                       boot_time=boot_time)
-        position_after = (options.ready_after_s if options.position_after_s is None
-                          else options.position_after_s)
-        self.autopilot = Autopilot(
-            home=(lat, lon), boot_time=boot_time,
-            options=AutopilotOptions(prearm_after_s=options.ready_after_s,
-                                     position_after_s=position_after, limits=options.limits))
-        self._home_alt = alt
-        self._next_beat = boot_time
-        self._position_period = 1.0 / options.position_hz
-        self._next_position = boot_time
-        self._stored: list = []
+        self.autopilot = Autopilot(home=(lat, lon), boot_time=boot_time,
+                                   options=AutopilotOptions(boot=self.boot, limits=options.limits))
+        self.links: dict[Link, LinkState] = {}
+        self._mission_version = -1
+
+    # -- links
+    def link(self, link: Link, now: float | None = None) -> LinkState:
+        st = self.links.get(link)
+        if st is None:
+            t = self.boot_time if now is None else now
+            st = self.links[link] = LinkState(next_beat=t, next_timesync=self.boot_time
+                                              + TIMESYNC_S)
+        return st
+
+    def home_set(self, now: float) -> bool:
+        return now - self.boot_time >= self.boot.home_s
 
     def is_for_me(self, msg) -> bool:
         """MAVLink routing: a targeted message is handled only by its target (or broadcast)."""
         target = getattr(msg, "target_system", 0)
         return target in (0, self.sysid)
 
-    def handle(self, msg, now: float) -> list:
-        """Replies to one message (already through the link's faults and signing check)."""
-        if msg.get_type() == "BAD_DATA" or not self.is_for_me(msg):
+    def _route(self, pairs, link: Link) -> list:
+        """``(link, msg)`` pairs: the sender's returned, the others queued for their link."""
+        mine = []
+        for to, msg in pairs:
+            if to is SENDER or to == link:
+                mine.append(msg)
+            elif to == EVERY_LINK:
+                for key, st in self.links.items():
+                    if key == link:
+                        mine.append(msg)
+                    elif st.active:
+                        st.outbox.append(msg)
+            else:
+                self.link(to).outbox.append(msg)
+        return mine
+
+    def handle(self, msg, now: float, link: Link = 0) -> list:
+        """Replies for ``link`` to one message (already through its faults and signing)."""
+        if msg.get_type() == "BAD_DATA":
+            return []
+        st = self.link(link, now)
+        st.active = True  # GCS_MAVLINK::packetReceived: the link is a GCS
+        if not self.is_for_me(msg):
             return []
         kind = msg.get_type()
-        if kind in ("COMMAND_LONG", "SET_MODE", "MISSION_SET_CURRENT"):
-            self._sync_mission()
-            self.autopilot.advance(now)
-            replies = self._command(msg, now)
-            self._sync_state()
-            return replies
-        return self.missions.handle(msg, now)
-
-    def tick(self, now: float) -> tuple[list, list]:
-        """``(broadcast, replies)``: telemetry and flight announcements for every client,
-        and the mission server's re-requests/cancellations for the client of the transfer."""
         self._sync_mission()
-        periodic = self.autopilot.advance(now)
+        news = self._announce(self.autopilot.advance(now), link)
+        if kind in ("COMMAND_LONG", "SET_MODE", "MISSION_SET_CURRENT", "REQUEST_DATA_STREAM"):
+            replies = self._command(msg, now, st)
+        else:
+            replies = self.missions.handle(msg, now, link)
+            self.home_for_missions(now)
         self._sync_state()
-        if now >= self._next_beat:
-            self._next_beat = now + self.options.heartbeat_s
-            periodic += self.telemetry(now)
-            # in the extended-status stream, whatever the mode (GCS_Common.cpp
-            # send_mission_current)
-            periodic.append(R.MAVLink_mission_current_message(self.autopilot.current))
-        elif now >= self._next_position:
-            periodic.append(self.position_message(now))
-        if now >= self._next_position:
-            self._next_position = max(self._next_position + self._position_period, now - 1.0)
-        return periodic, self.missions.update(now)
+        return news + self._route(replies, link)
+
+    def home_for_missions(self, now: float) -> None:
+        self.missions.home = self.home if self.home_set(now) else None
+
+    def _announce(self, texts: list, link: Link | None) -> list:
+        """The autopilot's STATUSTEXT and MISSION_ITEM_REACHED for every active link;
+        returns those for ``link``."""
+        mine = []
+        for msg in texts:
+            for key, st in self.links.items():
+                if not st.active and msg.get_type() == "STATUSTEXT":
+                    continue
+                (mine if key == link else st.outbox).append(msg)
+        return mine
+
+    def tick(self, now: float) -> dict[Link, list]:
+        """What time brings, per link: the asked-for telemetry, HEARTBEAT, TIMESYNC,
+        home once, announcements, and the mission server's re-requests/cancellations."""
+        self._sync_mission()
+        self._announce(self.autopilot.advance(now), None)
+        self._sync_state()
+        self.home_for_missions(now)
+        self._route(self.missions.update(now), None)
+        out: dict[Link, list] = {}
+        for key, st in self.links.items():
+            msgs, st.outbox = st.outbox, []
+            if now >= st.next_beat:
+                st.next_beat = max(st.next_beat + self.options.heartbeat_s, now - 1.0)
+                msgs.append(self.heartbeat())
+            if now >= st.next_timesync:
+                st.next_timesync += TIMESYNC_S
+                msgs.append(R.MAVLink_timesync_message(0, int((now - self.boot_time) * 1e9)))
+            if not st.home_sent and self.home_set(now):
+                st.home_sent = True  # AP_AHRS on setting home: MSG_HOME and MSG_ORIGIN
+                msgs += self.home_messages(now)
+            for msgid, period in st.periods.items():
+                if now >= st.due[msgid]:
+                    st.due[msgid] = max(st.due[msgid] + period, now - period)
+                    m = self.message(msgid, now)
+                    if m is not None:
+                        msgs.append(m)
+            out[key] = msgs
+        return out
 
     # -- flight commands (ArduCopter/GCS_Mavlink.cpp handle_command_long_packet, and
     #    libraries/GCS_MAVLink/GCS_Common.cpp for the commands every vehicle shares)
     def _sync_mission(self) -> None:
         """Give the autopilot the stored mission whenever an upload or clear changed it."""
-        items = self.missions.items
-        if items != self._stored:
-            self._stored = list(items)
-            self.autopilot.set_mission([
-                MissionItem(seq=i, command=it.command, frame=it.frame, lat_deg=it.x / 1e7,
-                            lon_deg=it.y / 1e7, alt_m=it.z, param1=it.param1,
-                            param2=it.param2, param3=it.param3, param4=it.param4)
-                for i, it in enumerate(items)])
+        if self.missions.version == self._mission_version:
+            return
+        self._mission_version = self.missions.version
+        self.autopilot.set_mission([
+            MissionItem(seq=i, command=it.command, frame=it.frame, lat_deg=it.x / 1e7,
+                        lon_deg=it.y / 1e7, alt_m=it.z, param1=it.param1,
+                        param2=it.param2, param3=it.param3, param4=it.param4)
+            for i, it in enumerate(self.missions.items)])
 
     def _sync_state(self) -> None:
         ap, s = self.autopilot, self.state
         s.lat_deg, s.lon_deg = ap.latlon()
         s.relative_alt_m = float(ap.position[2])
-        s.alt_amsl_m = self._home_alt + s.relative_alt_m
+        s.alt_amsl_m = self.home[2] + s.relative_alt_m
         s.mode = CopterMode(ap.mode)
         s.armed = ap.armed
 
-    def _command(self, msg, now: float) -> list:
+    def _set_interval(self, st: LinkState, msgid: int, interval_us: float, now: float) -> int:
+        """GCS_MAVLINK::handle_command_set_message_interval / set_message_interval."""
+        if now - self.boot_time < self.options.interval_drop_s:
+            return R.MAV_RESULT_ACCEPTED  # acknowledged, then lost as SITL's boot resets rates
+        if interval_us == -1 or msgid == R.MAVLINK_MSG_ID_HEARTBEAT:
+            st.periods.pop(msgid, None)  # -1: stop (HEARTBEAT keeps its 1 Hz here)
+            return R.MAV_RESULT_ACCEPTED
+        if interval_us == 0:  # 0: the default rate, which is "not sent" with copter.parm
+            st.periods.pop(msgid, None)
+            return R.MAV_RESULT_ACCEPTED
+        if interval_us < 0:
+            return R.MAV_RESULT_FAILED
+        st.periods[msgid] = interval_us / 1e6
+        st.due[msgid] = now
+        return R.MAV_RESULT_ACCEPTED
+
+    def _command(self, msg, now: float, st: LinkState) -> list:
         ap = self.autopilot
         kind = msg.get_type()
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
-        if kind == "SET_MODE":  # common.xml: deprecated, still honoured by ArduPilot
-            ap.set_mode(int(msg.custom_mode), now)
+        if kind == "REQUEST_DATA_STREAM":  # GCS_MAVLINK::handle_request_data_stream
+            rate = msg.req_message_rate if msg.start_stop else 0
+            for msgid in data_stream_messages(msg.req_stream_id):
+                if rate > 0:
+                    st.periods[msgid] = 1.0 / rate
+                    st.due[msgid] = now
+                else:
+                    st.periods.pop(msgid, None)
             return []
+        if kind == "SET_MODE":  # answered with a COMMAND_ACK for "command" 11
+            result, texts = ap.command_set_mode(msg.base_mode, int(msg.custom_mode), now)
+            return [(SENDER, m) for m in texts] + [
+                (SENDER, self._ack(R.MAVLINK_MSG_ID_SET_MODE, result, sender))]
         if kind == "MISSION_SET_CURRENT":  # GCS_Common.cpp handle_mission_set_current
             if ap.set_current(int(msg.seq)):
-                return [R.MAVLink_mission_current_message(ap.current)]
+                return [(EVERY_LINK, self.mission_current())]
             return []
         cmd = msg.command
-        text: list = []
-        if cmd == R.MAV_CMD_COMPONENT_ARM_DISARM:
-            if msg.param1 >= 0.5:
-                reason = ap.arm(now) if not ap.armed else None
-                ok = reason is None
-                if reason:  # ArduPilot says why as STATUSTEXT beside the FAILED ack
-                    text.append(R.MAVLink_statustext_message(R.MAV_SEVERITY_CRITICAL,
-                                                             reason.encode()))
+        if cmd == R.MAV_CMD_SET_MESSAGE_INTERVAL:
+            result, texts = self._set_interval(st, int(msg.param1), msg.param2, now), []
+        elif cmd == R.MAV_CMD_REQUEST_MESSAGE:
+            m = self.message(int(msg.param1), now)
+            if m is None:
+                result, texts = R.MAV_RESULT_FAILED, []
             else:
-                ok = ap.landed or int(msg.param2) == 21196  # force-disarm magic number
-                if ok:
-                    ap.disarm()
-        elif cmd == R.MAV_CMD_NAV_TAKEOFF:
-            ok = ap.takeoff(float(msg.param7))
-        elif cmd == R.MAV_CMD_DO_SET_MODE:
-            reason = ap.mode_refusal(int(msg.param2), now)
-            ok = reason is None and ap.set_mode(int(msg.param2), now)
-            if reason:
-                text.append(R.MAVLink_statustext_message(R.MAV_SEVERITY_WARNING,
-                                                         reason.encode()))
-        elif cmd == R.MAV_CMD_MISSION_START:
-            ok = ap.set_mode(CopterMode.AUTO, now)
-        elif cmd == R.MAV_CMD_DO_SET_MISSION_CURRENT:
-            ok = ap.set_current(int(msg.param1))
-            if ok:
-                text.append(R.MAVLink_mission_current_message(ap.current))
-        elif cmd == R.MAV_CMD_NAV_RETURN_TO_LAUNCH:
-            ok = ap.set_mode(CopterMode.RTL, now)
-        elif cmd == R.MAV_CMD_NAV_LAND:
-            ok = ap.set_mode(CopterMode.LAND, now)
-        elif cmd == R.MAV_CMD_SET_MESSAGE_INTERVAL:
-            ok = int(msg.param1) == R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT and msg.param2 > 0
-            if ok:
-                self._position_period = float(msg.param2) / 1e6
-                self._next_position = now
+                result, texts = R.MAV_RESULT_ACCEPTED, []
+                st.outbox.append(m)
         else:
-            return [self._ack(cmd, R.MAV_RESULT_UNSUPPORTED, sender)]
-        result = R.MAV_RESULT_ACCEPTED if ok else R.MAV_RESULT_FAILED
-        return text + [self._ack(cmd, result, sender)]
+            result, texts = ap.command(cmd, [msg.param1, msg.param2, msg.param3, msg.param4,
+                                             msg.param5, msg.param6, msg.param7], now)
+        extra = []
+        if cmd in (R.MAV_CMD_DO_SET_MISSION_CURRENT,) and result == R.MAV_RESULT_ACCEPTED:
+            extra.append((EVERY_LINK, self.mission_current()))
+        return ([(EVERY_LINK, m) for m in texts] + [(SENDER, self._ack(cmd, result, sender))]
+                + extra)
 
     @staticmethod
     def _ack(command: int, result: int, to: tuple[int, int]):
         return R.MAVLink_command_ack_message(command, result, 0, 0, to[0], to[1])
 
-    # -- what ArduCopter streams
+    # -- what ArduCopter sends
     def heartbeat(self):
         s = self.state
         base = R.MAV_MODE_FLAG_STABILIZE_ENABLED | R.MAV_MODE_FLAG_MANUAL_INPUT_ENABLED
@@ -211,28 +313,61 @@ class Vehicle:
                                            base, int(s.mode), status, 3)
 
     def ready(self, now: float) -> bool:
-        return now - self.boot_time >= self.options.ready_after_s
+        """The pre-arm checks pass (SYS_STATUS PREARM_CHECK healthy)."""
+        return now - self.boot_time >= self.boot.prearm_s
 
-    def telemetry(self, now: float) -> list:
+    def home_messages(self, now: float) -> list:
+        lat, lon, alt = self.home
+        usec = int((now - self.boot_time) * 1e6)
+        ilat, ilon, ialt = round(lat * 1e7), round(lon * 1e7), int(round(alt * 1000))
+        return [R.MAVLink_home_position_message(ilat, ilon, ialt, 0, 0, 0,
+                                                [float("nan")] * 4, 0, 0, 0, usec),
+                R.MAVLink_gps_global_origin_message(ilat, ilon, ialt, usec)]
+
+    def mission_current(self):
+        """MISSION_CURRENT (GCS_Common.cpp send_mission_current): seq, total (the last
+        index), mission_state and mission_mode (1 in AUTO)."""
+        ap = self.autopilot
+        total = max(len(self.missions.items) - 1, 0)
+        state = ap.mission_state()
+        return R.MAVLink_mission_current_message(ap.current, total, state,
+                                                 1 if ap.mode == CopterMode.AUTO else 0)
+
+    def message(self, msgid: int, now: float):
+        """The message ``msgid`` as the vehicle would send it now, or None (not emulated)."""
         s = self.state
-        ready = self.ready(now)
-        lat, lon = round(s.lat_deg * 1e7), round(s.lon_deg * 1e7)
         boot_ms = int((now - self.boot_time) * 1000) & 0xFFFFFFFF
-        sensors = (R.MAV_SYS_STATUS_SENSOR_3D_GYRO | R.MAV_SYS_STATUS_SENSOR_3D_ACCEL
-                   | R.MAV_SYS_STATUS_SENSOR_GPS)
-        # ArduPilot reports passing pre-arm checks as the PREARM_CHECK health bit
-        # (GCS_Common.cpp GCS_MAVLINK::send_sys_status, AP_Arming)
-        health = sensors | (R.MAV_SYS_STATUS_PREARM_CHECK if ready else 0)
-        return [
-            self.heartbeat(),
-            R.MAVLink_sys_status_message(sensors | R.MAV_SYS_STATUS_PREARM_CHECK,
-                                         sensors | R.MAV_SYS_STATUS_PREARM_CHECK, health,
-                                         0, 12600, -1, 100, 0, 0, 0, 0, 0, 0),
-            R.MAVLink_gps_raw_int_message(
-                boot_ms * 1000, R.GPS_FIX_TYPE_3D_FIX if ready else R.GPS_FIX_TYPE_NO_FIX,
-                lat, lon, int(s.alt_amsl_m * 1000), 80, 120, 0, 0, 10 if ready else 0),
-            self.position_message(now),
-        ]
+        fix = now - self.boot_time >= self.boot.gps_fix_s
+        if msgid == R.MAVLINK_MSG_ID_HEARTBEAT:
+            return self.heartbeat()
+        if msgid == R.MAVLINK_MSG_ID_SYS_STATUS:
+            sensors = (R.MAV_SYS_STATUS_SENSOR_3D_GYRO | R.MAV_SYS_STATUS_SENSOR_3D_ACCEL
+                       | R.MAV_SYS_STATUS_SENSOR_GPS | R.MAV_SYS_STATUS_PREARM_CHECK)
+            # passing pre-arm checks is the PREARM_CHECK health bit (send_sys_status)
+            health = sensors if self.ready(now) else sensors & ~R.MAV_SYS_STATUS_PREARM_CHECK
+            return R.MAVLink_sys_status_message(sensors, sensors, health, 0, 12600, -1, 100,
+                                                0, 0, 0, 0, 0, 0)
+        if msgid == R.MAVLINK_MSG_ID_GPS_RAW_INT:
+            lat, lon = (round(s.lat_deg * 1e7), round(s.lon_deg * 1e7)) if fix else (0, 0)
+            return R.MAVLink_gps_raw_int_message(
+                boot_ms * 1000, 6 if fix else R.GPS_FIX_TYPE_NO_FIX, lat, lon,
+                int(s.alt_amsl_m * 1000) if fix else 0, 121, 200, 0, 0, 10 if fix else 0)
+        if msgid == R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT:
+            return self.position_message(now)
+        if msgid == R.MAVLINK_MSG_ID_MISSION_CURRENT:
+            return self.mission_current()
+        if msgid == R.MAVLINK_MSG_ID_EXTENDED_SYS_STATE:
+            ap = self.autopilot
+            landed = (R.MAV_LANDED_STATE_ON_GROUND if ap.landed or not ap.armed
+                      else R.MAV_LANDED_STATE_IN_AIR)
+            return R.MAVLink_extended_sys_state_message(0, landed)
+        if msgid == R.MAVLINK_MSG_ID_HOME_POSITION:
+            return self.home_messages(now)[0] if self.home_set(now) else None
+        if msgid == R.MAVLINK_MSG_ID_VFR_HUD:
+            v = self.autopilot.velocity
+            return R.MAVLink_vfr_hud_message(0.0, float((v[0] ** 2 + v[1] ** 2) ** 0.5), 0, 0,
+                                             s.alt_amsl_m, float(v[2]))
+        return None
 
     def position_message(self, now: float):
         s, v = self.state, self.autopilot.velocity

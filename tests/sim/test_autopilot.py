@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from ftlbo_mav.ardupilot.commands import BootTimeline
 from ftlbo_mav.mission.items import build_mission
 from ftlbo_mav.sim.autopilot import (
     AUTO,
@@ -33,13 +34,14 @@ def _run(ap, t, until, dt=0.1, limit=300.0):
     return t, log
 
 
-def test_arming_waits_for_prearm_and_position_estimate():
-    ap = Autopilot(home=HOME, boot_time=0.0,
-                   options=AutopilotOptions(prearm_after_s=2.0, position_after_s=5.0))
-    assert ap.arm(1.0).startswith("PreArm")
-    assert ap.arm(3.0) == "Arm: Need Position Estimate"
-    assert not ap.set_mode(GUIDED, 3.0)
-    assert ap.set_mode(GUIDED, 5.0) and ap.arm(5.0) is None and ap.armed
+def test_arming_waits_for_the_boot_timeline_and_modes_change_freely_while_disarmed():
+    boot = BootTimeline(ready_s=0.5, storage_s=0.5, gps_fix_s=1.0, home_s=2.0, prearm_s=4.0,
+                        armable_s=5.0)
+    ap = Autopilot(home=HOME, boot_time=0.0, options=AutopilotOptions(boot=boot))
+    assert [t for _, t in ap.arm(1.0)] == ["Arm: AHRS: waiting for home"]
+    assert [t for _, t in ap.arm(3.0)] == ["Arm: Need Position Estimate"]
+    assert ap.set_mode(GUIDED, 3.0)  # disarmed: Copter::set_mode skips its checks
+    assert ap.arm(5.0) is None and ap.armed
 
 
 def test_guided_takeoff_then_auto_flies_the_mission_and_lands_at_the_goal():
@@ -56,7 +58,9 @@ def test_guided_takeoff_then_auto_flies_the_mission_and_lands_at_the_goal():
     t, log = _run(ap, t, lambda a: not a.armed)
     reached = [m.seq for m in log if m.get_type() == "MISSION_ITEM_REACHED"]
     assert reached == [2, 3, 4, 5, 6]
-    assert [m.seq for m in log if m.get_type() == "MISSION_CURRENT"] == [3, 4, 5, 6]
+    texts = [m.text for m in log if m.get_type() == "STATUSTEXT"]
+    assert texts == ["Mission: 2 WP", "Mission: 3 WP", "Mission: 4 WP", "Mission: 5 WP",
+                     "Mission: 6 Land", "Land complete", "Disarming motors"]
     assert np.allclose(ap.position, [20, 10, 0], atol=0.15)
     assert not ap.armed and any(m.get_type() == "STATUSTEXT" for m in log)
 

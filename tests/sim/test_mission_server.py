@@ -32,8 +32,9 @@ def item(seq, src=GCS, frame=None):
     return wire(msg, src)
 
 
-def only(msgs):
-    (m,) = msgs
+def only(pairs):
+    """The one protocol message among ``(link, message)`` replies (STATUSTEXT aside)."""
+    (m,) = [m for _, m in pairs if m.get_type() != "STATUSTEXT"]
     return m
 
 
@@ -75,10 +76,11 @@ def test_re_asks_after_a_second_and_cancels_a_stalled_upload_after_eight():
     while True:
         t += 0.1
         out = s.update(t)
-        if out and out[0].get_type() == "MISSION_ACK":
+        acks = [m for _, m in out if m.get_type() == "MISSION_ACK"]
+        if acks:
             break
         asks += len(out)
-    assert out[0].type == R.MAV_MISSION_OPERATION_CANCELLED and 8.0 < t < 8.2
+    assert acks[0].type == R.MAV_MISSION_OPERATION_CANCELLED and 8.0 < t < 8.2
     assert asks == 7 and not s.receiving
 
 
@@ -124,7 +126,7 @@ def test_read_back_returns_home_as_item_zero_and_frame_6_as_3():
 def test_reading_past_the_end_educates_with_count_and_error():
     s = server()
     upload_all(s)
-    cnt, err = read(s, 99)
+    (_, cnt), (_, err) = read(s, 99)
     assert cnt.get_type() == "MISSION_COUNT" and cnt.count == len(ITEMS)
     assert err.type == R.MAV_MISSION_ERROR
 

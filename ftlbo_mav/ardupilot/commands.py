@@ -1,0 +1,112 @@
+"""How ArduCopter 4.5 answers arming, mode and mission commands, and when it is ready.
+
+The COMMAND_ACK results and STATUSTEXTs that ftlbo-mav meets, each with the ArduPilot
+function it follows, and the boot timeline recorded on ArduCopter 4.5.6 SITL with
+copter.parm (``tests/data/ardupilot-4.5.6/boot.json``, ``commands.json``). Pure values:
+the emulator answers by them; the ground side may use them to explain a refusal.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from .modes import CopterMode, mode_name
+
+
+@dataclass(frozen=True)
+class BootTimeline:
+    """Seconds after boot (SITL boots when its first client connects) at which ArduCopter
+    4.5.6 SITL became ready, as recorded (boot.json ``time_to_armable``, mission_protocol.json
+    ``0_upload_during_boot``):
+
+    - ``ready_s``: "ArduPilot Ready" (AP_Vehicle / Copter::init_ardupilot end); a mode
+      set before is reset to STABILIZE (init_ardupilot's ``set_mode(STABILIZE)``).
+    - ``storage_s``: MISSION_COUNT is answered NO_SPACE ("Only 0 items are supported":
+      AP_Mission not yet initialised, ``num_commands_max`` 0) until about this time.
+    - ``gps_fix_s``: GPS_RAW_INT fix_type reaches 3 (SITL reports 6, RTK fixed).
+    - ``home_s``: EKF origin and home set; HOME_POSITION and GPS_GLOBAL_ORIGIN are sent.
+    - ``prearm_s``: SYS_STATUS's PREARM_CHECK health bit set.
+    - ``armable_s``: MAV_CMD_COMPONENT_ARM_DISARM accepted ("EKF3 IMU0 is using GPS":
+      AP_Arming ``mandatory_gps_checks`` pass).
+    """
+
+    ready_s: float = 2.23
+    storage_s: float = 2.49
+    gps_fix_s: float = 9.8
+    home_s: float = 19.8
+    prearm_s: float = 41.4
+    armable_s: float = 42.1
+
+    def scaled(self, factor: float) -> BootTimeline:
+        """Every time multiplied by ``factor`` (tests run a fast boot in the same order)."""
+        return BootTimeline(*(factor * v for v in vars(self).values()))
+
+
+RECORDED_BOOT = BootTimeline()
+INSTANT_BOOT = RECORDED_BOOT.scaled(0.0)
+
+FORCE_DISARM_MAGIC = 21196  # AP_Arming::MAGIC_FORCE_ARM_VALUE / disarm: forced
+DISARM_DELAY_S = 10.0       # DISARM_DELAY default (ArduCopter/motors.cpp auto_disarm_check)
+
+# Texts, with the severity ArduPilot sends them at
+ARMING_MOTORS = (R.MAV_SEVERITY_INFO, "Arming motors")        # AP_Arming::arm
+DISARMING_MOTORS = (R.MAV_SEVERITY_INFO, "Disarming motors")  # AP_Arming::disarm
+MISSING_TAKEOFF = (R.MAV_SEVERITY_CRITICAL, "Auto: Missing Takeoff Cmd")  # ModeAuto::init
+READY = (R.MAV_SEVERITY_INFO, "ArduPilot Ready")
+FLIGHT_PLAN_RECEIVED = (R.MAV_SEVERITY_INFO, "Flight plan received")  # AP_Mission complete
+LAND_COMPLETE = (R.MAV_SEVERITY_INFO, "Land complete")
+
+
+def no_space_text(max_items: int) -> tuple[int, str]:
+    """MissionItemProtocol::handle_mission_count on a COUNT beyond ``max_items``."""
+    return (R.MAV_SEVERITY_WARNING, f"Only {max_items} items are supported")
+
+
+def mode_change_failed(mode: int, reason: str) -> tuple[int, str]:
+    """Copter::mode_change_failed (ArduCopter/mode.cpp)."""
+    return (R.MAV_SEVERITY_WARNING, f"Mode change to {mode_name(mode)} failed: {reason}")
+
+
+def arm_refusals(since_boot_s: float, boot: BootTimeline) -> list[tuple[int, str]]:
+    """What AP_Arming says when arming is refused at this time after boot (severity
+    CRITICAL, prefix "Arm: "). SITL's early sensor texts vary from run to run ("Accels
+    inconsistent", "Gyros inconsistent"); the ones that follow the boot phases are kept:
+    no home yet (AP_Arming::ahrs_checks), then no position (ArduCopter/AP_Arming.cpp
+    mandatory_gps_checks)."""
+    crit = R.MAV_SEVERITY_CRITICAL
+    if since_boot_s < boot.ready_s:
+        return [(crit, "Arm: Need Alt Estimate"), (crit, "Arm: AHRS: waiting for home")]
+    if since_boot_s < boot.home_s:
+        return [(crit, "Arm: AHRS: waiting for home")]
+    return [(crit, "Arm: Need Position Estimate")]
+
+
+def mode_not_armable(mode: int) -> tuple[int, str]:
+    """ArduCopter/AP_Arming.cpp arm_checks: ``"%s mode not armable"`` for a mode whose
+    ``allows_arming`` is false (AUTO, RTL, LAND, ... from a GCS command)."""
+    return (R.MAV_SEVERITY_CRITICAL, f"Arm: {mode_name(mode)} mode not armable")
+
+
+# Modes a GCS may arm in (ArduCopter/mode.h allows_arming); AUTO only with AUTO_OPTIONS bit 0
+ARMABLE_MODES = frozenset({
+    CopterMode.STABILIZE, CopterMode.ACRO, CopterMode.ALT_HOLD, CopterMode.GUIDED,
+    CopterMode.LOITER, CopterMode.DRIFT, CopterMode.SPORT, CopterMode.POSHOLD,
+    CopterMode.THROW, CopterMode.FLOWHOLD, CopterMode.ZIGZAG, CopterMode.SYSTEMID,
+    CopterMode.GUIDED_NOGPS, CopterMode.AUTOTUNE, CopterMode.BRAKE, CopterMode.CIRCLE,
+})
+
+# Modes that need a position estimate to be entered while armed (Mode::requires_GPS)
+NEEDS_POSITION = frozenset({
+    CopterMode.AUTO, CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL,
+    CopterMode.CIRCLE, CopterMode.DRIFT, CopterMode.POSHOLD, CopterMode.BRAKE,
+    CopterMode.AVOID_ADSB, CopterMode.SMART_RTL, CopterMode.FOLLOW, CopterMode.ZIGZAG,
+    CopterMode.AUTO_RTL, CopterMode.THROW,
+})
+
+
+def set_mode_base_ok(base_mode: float) -> bool:
+    """GCS_MAVLINK::_set_mode_common: only custom modes; DO_SET_MODE with param1 lacking
+    MAV_MODE_FLAG_CUSTOM_MODE_ENABLED is answered MAV_RESULT_DENIED."""
+    return bool(int(base_mode) & R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
