@@ -41,6 +41,9 @@ _FRAME_KEPT = {
 }
 
 LOCATION_ALT_MAX_M = 83000  # libraries/AP_Common/Location.h
+# AP_Mission::num_commands_max on SITL (its storage size over 15 bytes a command): the
+# recorded NO_SPACE text says "Only 0 items are supported" while booting, 650 after
+SITL_MISSION_CAPACITY = 650
 
 
 @dataclass(frozen=True)

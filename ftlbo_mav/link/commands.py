@@ -12,6 +12,7 @@ from pathlib import Path
 
 import click
 
+from ..ardupilot.storage import SITL_MISSION_CAPACITY
 from ..cli_errors import user_errors
 from ..errors import FtlboError, MissionFileError
 from ..mission.waypoints import read_waypoints, write_waypoints
@@ -214,7 +215,8 @@ def _endpoint(text: str) -> tuple[str, int]:
 @click.option("--latency-ms", type=click.FloatRange(min=0), default=0.0, help="One-way delay.")
 @click.option("--boot-delay", type=click.FloatRange(min=0), default=0.0,
               help="Seconds after start during which uploads get NO_SPACE (like ArduPilot).")
-@click.option("--capacity", type=click.IntRange(min=0), default=700, show_default=True,
+@click.option("--capacity", type=click.IntRange(min=0), default=SITL_MISSION_CAPACITY,
+              show_default=True,
               help="Mission items a vehicle can hold.")
 @click.option("--silent", "silent", multiple=True, type=int, metavar="SYSID",
               help="This vehicle says nothing at all (repeatable).")

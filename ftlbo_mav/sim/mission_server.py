@@ -20,7 +20,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot import storage
 from ..ardupilot.commands import FLIGHT_PLAN_RECEIVED, no_space_text
-from ..ardupilot.storage import WireItem
+from ..ardupilot.storage import SITL_MISSION_CAPACITY, WireItem
 
 R = mavlink2
 MISSION = R.MAV_MISSION_TYPE_MISSION
@@ -39,7 +39,7 @@ class MissionServerOptions:
     supported") for this long after boot, as ArduCopter SITL does for its first ~2.5 s
     (the vehicle sets it from its boot timeline)."""
 
-    capacity: int = 650
+    capacity: int = SITL_MISSION_CAPACITY
     rerequest_s: float = 1.0
     upload_timeout_s: float = 8.0
     boot_no_space_s: float = 0.0
