@@ -121,10 +121,14 @@ def timing_options(func):
               help="pymavlink connection string; repeat it (or give several separated by "
                    "spaces) for one link per vehicle. Default: system id s on "
                    "tcp:127.0.0.1:5760 + 10*(s-1), where SITL and `ftlbo-mav sim` listen.")
+@click.option("--capacity", type=click.IntRange(min=1), default=None,
+              help="Mission items the vehicles hold (ArduCopter SITL: 650): longer missions "
+                   "are refused before anything is sent. Without it the vehicle's own "
+                   "NO_SPACE answer refuses them, also before any item is sent.")
 @timing_options
 @user_errors
-def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, discover_timeout,
-           signing_key):
+def upload(mission_dir, sysid_text, connect, capacity, timeout, retries, ready_timeout,
+           discover_timeout, signing_key):
     """Upload MISSION_DIR/uavN.waypoints to the vehicles, read each back and verify it.
 
     Exits 0 only when every vehicle's mission read back equal to its file.
@@ -138,6 +142,11 @@ def upload(mission_dir, sysid_text, connect, timeout, retries, ready_timeout, di
         missions = [tuple(read_waypoints(f)) for f in files]
     except MissionFileError as exc:
         raise BadInput(f"{exc}; no vehicle was contacted") from None
+    if capacity is not None:
+        for f, m in zip(files, missions):
+            if len(m) > capacity:
+                raise BadInput(f"{f}: {f.name} has {len(m)} items, more than --capacity "
+                               f"{capacity}; no vehicle was contacted")
     key = load_key(signing_key) if signing_key else None
     urls = _urls(connect) or default_urls_for(sysids)
     assignments = [Assignment(f.stem, s, m) for f, s, m in zip(files, sysids, missions)]

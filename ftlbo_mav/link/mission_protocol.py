@@ -27,6 +27,8 @@ MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
 
 from __future__ import annotations
 
+import re
+
 from collections.abc import Sequence
 
 from ..mission.items import MissionItem
@@ -46,6 +48,9 @@ __all__ = [
     "RESULT_TEXT", "Clear", "Download", "MissionTransferError", "Progress", "Timing", "Upload",
     "clear_mission", "describe_result", "download_mission", "run_transfer", "upload_mission",
 ]
+
+CAPACITY_TEXT = re.compile(r"Only (\d+) items are supported")
+
 
 class Upload(_Transfer):
     """MISSION_COUNT, then an item for every request, until ACK ACCEPTED.
@@ -74,6 +79,7 @@ class Upload(_Transfer):
         self.acknowledged = False
         self.started_at = 0.0
         self.count_sent_at = 0.0
+        self.capacity: int | None = None  # what the vehicle said it holds, if it did
 
     def _count(self, now: float) -> list:
         self.count_sent_at = now
@@ -103,6 +109,23 @@ class Upload(_Transfer):
             return self._on_request(msg.seq, now)
         if kind == "MISSION_ACK":
             return self._on_ack(msg.type, now)
+        if kind == "STATUSTEXT":
+            return self._on_text(msg.text, now)
+        return []
+
+    def _on_text(self, text: str, now: float) -> list:
+        """ArduPilot says why it answered NO_SPACE: "Only N items are supported"
+        (MissionItemProtocol::handle_mission_count). N = 0 while it boots; otherwise the
+        mission is too long for it, which no retry changes."""
+        m = CAPACITY_TEXT.search(text or "")
+        if m is None:
+            return []
+        self.capacity = int(m.group(1))
+        if self.waiting_ready and 0 < self.capacity < self.n:
+            return self._fail(
+                f"the vehicle holds at most {self.capacity} mission items and this mission "
+                f"has {self.n} (MAV_MISSION_NO_SPACE, \"{text.strip()}\"); nothing was "
+                "sent and its mission is unchanged", result=R.MAV_MISSION_NO_SPACE)
         return []
 
     def _on_request(self, seq: int, now: float) -> list:

@@ -111,6 +111,10 @@ def upload_and_verify(channel, items: Sequence[MissionItem], *, timing: Timing,
     try:
         run_transfer(machine, channel)
     except MissionTransferError as exc:
+        if machine.highest < 0 and exc.result is not None:
+            # refused at MISSION_COUNT (NO_SPACE, DENIED): ArduPilot truncates nothing
+            # before it asks for item 0 (MissionItemProtocol::handle_mission_count)
+            return False, f"upload failed: {exc.problem}"
         if machine.highest < 0 and exc.result is None:
             return False, (f"upload failed: {exc.problem}; the vehicle never asked for an item, "
                            "so none was sent")

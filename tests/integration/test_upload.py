@@ -89,17 +89,28 @@ def test_a_vehicle_that_stops_answering_the_mission_protocol(tmp_path):
     assert len(verified_lines(out)) == 2
 
 
-def test_a_vehicle_that_rejects_with_no_space(tmp_path):
+def test_a_mission_longer_than_the_vehicle_holds_is_refused_at_once_with_the_count(tmp_path):
+    """ArduPilot answers NO_SPACE and says "Only N items are supported": final at once,
+    nothing is sent, and nothing is cleared on the vehicle."""
     write_missions(tmp_path, 2)
     small = VehicleOptions(heartbeat_s=FAST.heartbeat_s,
                            mission=MissionServerOptions(capacity=10))
     with vehicles(2, options=[FAST, small]) as fleet:
-        code, out = run("upload", tmp_path, "--sysid", "1,2", "--ready-timeout", "0.5",
-                        *connect(fleet.urls))
+        code, out = run("upload", tmp_path, "--sysid", "1,2", *connect(fleet.urls))
         assert fleet.missions()[1] == []
     assert code == 1
-    assert "uav2 -> sysid 2: FAILED: upload failed: the vehicle has no space" in out
-    assert "MAV_MISSION_NO_SPACE" in out and len(verified_lines(out)) == 1
+    assert ("uav2 -> sysid 2: FAILED: upload failed: the vehicle holds at most 10 mission "
+            "items and this mission has 15") in out
+    assert "its mission is unchanged" in out and len(verified_lines(out)) == 1
+
+
+def test_capacity_given_by_the_user_is_checked_before_any_vehicle(tmp_path):
+    write_missions(tmp_path, 2)
+    code, out = run("upload", tmp_path, "--sysid", "1,2", "--capacity", "12",
+                    "--connect", "tcp:127.0.0.1:9")
+    assert code == 2
+    assert "uav1.waypoints has 15 items, more than --capacity 12" in out
+    assert "no vehicle was contacted" in out
 
 
 def test_no_space_while_booting_is_waited_out(tmp_path):
