@@ -28,7 +28,6 @@ MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
 from __future__ import annotations
 
 import re
-
 from collections.abc import Sequence
 
 from ..mission.items import MissionItem
