@@ -121,6 +121,9 @@ def main() -> int:
     parser.add_argument("--speedup", type=float, default=2.0,
                         help="emulator time scale / SITL --speedup")
     parser.add_argument("--out", default="flight-benchmark.json")
+    parser.add_argument("--only", action="append", default=[],
+                        choices=["naive", "fly, no keeper", "fly"],
+                        help="fly only this way (repeatable; default all three)")
     parser.add_argument("--set", dest="params", action="append", default=[],
                         metavar="SYSID:NAME=VALUE",
                         help="set a parameter on one vehicle before each flight (PARAM_SET, "
@@ -133,7 +136,7 @@ def main() -> int:
     scenario = load_scenario(args.scenario)
     homes = scenario_homes(scenario)
     binary = os.environ.get("ARDUPILOT_SITL")
-    rows = {"naive": [], "fly, no keeper": [], "fly": []}
+    rows = {k: [] for k in ("naive", "fly, no keeper", "fly") if not args.only or k in args.only}
     with tempfile.TemporaryDirectory() as tmp:
         plan_dir = Path(tmp) / "plan"
         shipped = args.scenario.with_suffix("")
