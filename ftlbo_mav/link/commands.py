@@ -237,15 +237,24 @@ def _endpoint(text: str) -> tuple[str, int]:
 @click.option("--arm-delay", type=click.FloatRange(min=0), default=None,
               help="Seconds after start before arming is allowed (the EKF's position "
                    "estimate; ArduCopter SITL: about 42 s). Default: --boot-delay.")
-@click.option("--speed", type=click.FloatRange(min=0.1), default=5.0, show_default=True,
-              help="Horizontal speed between waypoints, m/s (WPNAV_SPEED).")
+@click.option("--speed", type=click.FloatRange(min=0.2), default=10.0, show_default=True,
+              help="WPNAV_SPEED, m/s: the horizontal speed limit between waypoints "
+                   "(ArduCopter's default; short legs stay slower, as on ArduCopter).")
+@click.option("--boot-scale", type=click.FloatRange(min=0), default=None,
+              help="Boot as ArduCopter 4.5.6 SITL was recorded to (ready 2.2 s, home 19.8 s, "
+                   "armable 42.1 s), every time multiplied by this (e.g. 0.1). Overrides "
+                   "--boot-delay and --arm-delay.")
+@click.option("--vary", is_flag=True,
+              help="Make each vehicle differ a little, as a real fleet does (a start "
+                   "latency of up to 0.3 s, WPNAV_JERK within 5%), seeded by --seed.")
 @click.option("--time-scale", type=click.FloatRange(min=0.01), default=1.0, show_default=True,
               help="Run the vehicles' clock this many times faster than real time.")
 @user_errors
 def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
         latency_ms, boot_delay, capacity, silent, mute, signing_key, seed, arm_delay, speed,
-        time_scale):
+        boot_scale, vary, time_scale):
     """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
+    from ..ardupilot.commands import RECORDED_BOOT
     from ..scenario import load_scenario
     from ..sim.faults import Faults
     from ..sim.homes import default_homes, scenario_homes
@@ -266,13 +275,15 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
             "duplicate": duplicate, "reorder": reorder, "latency_s": latency_ms / 1000.0}
     faults = [Faults(**link, silent=(i + 1) in silent, mute=(i + 1) in mute) for i in range(n)]
     options = VehicleOptions(ready_after_s=boot_delay, position_after_s=arm_delay,
-                             limits=FlightLimits(speed_m_s=speed),
+                             boot=None if boot_scale is None else RECORDED_BOOT.scaled(boot_scale),
+                             limits=FlightLimits.with_speed(speed),
                              mission=MissionServerOptions(capacity=capacity,
                                                           boot_no_space_s=boot_delay))
     key = load_key(signing_key) if signing_key else None
     simulator = Simulator(homes=homes, base_port=base_port,
                           udp_out=_endpoint(udp_out) if udp_out else None, faults=faults,
-                          options=options, signing_key=key, seed=seed, time_scale=time_scale)
+                          options=options, signing_key=key, seed=seed, time_scale=time_scale,
+                          vary=vary)
 
     def ready() -> None:
         for i, (url, home) in enumerate(zip(simulator.urls, homes)):

@@ -11,16 +11,28 @@ Modelled on ArduCopter wherever ftlbo-mav looks:
   again until the EKF has a position estimate ("Arm: Need Position Estimate";
   libraries/AP_Arming/AP_Arming.cpp, ArduCopter/AP_Arming.cpp ``mandatory_gps_checks``).
 - MAV_CMD_NAV_TAKEOFF is accepted in GUIDED when armed (ArduCopter/GCS_Mavlink.cpp
-  ``handle_command_long_packet``, ``Mode::do_user_takeoff``).
-- AUTO runs the mission from the current item; MAV_CMD_MISSION_START switches to AUTO
-  and starts it (ArduCopter/GCS_Mavlink.cpp); MISSION_SET_CURRENT moves the current
-  item (libraries/AP_Mission/AP_Mission.cpp ``set_current_cmd``).
-- Waypoints count as reached inside WPNAV_RADIUS; NAV_LAND flies to the point, descends
-  at LAND_SPEED and disarms on the ground (ArduCopter/mode_land.cpp,
-  ArduCopter/mode_auto.cpp); RTL climbs to RTL_ALT (15 m), returns home and lands
-  (ArduCopter/mode_rtl.cpp); LOITER_UNLIM holds at its point.
+  ``handle_command_long_packet``, ``Mode::do_user_takeoff``); the copter leaves the
+  ground after the spool-up and throttle slew (recorded ~3 s) and climbs as
+  ``_AutoTakeoff::run`` asks (AC_PosControl's jerk-limited vertical shaping).
+- AUTO runs the mission from the current item as ArduCopter/mode_auto.cpp does:
+  ``do_nav_wp`` / ``wp_start`` / ``set_next_wp`` give AC_WPNav (physics.WaypointNav)
+  the destination and, when the next navigation command is a waypoint and there is no
+  hold time, the next one, so the S-curve blends through the corner; ``verify_nav_wp``
+  reaches a waypoint when AC_WPNav says so, then waits its hold time ("Reached command
+  #N", MISSION_ITEM_REACHED). DO_CHANGE_SPEED runs when reached in the mission
+  (ModeAuto::do_change_speed -> AC_WPNav::set_speed_xy) or as a command.
+  MAV_CMD_MISSION_START switches to AUTO; MISSION_SET_CURRENT moves the current item
+  (libraries/AP_Mission/AP_Mission.cpp ``set_current_cmd``).
+- NAV_LAND flies to its point at the current altitude, then descends as
+  Mode::land_run_vertical_control asks (WPNAV_SPEED_DN above LAND_ALT_LOW, LAND_SPEED
+  below) and disarms once the land detector has seen the touchdown (recorded ~2.1 s);
+  RTL (ArduCopter/mode_rtl.cpp) climbs to RTL_ALT over its stopping point, returns home,
+  waits RTL_LOIT_TIME and lands; LOITER_UNLIM holds at its point.
 - A copter armed on the ground that does not take off disarms after DISARM_DELAY, 10 s
   (ArduCopter/motors.cpp ``auto_disarm_check``).
+- Parameters (PARAM_REQUEST_READ / PARAM_SET) are ArduCopter's defaults for the
+  navigation parameters (:mod:`ftlbo_mav.ardupilot.navigation`); WPNAV_* set in flight
+  apply to the next leg, WPNAV_SPEED at once (AC_WPNav::update_wpnav).
 """
 
 from __future__ import annotations
@@ -38,7 +50,6 @@ from ..ardupilot.commands import (
     DISARMING_MOTORS,
     FORCE_DISARM_MAGIC,
     INSTANT_BOOT,
-    LAND_COMPLETE,
     MISSING_TAKEOFF,
     NEEDS_POSITION,
     READY,
@@ -49,6 +60,8 @@ from ..ardupilot.commands import (
     set_mode_base_ok,
 )
 from ..ardupilot.modes import CopterMode, mode_name
+from ..ardupilot.navigation import DEFAULTS as PARAM_DEFAULTS
+from ..ardupilot.navigation import param_value
 from ..mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_NAV_LAND,
@@ -58,7 +71,7 @@ from ..mission.items import (
     CMD_NAV_WAYPOINT,
     MissionItem,
 )
-from .physics import FlightLimits, reached, step_towards
+from .physics import FlightLimits, VerticalShaper, WaypointNav, landing_rate
 
 STABILIZE, AUTO, GUIDED, LOITER, RTL, LAND, BRAKE = (
     CopterMode.STABILIZE, CopterMode.AUTO, CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL,
@@ -67,13 +80,16 @@ STABILIZE, AUTO, GUIDED, LOITER, RTL, LAND, BRAKE = (
 FLOWN_MODES = frozenset({STABILIZE, CopterMode.ALT_HOLD, AUTO, GUIDED, LOITER, RTL, LAND,
                          CopterMode.POSHOLD, BRAKE})
 
-RTL_ALT_M = 15.0
 STEP_S = 0.02
 _WGS84_A = 6378137.0
 _WGS84_E2 = 6.69437999014e-3
 _NAV_LAST = 95  # MAV_CMD_NAV_LAST: commands below are navigation commands (AP_Mission)
+# AP_Mission / ModeAuto::start_command: "Mission: <seq> <name>" (AP_Mission::Mission_Command::type)
 _MISSION_TEXT = {CMD_NAV_TAKEOFF: "Takeoff", CMD_NAV_WAYPOINT: "WP", CMD_NAV_LAND: "Land",
-                 CMD_NAV_RETURN_TO_LAUNCH: "RTL", CMD_NAV_LOITER_UNLIM: "LoitUnlim"}
+                 CMD_NAV_RETURN_TO_LAUNCH: "RTL", CMD_NAV_LOITER_UNLIM: "LoitUnlim",
+                 CMD_DO_CHANGE_SPEED: "ChangeSpeed"}
+# ModeAuto::set_next_wp: the next commands the copter flies through instead of stopping
+_FLY_THROUGH = (CMD_NAV_WAYPOINT, CMD_NAV_LOITER_UNLIM)
 
 
 def _text(severity_text: tuple[int, str]):
@@ -130,14 +146,25 @@ class Autopilot:
         self.mission: list[MissionItem] = []
         self.current = 0
         self.mission_started = False
-        self.speed_m_s: float | None = None
-        self._target: np.ndarray | None = None  # GUIDED / LOITER / mission hold point
-        self._phase = ""  # within a mode: "climb", "return", "descend", "hold"
+        self.speed_m_s: float | None = None  # ModeAuto desired_speed_override.xy
+        self.params = {name: d.value for name, d in PARAM_DEFAULTS.items()}
+        self.params.update(options.limits.nav.to_params())
+        self._phase = ""  # what the current mode is doing (see _step)
         self._armed_on_ground_since: float | None = None
         self._announced_ready = False
         self._pending: list = []  # announcements made outside advance()
         self._takeoff_at: float | None = None  # spool-up: the climb starts then
-        self.nav = None  # the S-curve navigator of the current mission leg (physics)
+        self._takeoff_alt = 0.0
+        self._takeoff_done_at: float | None = None
+        self._touchdown_at: float | None = None
+        self._wait_until: float | None = None  # a hold time, RTL's loiter, a start latency
+        self._enter = None  # what a new mode starts once the copter has braked
+        self.nav: WaypointNav | None = None  # AC_WPNav, while it is in use
+        self.z = VerticalShaper()  # AC_PosControl's vertical target (takeoff, landing)
+        self._hold_s = 0
+        self._rtl_home = np.zeros(3)
+        self._do_done: list[int] = []  # DO commands started, reached at the next update
+        self._phase_before_item = ""
 
     # -- what the vehicle knows about itself
     @property
@@ -206,16 +233,28 @@ class Autopilot:
             self._pending += [_text(t) for t in refusal]
             return False
         self.mode = mode
-        self._phase = ""
+        self._phase = "hold"
         self.nav = None
-        self.speed_m_s = self.speed_m_s if mode == AUTO else None
-        if mode in (GUIDED, LOITER, BRAKE):
-            self._target = self.position.copy()
-        elif mode == AUTO:
+        self._wait_until = None
+        self._takeoff_at = None
+        if not self.armed:
+            self._enter = None
+            if mode == AUTO:  # ModeAuto::init starts the mission even on the ground
+                self.speed_m_s = None
+                self.current = max(self.current, 1)
+                self._start_item()
+                self._phase, self._takeoff_at, self.nav = "", None, None
+            return True
+        if mode == AUTO:
+            self.speed_m_s = None  # ModeAuto::init clears desired_speed_override
             self.current = max(self.current, 1)
-            self._start_item()
+            self._enter = self._auto_enter
         elif mode == RTL:
-            self._phase, self._target = "climb", None
+            self._enter = self._rtl_enter
+        elif mode == LAND:
+            self._enter = self._descend_enter
+        else:  # GUIDED, LOITER, BRAKE, ...: stop and hold where the copter stops
+            self._enter = self._hold_enter
         return True
 
     def command_set_mode(self, base_mode: float, custom_mode: int, now: float):
@@ -247,26 +286,36 @@ class Autopilot:
         self.velocity[:] = 0.0
         self._armed_on_ground_since = None
         self._takeoff_at = None
-        self.current = 0
+        self._touchdown_at = None
+        self._enter = None
         self.nav = None
+        self._phase = ""
         self._pending.append(_text(DISARMING_MOTORS))
+        # the mission restarts; in AUTO ModeAuto starts its first item again (recorded:
+        # "Mission: 1 Takeoff" and MISSION_CURRENT 1 after the landing's disarm)
+        if self.mode == AUTO and len(self.mission) > 1:
+            self.current = 1
+            name = _MISSION_TEXT.get(self.mission[1].command)
+            if name:
+                self._pending.append(_text((R.MAV_SEVERITY_INFO, f"Mission: 1 {name}")))
+        else:
+            self.current = 0
 
     def takeoff(self, alt_m: float, now: float | None = None) -> bool:
         """MAV_CMD_NAV_TAKEOFF: Mode::do_user_takeoff refuses unless armed, landed
         (``ap.land_complete``) and in a mode that has a user takeoff (GUIDED here)."""
         if not self.armed or self.mode != GUIDED or alt_m <= 0 or not self.landed:
             return False
-        self._target = np.array([self.position[0], self.position[1], alt_m])
-        self._takeoff_at = (self.time if now is None else now) + self.options.limits.spool_up_s
+        self._start_takeoff(alt_m, self.time if now is None else now)
         return True
 
     def set_current(self, seq: int) -> bool:
         if not 0 <= seq < len(self.mission):
             return False
         self.current = seq
-        if self.mode == AUTO:
+        if self.mode == AUTO and self.armed:
+            # AP_Mission::set_current_cmd while running: the new item starts now
             self.current = max(seq, 1)
-            self.nav = None
             self._start_item()
         return True
 
@@ -309,58 +358,201 @@ class Autopilot:
         elif cmd == R.MAV_CMD_NAV_LAND:
             result = R.MAV_RESULT_ACCEPTED if self.set_mode(LAND, now) else result
         elif cmd == R.MAV_CMD_DO_CHANGE_SPEED:
-            if p[1] > 0:  # Copter::set_desired_speed via ModeAuto / ModeGuided
-                self.speed_m_s = float(p[1])
-                if self.nav is not None:
-                    self.nav.set_speed(float(p[1]))
+            if p[1] > 0:  # GCS_MAVLINK handle_MAV_CMD_DO_CHANGE_SPEED -> set_speed_xy
+                self.change_speed(float(p[1]))
                 result = R.MAV_RESULT_ACCEPTED
         else:
             result = R.MAV_RESULT_UNSUPPORTED
         return result, self._take_pending()
 
+
+    # -- parameters (GCS_Param.cpp)
+    def nav_params(self):
+        """The navigation parameters now (the defaults, as set by PARAM_SET)."""
+        return self.options.limits.nav.with_params(self.params)
+
+    def get_param(self, name: str) -> tuple[float, int] | None:
+        """``(value, MAV_PARAM_TYPE)`` of a parameter the emulator has, else None."""
+        if name not in self.params:
+            return None
+        return self.params[name], PARAM_DEFAULTS[name].type
+
+    def set_param(self, name: str, value: float) -> bool:
+        """PARAM_SET: False for an unknown parameter or a non-finite value (ignored, as
+        GCS_MAVLINK::handle_param_set does). WPNAV_SPEED applies to the leg being flown
+        when no speed was set for it (AC_WPNav::update_wpnav); the others to the next."""
+        if name not in self.params or not math.isfinite(value):
+            return False
+        self.params[name] = param_value(name, value)
+        if name == "WPNAV_SPEED" and self.nav is not None:
+            self.nav.param_speed_changed(self.params[name] / 100.0)
+        return True
+
+    def change_speed(self, speed_m_s: float) -> None:
+        """DO_CHANGE_SPEED (ground speed): AC_WPNav::set_speed_xy on the navigation in use;
+        in AUTO also kept for the legs to come (ModeAuto desired_speed_override)."""
+        if self.mode == AUTO:
+            self.speed_m_s = speed_m_s
+        if self.nav is not None:
+            self.nav.set_speed_xy(speed_m_s)
+
+    def goto(self, target: np.ndarray) -> bool:
+        """GUIDED: fly to ``target`` (ENU metres) with AC_WPNav (ModeGuided::set_destination)."""
+        if self.mode != GUIDED or not self.armed or self.landed:
+            return False
+        self._takeoff_at = self._enter = None
+        self._start_nav()
+        self.nav.set_destination(np.asarray(target, float))
+        self._phase = "goto"
+        return True
+
     # -- mission execution
     def _item(self) -> MissionItem | None:
         return self.mission[self.current] if 0 < self.current < len(self.mission) else None
 
-    def _item_target(self, item: MissionItem) -> np.ndarray:
+    def _default_point(self) -> np.ndarray:
+        """ModeAuto::do_nav_wp's default location: the last destination once reached,
+        else where the copter is."""
+        if self.nav is not None and self.nav.reached:
+            return self.nav.destination.copy()
+        return self.position.copy()
+
+    def _item_target(self, item: MissionItem, default: np.ndarray) -> np.ndarray:
+        """ModeAuto::loc_from_cmd: zero latitude and longitude, or zero altitude, mean
+        the default's."""
         if item.lat_deg == 0 and item.lon_deg == 0:
-            east, north = self.position[0], self.position[1]
+            east, north = default[0], default[1]
         else:
             east, north = self.tangent.to_en(item.lat_deg, item.lon_deg)
-        return np.array([east, north, item.alt_m])
+        return np.array([east, north, item.alt_m if item.alt_m != 0 else default[2]])
+
+    def _next_nav(self) -> MissionItem | None:
+        for item in self.mission[self.current + 1:]:
+            if item.command < _NAV_LAST:
+                return item
+        return None
+
+    def _start_nav(self, stopping_point: np.ndarray | None = None) -> None:
+        """AC_WPNav::wp_and_spline_init at the copter's (stopped) position."""
+        point = self.position.copy() if stopping_point is None else stopping_point
+        self.nav = WaypointNav(self.nav_params(), point, self.speed_m_s)
+
+    def _wp_start(self, target: np.ndarray, stopping_point: np.ndarray | None = None) -> None:
+        """ModeAuto::wp_start."""
+        if self.nav is None:
+            self._start_nav(stopping_point)
+        self.nav.set_destination(target)
 
     def _start_item(self) -> None:
-        """Begin the current item; DO_ commands run at once and move on."""
+        """AP_Mission::advance_current_nav_cmd: DO commands run as they come (and are
+        reached at the next update), then the navigation command starts
+        (ModeAuto::start_command, "Mission: N <name>")."""
         self._phase = ""
-        while (item := self._item()) is not None and item.command == CMD_DO_CHANGE_SPEED:
-            self.speed_m_s = item.param2 if item.param2 > 0 else None
+        self._wait_until = None
+        while (item := self._item()) is not None and item.command >= _NAV_LAST:
+            self._announce_start(item)
+            if item.command == CMD_DO_CHANGE_SPEED and item.param2 > 0:
+                self.change_speed(float(item.param2))  # ModeAuto::do_change_speed
+            self._do_done.append(self.current)
             self.current += 1
-        item = self._item()
         if item is None:
-            self._target = self.position.copy()
-            self._phase = "done"
+            self._phase = "done"  # ModeAuto::exit_mission: hold (or disarm if landed)
             return
-        if item.command in _MISSION_TEXT:  # ModeAuto::start_command
-            self._pending.append(_text((R.MAV_SEVERITY_INFO,
-                                        f"Mission: {self.current} {_MISSION_TEXT[item.command]}")))
+        self._announce_start(item)
+        default = self._default_point()
         if item.command == CMD_NAV_TAKEOFF:
-            self._target = np.array([self.position[0], self.position[1], item.alt_m])
+            self.nav = None
+            self._start_takeoff(item.alt_m, self.time)
         elif item.command in (CMD_NAV_WAYPOINT, CMD_NAV_LOITER_UNLIM):
-            self._target = self._item_target(item)
+            target = self._item_target(item, default)
+            self._wp_start(target, self._takeoff_point())
+            nxt = self._next_nav()
+            hold = int(item.param1) if item.command == CMD_NAV_WAYPOINT else 0
+            if hold <= 0 and nxt is not None and nxt.command in _FLY_THROUGH:
+                self.nav.set_destination_next(self._item_target(nxt, target))
+            self._hold_s = max(hold, 0)
+            self._phase = "wp"
         elif item.command == CMD_NAV_LAND:
-            target = self._item_target(item)
-            target[2] = self.position[2]
-            self._target, self._phase = target, "return"
+            if item.lat_deg == 0 and item.lon_deg == 0:
+                self._descend_enter()
+            else:  # ModeAuto::do_land: fly there at the current altitude first
+                target = self._item_target(item, default)
+                target[2] = self.position[2]
+                self._wp_start(target, self._takeoff_point())
+                self._phase = "land_fly"
         elif item.command == CMD_NAV_RETURN_TO_LAUNCH:
-            self._phase, self._target = "climb", None
+            self._rtl_enter()
         else:  # commands the emulator does not fly are skipped, like unsupported ones
             self.current += 1
             self._start_item()
 
-    def _next_item(self, out: list) -> None:
+    def _announce_start(self, item: MissionItem) -> None:
+        name = _MISSION_TEXT.get(item.command)
+        if name:
+            self._pending.append(_text((R.MAV_SEVERITY_INFO, f"Mission: {self.current} {name}")))
+
+    def _takeoff_point(self) -> np.ndarray | None:
+        """ModeAuto::wp_start right after a takeoff: the takeoff's completion point."""
+        if self._phase_before_item == "takeoff_done":
+            return np.array([self.position[0], self.position[1], self._takeoff_alt])
+        return None
+
+    def _reached(self, out: list) -> None:
+        """verify_command true: "Reached command #N" (for waypoints) and
+        MISSION_ITEM_REACHED, then the next item."""
+        item = self._item()
+        if item is not None and item.command == CMD_NAV_WAYPOINT:
+            out.append(_text((R.MAV_SEVERITY_INFO, f"Reached command #{self.current}")))
         out.append(R.MAVLink_mission_item_reached_message(self.current))
         self.current += 1
         self._start_item()
+
+    # -- mode starts (once the copter has stopped)
+    def _hold_enter(self) -> None:
+        self.nav = None
+        self._phase = "hover" if self._takeoff_done_at is not None else "hold"
+
+    def _auto_enter(self) -> None:
+        """ModeAuto::init, then AP_Mission::start_or_resume from the current item (after
+        the vehicle's start latency, if it has one)."""
+        self.nav = None
+        self._phase_before_item = ""
+        latency = self.options.limits.start_latency_s
+        if latency > 0:
+            self._wait_until = self.time + latency
+            self._phase = "auto_wait"
+        else:
+            self._start_item()
+
+    def _rtl_enter(self) -> None:
+        """ModeRTL::init / build_path / climb_start: from the stopping point climb to the
+        return altitude (RTL_ALT, never lower than now), blended into the return home."""
+        nav = self.nav_params()
+        self.nav = WaypointNav(nav, self.position.copy(),
+                               nav.rtl_speed if nav.rtl_speed > 0 else None)
+        alt = max(float(self.position[2]), nav.rtl_alt)
+        self._rtl_home = np.array([0.0, 0.0, alt])
+        self.nav.set_destination(np.array([self.position[0], self.position[1], alt]))
+        self.nav.set_destination_next(self._rtl_home)
+        self._phase = "rtl_climb"
+
+    def _descend_enter(self) -> None:
+        """Landing: the vertical target starts where the copter is."""
+        self.nav = None
+        self.z = VerticalShaper(pos=float(self.position[2]), vel=float(self.velocity[2]))
+        self.velocity[:2] = 0.0
+        self._phase = "descend"
+
+    def _start_takeoff(self, alt_m: float, now: float) -> None:
+        """Mode::do_user_takeoff / ModeAuto::takeoff_start -> _AutoTakeoff::start: from
+        the ground the climb starts after the spool-up and throttle slew."""
+        self._enter = None
+        self._takeoff_alt = alt_m
+        self._takeoff_done_at = None
+        delay = self.options.limits.takeoff_delay_s if self.landed else 0.0
+        self._takeoff_at = now + delay
+        self.z = VerticalShaper(pos=float(self.position[2]), vel=float(self.velocity[2]))
+        self._phase = "takeoff"
 
     # -- time
     def advance(self, now: float) -> list:
@@ -371,92 +563,143 @@ class Autopilot:
             # a mode set by a GCS before then is lost (boot.json)
             self._announced_ready = True
             if self.mode != STABILIZE and not self.armed:
-                self.mode, self._target, self._phase = STABILIZE, None, ""
+                self.mode, self._phase = STABILIZE, ""
             out.append(_text(READY))
         while self.time < now - 1e-9:  # fixed steps, the last one shortened to end at now
             dt = min(STEP_S, now - self.time)
             self.time += dt
+            self._flush_do(out)
             self._step(dt, out)
+            out += self._take_pending()
+        self._flush_do(out)
         return out + self._take_pending()
 
-    def _fly(self, target: np.ndarray, dt: float, *, stop: bool = True, speed=None) -> None:
-        self.position, self.velocity = step_towards(
-            self.position, self.velocity, target, dt, self.options.limits, stop=stop,
-            speed_m_s=speed if speed is not None else self.speed_m_s)
+    def _flush_do(self, out: list) -> None:
+        """DO commands are reached at the mission's next update (AP_Mission::update)."""
+        out += self._take_pending()
+        for seq in self._do_done:
+            out.append(R.MAVLink_mission_item_reached_message(seq))
+        self._do_done = []
+
+    def _brake(self, dt: float) -> bool:
+        """Stop before a new mode's navigation starts (AC_PosControl's stopping point,
+        reached at WPNAV_ACCEL); True while still moving."""
+        speed = float(np.linalg.norm(self.velocity))
+        if speed < 1e-3:
+            self.velocity[:] = 0.0
+            return False
+        cut = min(speed, self.nav_params().wp_accel * dt)
+        new = self.velocity * (1.0 - cut / speed)
+        self.position = self.position + (self.velocity + new) / 2 * dt
         self.position[2] = max(self.position[2], 0.0)
+        self.velocity = new
+        return True
 
     def _step(self, dt: float, out: list) -> None:
         if not self.armed:
             return
         limits = self.options.limits
-        if self._takeoff_at is not None:
-            if self.time < self._takeoff_at:  # motors spooling up (Mode::_TakeOff::start)
+        if self._touchdown_at is not None:  # on the ground: the land detector's delay
+            if self.time - self._touchdown_at >= limits.disarm_after_touchdown_s:
+                self.disarm()
+            return
+        if self._enter is not None:
+            if not self.landed and self._brake(dt):
                 return
-            self._takeoff_at = None
-        if self.mode in (GUIDED, LOITER, BRAKE) and self._target is not None:
-            self._fly(self._target, dt)
-        elif self.mode == LAND or (self.mode in (RTL, AUTO) and self._phase == "descend"):
-            self._descend(dt, out)
-        elif self.mode == RTL or (self.mode == AUTO and self._phase in ("climb", "home")):
-            self._rtl(dt)
-        elif self.mode == AUTO:
-            self._auto(dt, out, limits)
+            enter, self._enter = self._enter, None
+            enter()
+        phase = self._phase
+        if phase == "takeoff":
+            self._takeoff_step(dt, out)
+        elif phase == "hover":
+            self._hover_step(dt)
+        elif phase in ("wp", "land_fly", "goto", "rtl_climb", "rtl_return", "rtl_loiter"):
+            self._nav_step(dt, out)
+        elif phase == "descend":
+            self._descend_step(dt)
+        elif phase == "auto_wait":
+            if self.time >= self._wait_until:
+                self._wait_until = None
+                self._start_item()
+        elif phase == "done" and self.landed:  # ModeAuto::exit_mission on the ground
+            self.disarm()
         if self._armed_on_ground_since is not None and self.landed and self.mode != AUTO:
-            if self.time - self._armed_on_ground_since >= DISARM_DELAY_S and (
-                self._target is None or self._target[2] <= 0.05
-            ):
+            if (self.time - self._armed_on_ground_since >= DISARM_DELAY_S
+                    and self._takeoff_at is None and self._phase != "takeoff"):
                 self.disarm()
         if not self.landed:
             self._armed_on_ground_since = None
 
-    def _auto(self, dt: float, out: list, limits: FlightLimits) -> None:
-        item = self._item()
-        if item is None or self._target is None:
-            return
-        if item.command == CMD_NAV_TAKEOFF:
-            self._fly(self._target, dt)
-            if abs(self.position[2] - self._target[2]) < 0.1:
-                self._next_item(out)
-        elif item.command == CMD_NAV_WAYPOINT:
-            nxt = self.mission[self.current + 1] if self.current + 1 < len(self.mission) else None
-            through = nxt is not None and nxt.command == CMD_NAV_WAYPOINT
-            self._fly(self._target, dt, stop=not through)
-            if reached(self.position, self._target, limits) if through else (
-                np.linalg.norm(self._target - self.position) < 0.1
-            ):
-                self._next_item(out)
-        elif item.command == CMD_NAV_LOITER_UNLIM:
-            self._fly(self._target, dt)
-        elif item.command == CMD_NAV_LAND and self._phase == "return":
-            self._fly(self._target, dt)
-            if np.linalg.norm(self._target[:2] - self.position[:2]) < 0.1:
-                self._phase = "descend"
+    def _takeoff_step(self, dt: float, out: list) -> None:
+        """_AutoTakeoff::run: shape the altitude to the takeoff altitude at WPNAV_SPEED_UP,
+        WPNAV_ACCEL_Z, PSC_JERK_Z; complete when the target is within the stopping distance
+        of a tenth of the climb speed and climbs slower than that."""
+        if self._takeoff_at is not None:
+            if self.time < self._takeoff_at:
+                return  # motors spooling up, throttle slewing (still on the ground)
+            self._takeoff_at = None
+        nav = self.nav_params()
+        self.z.to_altitude(self._takeoff_alt, dt, up=nav.wp_speed_up, down=nav.wp_speed_dn,
+                           accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
+        self.position[2] = max(self.z.pos, 0.0)
+        self.velocity[:] = (0.0, 0.0, self.z.vel)
+        slow = 0.1 * nav.wp_speed_up
+        if (self.z.pos >= self._takeoff_alt - 0.5 * slow * slow / nav.wp_accel_z
+                and self.z.vel < slow):
+            self._takeoff_done_at = self.time
+            if self.mode == AUTO:  # ModeAuto::verify_takeoff
+                self._phase_before_item = "takeoff_done"
+                self._reached(out)
+                self._phase_before_item = ""
+            else:  # GUIDED keeps running the takeoff controller: it hovers there
+                self._phase = "hover"
 
-    def _rtl(self, dt: float) -> None:
-        if self._phase == "climb":
-            if self._target is None or self._target[2] < RTL_ALT_M - 1e-9:
-                alt = max(self.position[2], RTL_ALT_M)
-                self._target = np.array([self.position[0], self.position[1], alt])
-            self._fly(self._target, dt)
-            if abs(self.position[2] - self._target[2]) < 0.1 and abs(self.velocity[2]) < 0.2:
-                self._phase = "home"
-                self._target = np.array([0.0, 0.0, self._target[2]])
-        elif self._phase == "home":
-            self._fly(self._target, dt)
-            if np.linalg.norm(self._target[:2] - self.position[:2]) < 0.1:
-                self._phase = "descend"
-        else:
-            self._phase = "climb"
+    def _hover_step(self, dt: float) -> None:
+        """Hovering after a GUIDED takeoff: the altitude target settles on the takeoff
+        altitude, the copter ``hover_error_m`` below it (FlightLimits)."""
+        nav = self.nav_params()
+        self.z.to_altitude(self._takeoff_alt, dt, up=nav.wp_speed_up, down=nav.wp_speed_dn,
+                           accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
+        settled = min(1.0, (self.time - self._takeoff_done_at) / 1.0)
+        self.position[2] = self.z.pos - self.options.limits.hover_error_m * settled
+        self.velocity[:] = (0.0, 0.0, self.z.vel)
 
-    def _descend(self, dt: float, out: list) -> None:
-        land = self.options.limits.land_m_s
-        self.velocity[:2] = 0.0
-        self.velocity[2] = -land
-        self.position[2] = max(self.position[2] - land * dt, 0.0)
+    def _nav_step(self, dt: float, out: list) -> None:
+        nav = self.nav
+        nav.advance(dt, self.position)
+        self.position = nav.target.copy()
+        self.position[2] = max(self.position[2], 0.0)
+        self.velocity = nav.target_vel.copy()
+        phase = self._phase
+        if phase == "wp":
+            item = self._item()
+            if nav.reached and item is not None and item.command == CMD_NAV_WAYPOINT:
+                if self._hold_s > 0 and self._wait_until is None:  # ModeAuto::verify_nav_wp
+                    self._wait_until = self.time + self._hold_s
+                if self._wait_until is None or self.time >= self._wait_until:
+                    self._reached(out)
+        elif phase == "land_fly" and nav.reached:
+            self._descend_enter()  # ModeAuto::land_run: FlyToLocation -> Descending
+        elif phase == "rtl_climb" and nav.reached:
+            nav.set_destination(self._rtl_home)  # ModeRTL::return_start
+            self._phase = "rtl_return"
+        elif phase == "rtl_return" and nav.reached:  # ModeRTL::loiterathome_start
+            self._wait_until = self.time + self.nav_params().rtl_loit_time
+            self._phase = "rtl_loiter"
+        elif phase == "rtl_loiter" and self.time >= self._wait_until:
+            self._wait_until = None
+            self._descend_enter()  # ModeRTL::land_start (RTL_ALT_FINAL 0)
+
+    def _descend_step(self, dt: float) -> None:
+        """Mode::land_run_vertical_control: descend at :func:`physics.landing_rate`
+        (the copter achieving ``land_rate_achieved`` of it), shaped by WPNAV_ACCEL_Z and
+        PSC_JERK_Z; on the ground the land detector's delay starts."""
+        nav = self.nav_params()
+        rate = landing_rate(nav, float(self.position[2]), dt)
+        rate *= self.options.limits.land_rate_achieved
+        self.z.at_rate(rate, dt, accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
+        self.position[2] = max(self.z.pos, 0.0)
+        self.velocity[:] = (0.0, 0.0, self.z.vel)
         if self.position[2] <= 0.0:
             self.velocity[:] = 0.0
-            if self.mode == AUTO and self._item() is not None:
-                out.append(R.MAVLink_mission_item_reached_message(self.current))
-            out.append(_text(LAND_COMPLETE))
-            self.disarm()
-            self._phase = "landed"
+            self._touchdown_at = self.time

@@ -15,12 +15,14 @@ import signal
 import threading
 import time
 from collections.abc import Callable, Hashable, Sequence
+from dataclasses import replace
 from typing import Self
 
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from .faults import Faults, FaultyPipe
+from .physics import varied
 from .vehicle import Vehicle, VehicleOptions
 
 TICK_S = 0.02
@@ -159,7 +161,9 @@ class Simulator:
     listens on ``base_port + 10*i``; ``0`` lets the system choose free ports (tests).
     ``faults`` / ``options``: one for all vehicles, or one per vehicle. ``seed``: seeds
     the fault decisions. ``time_scale``: the vehicles' clock runs this many times faster
-    than the wall clock (flights in tests; link latency stays real). Use
+    than the wall clock (flights in tests; link latency stays real). ``vary``: each
+    vehicle's flight differs a little, as in a real fleet (a start latency, WPNAV_JERK;
+    :func:`~ftlbo_mav.sim.physics.varied`), drawn from ``seed``; off by default. Use
     ``with Simulator(...) as sim:`` (background thread) or
     :meth:`run` (foreground, until interrupted). ``urls`` gives the client connection
     strings; ``udp_url`` the shared link's, when ``udp_out`` is set.
@@ -170,7 +174,7 @@ class Simulator:
                  faults: Faults | Sequence[Faults] | None = None,
                  options: VehicleOptions | Sequence[VehicleOptions] | None = None,
                  signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1,
-                 time_scale: float = 1.0):
+                 time_scale: float = 1.0, vary: bool = False):
         n = len(homes)
         if time_scale <= 0:
             raise ValueError("time_scale must be positive")
@@ -185,6 +189,9 @@ class Simulator:
         self.options = list(options) if not isinstance(options, VehicleOptions) else [options] * n
         if len(self.faults) != n or len(self.options) != n:
             raise ValueError("faults and options: one for all vehicles, or one per vehicle")
+        if vary:
+            self.options = [replace(o, limits=varied(o.limits, np.random.default_rng(
+                [seed, 0x7A, i]))) for i, o in enumerate(self.options)]
         self.signing_key, self.seed, self.first_sysid = signing_key, seed, first_sysid
         self.ports: list[int] = []
         self.runners: list[VehicleRunner] = []

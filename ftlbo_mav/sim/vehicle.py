@@ -24,6 +24,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot.commands import INSTANT_BOOT, BootTimeline
 from ..ardupilot.modes import CopterMode
+from ..ardupilot.navigation import PARAM_COUNT
 from ..ardupilot.streams import data_stream_messages
 from ..mission.items import MissionItem
 from .autopilot import Autopilot, AutopilotOptions
@@ -51,7 +52,9 @@ class VehicleOptions:
     ``interval_drop_s``: a SET_MESSAGE_INTERVAL received this soon after boot is
     acknowledged and then lost (SITL: the first request, sent as the first client
     connects, is; one 24 ms later is kept). ``limits``: the copter's navigation
-    parameters."""
+    parameters (ArduCopter's defaults, :class:`~ftlbo_mav.sim.physics.FlightLimits`) and
+    what its airframe adds; :func:`~ftlbo_mav.sim.physics.varied` makes one copter of a
+    real fleet (start latency, WPNAV_JERK)."""
 
     heartbeat_s: float = 1.0
     ready_after_s: float = 0.0
@@ -168,6 +171,8 @@ class Vehicle:
         news = self._announce(self.autopilot.advance(now), link)
         if kind in ("COMMAND_LONG", "SET_MODE", "MISSION_SET_CURRENT", "REQUEST_DATA_STREAM"):
             replies = self._command(msg, now, st)
+        elif kind in ("PARAM_REQUEST_READ", "PARAM_SET"):
+            replies = self._param(msg)
         else:
             replies = self.missions.handle(msg, now, link)
             self.home_for_missions(now)
@@ -293,6 +298,31 @@ class Vehicle:
             extra.append((EVERY_LINK, self.mission_current()))
         return ([(EVERY_LINK, m) for m in texts] + [(SENDER, self._ack(cmd, result, sender))]
                 + extra)
+
+    def _param(self, msg) -> list:
+        """GCS_Param.cpp: PARAM_REQUEST_READ by name is answered with PARAM_VALUE on the
+        asking link (param_index -1, as sent for a read by name); an unknown name or a
+        read by index of a parameter the emulator lacks gets nothing. PARAM_SET of a known
+        parameter sets it and PARAM_VALUE goes to every active link
+        (GCS::send_parameter_value); an unknown one or a NaN is ignored."""
+        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+        name = name.rstrip("\x00")
+        ap = self.autopilot
+        if msg.get_type() == "PARAM_SET":
+            if not ap.set_param(name, float(msg.param_value)):
+                return []
+            to = EVERY_LINK
+        else:
+            if msg.param_index != -1:
+                return []  # the emulator keeps no parameter table to index
+            to = SENDER
+        known = ap.get_param(name)
+        if known is None:
+            return []
+        value, kind = known
+        # param_index -1 is 65535 on the wire (uint16), as recorded in flight.json
+        return [(to, R.MAVLink_param_value_message(name.encode(), value, kind, PARAM_COUNT,
+                                                   0xFFFF))]
 
     @staticmethod
     def _ack(command: int, result: int, to: tuple[int, int]):

@@ -84,3 +84,30 @@ def test_only_messages_for_this_vehicle_are_handled():
     assert [m for m in v.handle(for_other, 0.0) if m.get_type() != "STATUSTEXT"] == []
     (reply,) = [m for m in v.handle(for_me, 0.0) if m.get_type() != "STATUSTEXT"]
     assert reply.get_type() == "MISSION_COUNT" and reply.target_system == 255
+
+
+def test_param_request_read_and_param_set_are_answered_as_gcs_param_does():
+    v = Vehicle(sysid=1, home=HOME)
+    v.link("B", 0.0)
+    packer = R.MAVLink(None, srcSystem=255, srcComponent=190)
+    parse = R.MAVLink(None).parse_char
+
+    def wire(m):
+        return parse(bytes(m.pack(packer)))
+
+    def values(msgs):
+        return [m for m in msgs if m.get_type() == "PARAM_VALUE"]
+
+    (pv,) = values(v.handle(wire(R.MAVLink_param_request_read_message(
+        1, 1, b"WPNAV_SPEED", -1)), 1.0, "A"))
+    assert (pv.param_id, pv.param_value, pv.param_type) == ("WPNAV_SPEED", 1000.0, 9)
+    assert pv.param_count == 1390 and pv.param_index == 65535  # as flight.json recorded
+    assert values(v.handle(wire(R.MAVLink_param_request_read_message(1, 1, b"NO_SUCH", -1)),
+                           1.0, "A")) == []
+    (pv,) = values(v.handle(wire(R.MAVLink_param_set_message(1, 1, b"WPNAV_SPEED", 500.0, 9)),
+                            1.0, "A"))
+    assert pv.param_value == 500.0
+    assert v.autopilot.nav_params().wp_speed == 5.0
+    v.handle(wire(R.MAVLink_heartbeat_message(6, 8, 0, 0, 0, 3)), 1.0, "B")  # B is active
+    v.handle(wire(R.MAVLink_param_set_message(1, 1, b"LAND_SPEED", 30.0, 4)), 1.0, "A")
+    assert any(m.get_type() == "PARAM_VALUE" for m in v.tick(1.01)["B"])

@@ -1,0 +1,185 @@
+"""ArduCopter 4.5's navigation parameters: their defaults, units and MAVLink types.
+
+The parameters ftlbo-mav and its emulator depend on, as ArduCopter 4.5.6 defines them
+(the source of each default is given with it), and the same values in SI units as
+:class:`Navigation`. ``tests/data/ardupilot-4.5.6/flight.json`` ``params`` holds what
+ArduCopter 4.5.6 SITL with copter.parm answered to PARAM_REQUEST_READ; a test holds
+these defaults to it (copter.parm changes none of them).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
+
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+GRAVITY_M_S2 = 9.80665  # AP_Math/definitions.h GRAVITY_MSS
+
+REAL32, INT8, INT16, INT32 = (R.MAV_PARAM_TYPE_REAL32, R.MAV_PARAM_TYPE_INT8,
+                              R.MAV_PARAM_TYPE_INT16, R.MAV_PARAM_TYPE_INT32)
+
+# PARAM_VALUE param_count on ArduCopter 4.5.6 SITL with copter.parm (flight.json)
+PARAM_COUNT = 1390
+
+
+@dataclass(frozen=True)
+class ParamDefault:
+    value: float   # in the parameter's own units (cm, cm/s, cdeg, ...)
+    type: int      # MAV_PARAM_TYPE, as PARAM_VALUE reports it
+    source: str    # where ArduPilot 4.5.6 defines it
+
+
+_WPNAV = "libraries/AC_WPNav/AC_WPNav.cpp var_info"
+_COPTER = "ArduCopter/Parameters.cpp"
+_PSC = "libraries/AC_AttitudeControl/AC_PosControl.cpp var_info"
+_ATC = "libraries/AC_AttitudeControl/AC_AttitudeControl.cpp var_info"
+
+DEFAULTS: Mapping[str, ParamDefault] = {
+    "WPNAV_SPEED": ParamDefault(1000.0, REAL32, _WPNAV + " (WPNAV_WP_SPEED, cm/s)"),
+    "WPNAV_RADIUS": ParamDefault(200.0, REAL32, _WPNAV + " (WPNAV_WP_RADIUS, cm)"),
+    "WPNAV_SPEED_UP": ParamDefault(250.0, REAL32, _WPNAV + " (WPNAV_WP_SPEED_UP, cm/s)"),
+    "WPNAV_SPEED_DN": ParamDefault(150.0, REAL32, _WPNAV + " (WPNAV_WP_SPEED_DOWN, cm/s)"),
+    "WPNAV_ACCEL": ParamDefault(250.0, REAL32, "AC_WPNav.h WPNAV_ACCELERATION (cm/s/s)"),
+    "WPNAV_ACCEL_Z": ParamDefault(100.0, REAL32, _WPNAV + " (WPNAV_WP_ACCEL_Z_DEFAULT)"),
+    "WPNAV_JERK": ParamDefault(1.0, REAL32, _WPNAV + " (m/s/s/s)"),
+    "WPNAV_ACCEL_C": ParamDefault(0.0, REAL32, _WPNAV + " (0: twice WPNAV_ACCEL)"),
+    "WPNAV_TER_MARGIN": ParamDefault(10.0, REAL32, _WPNAV + " (m)"),
+    "LAND_SPEED": ParamDefault(50.0, INT16, _COPTER + " (LAND_SPEED, cm/s)"),
+    "LAND_SPEED_HIGH": ParamDefault(0.0, INT16, _COPTER + " (0: WPNAV_SPEED_DN)"),
+    "LAND_ALT_LOW": ParamDefault(1000.0, INT16, _COPTER + " (cm)"),
+    "PILOT_SPEED_UP": ParamDefault(250.0, INT16, _COPTER + " (cm/s)"),
+    "PILOT_SPEED_DN": ParamDefault(0.0, INT16, _COPTER + " (0: PILOT_SPEED_UP)"),
+    "PILOT_TKOFF_ALT": ParamDefault(0.0, REAL32, _COPTER + " (cm)"),
+    "WP_YAW_BEHAVIOR": ParamDefault(2.0, INT8, _COPTER + " (2: face the next waypoint)"),
+    "RTL_ALT": ParamDefault(1500.0, INT32, _COPTER + " (RTL_ALT, cm)"),
+    "RTL_SPEED": ParamDefault(0.0, INT16, _COPTER + " (0: WPNAV_SPEED)"),
+    "RTL_ALT_FINAL": ParamDefault(0.0, INT16, _COPTER + " (cm; 0: land)"),
+    "RTL_LOIT_TIME": ParamDefault(5000.0, INT32, _COPTER + " (ms)"),
+    "DISARM_DELAY": ParamDefault(10.0, INT8, "ArduCopter/Parameters.cpp (s)"),
+    "PSC_JERK_XY": ParamDefault(5.0, REAL32, _PSC + " (POSCONTROL_JERK_XY, m/s/s/s)"),
+    "PSC_JERK_Z": ParamDefault(5.0, REAL32, _PSC + " (POSCONTROL_JERK_Z, m/s/s/s)"),
+    "PSC_POSZ_P": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_POS_Z_P)"),
+    "PSC_POSXY_P": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_POS_XY_P)"),
+    "ATC_INPUT_TC": ParamDefault(0.15, REAL32, _ATC + " (AC_ATTITUDE_CONTROL_INPUT_TC_DEFAULT)"),
+    "ATC_ACCEL_R_MAX": ParamDefault(110000.0, REAL32, _ATC + " (cdeg/s/s)"),
+    "ATC_ACCEL_P_MAX": ParamDefault(110000.0, REAL32, _ATC + " (cdeg/s/s)"),
+    "ATC_RATE_R_MAX": ParamDefault(0.0, REAL32, _ATC + " (deg/s; 0: unlimited)"),
+    "ATC_RATE_P_MAX": ParamDefault(0.0, REAL32, _ATC + " (deg/s; 0: unlimited)"),
+    "TKOFF_SLEW_TIME": ParamDefault(2.0, REAL32, _COPTER + " (s)"),
+    "MOT_SPOOL_TIME": ParamDefault(0.5, REAL32, "libraries/AP_Motors/AP_MotorsMulticopter.cpp"),
+}
+
+
+@dataclass(frozen=True)
+class Navigation:
+    """The navigation parameters in SI units (metres, seconds, radians)."""
+
+    wp_speed: float = 10.0        # WPNAV_SPEED
+    wp_radius: float = 2.0        # WPNAV_RADIUS
+    wp_speed_up: float = 2.5      # WPNAV_SPEED_UP
+    wp_speed_dn: float = 1.5      # WPNAV_SPEED_DN
+    wp_accel: float = 2.5         # WPNAV_ACCEL
+    wp_accel_z: float = 1.0       # WPNAV_ACCEL_Z
+    wp_jerk: float = 1.0          # WPNAV_JERK
+    wp_accel_c: float = 0.0       # WPNAV_ACCEL_C
+    land_speed: float = 0.5       # LAND_SPEED
+    land_speed_high: float = 0.0  # LAND_SPEED_HIGH
+    land_alt_low: float = 10.0    # LAND_ALT_LOW
+    rtl_alt: float = 15.0         # RTL_ALT
+    rtl_speed: float = 0.0        # RTL_SPEED
+    rtl_alt_final: float = 0.0    # RTL_ALT_FINAL
+    rtl_loit_time: float = 5.0    # RTL_LOIT_TIME
+    disarm_delay: float = 10.0    # DISARM_DELAY
+    psc_jerk_xy: float = 5.0      # PSC_JERK_XY
+    psc_jerk_z: float = 5.0       # PSC_JERK_Z
+    psc_posz_p: float = 1.0       # PSC_POSZ_P
+    psc_posxy_p: float = 1.0      # PSC_POSXY_P
+    atc_input_tc: float = 0.15    # ATC_INPUT_TC
+    atc_accel_rp_max: float = math.radians(1100.0)  # ATC_ACCEL_R_MAX / _P_MAX, rad/s/s
+    atc_rate_rp_max: float = 0.0  # ATC_RATE_R_MAX / _P_MAX, rad/s (0: unlimited)
+
+    def corner_accel(self) -> float:
+        """AC_WPNav::get_corner_acceleration: WPNAV_ACCEL_C, or twice WPNAV_ACCEL."""
+        return self.wp_accel_c if self.wp_accel_c > 0 else 2.0 * self.wp_accel
+
+    def scurve_jerk_snap(self) -> tuple[float, float]:
+        """AC_WPNav::calc_scurve_jerk_and_snap: the S-curve's jerk (WPNAV_JERK, at most
+        what the rate limits allow) and snap (the jerk over the attitude time constant,
+        at most the angular acceleration limit, then halved)."""
+        jerk = self.wp_jerk
+        if self.atc_rate_rp_max > 0:
+            jerk = min(jerk, self.atc_rate_rp_max * GRAVITY_M_S2)
+        snap = jerk * math.pi / (2.0 * max(self.atc_input_tc, 0.1))
+        if self.atc_accel_rp_max > 0:
+            snap = min(snap, self.atc_accel_rp_max * GRAVITY_M_S2)
+        return jerk, snap * 0.5
+
+    def land_descent_speed(self) -> float:
+        """Mode::land_run_vertical_control: the fastest descent while landing (m/s,
+        positive): LAND_SPEED_HIGH, else WPNAV_SPEED_DN, never slower than LAND_SPEED."""
+        high = self.land_speed_high if self.land_speed_high > 0 else self.wp_speed_dn
+        return max(high, abs(self.land_speed))
+
+    # -- as parameters
+    def to_params(self) -> dict[str, float]:
+        """These values as ArduPilot parameters, in their own units."""
+        out = {name: d.value for name, d in DEFAULTS.items()}
+        for name, attr, scale in _SCALES:
+            out[name] = getattr(self, attr) * scale
+        return out
+
+    def with_params(self, values: Mapping[str, float]) -> Navigation:
+        """A copy with the named parameters (ArduPilot units) set; others ignored."""
+        change = {attr: float(values[name]) / scale for name, attr, scale in _SCALES
+                  if name in values}
+        return replace(self, **change)
+
+
+# parameter, Navigation field, units per SI unit
+_SCALES = (
+    ("WPNAV_SPEED", "wp_speed", 100.0), ("WPNAV_RADIUS", "wp_radius", 100.0),
+    ("WPNAV_SPEED_UP", "wp_speed_up", 100.0), ("WPNAV_SPEED_DN", "wp_speed_dn", 100.0),
+    ("WPNAV_ACCEL", "wp_accel", 100.0), ("WPNAV_ACCEL_Z", "wp_accel_z", 100.0),
+    ("WPNAV_JERK", "wp_jerk", 1.0), ("WPNAV_ACCEL_C", "wp_accel_c", 100.0),
+    ("LAND_SPEED", "land_speed", 100.0), ("LAND_SPEED_HIGH", "land_speed_high", 100.0),
+    ("LAND_ALT_LOW", "land_alt_low", 100.0), ("RTL_ALT", "rtl_alt", 100.0),
+    ("RTL_SPEED", "rtl_speed", 100.0), ("RTL_ALT_FINAL", "rtl_alt_final", 100.0),
+    ("RTL_LOIT_TIME", "rtl_loit_time", 1000.0), ("DISARM_DELAY", "disarm_delay", 1.0),
+    ("PSC_JERK_XY", "psc_jerk_xy", 1.0), ("PSC_JERK_Z", "psc_jerk_z", 1.0),
+    ("PSC_POSZ_P", "psc_posz_p", 1.0), ("PSC_POSXY_P", "psc_posxy_p", 1.0),
+    ("ATC_INPUT_TC", "atc_input_tc", 1.0),
+    ("ATC_ACCEL_R_MAX", "atc_accel_rp_max", math.degrees(1.0) * 100.0),
+    ("ATC_ACCEL_P_MAX", "atc_accel_rp_max", math.degrees(1.0) * 100.0),
+    ("ATC_RATE_R_MAX", "atc_rate_rp_max", math.degrees(1.0)),
+    ("ATC_RATE_P_MAX", "atc_rate_rp_max", math.degrees(1.0)),
+)
+assert {f.name for f in fields(Navigation)} == {attr for _n, attr, _s in _SCALES}
+
+
+def param_value(name: str, value: float) -> float:
+    """A value as PARAM_VALUE carries it: integer types are whole numbers (AP_Param
+    casts on set), REAL32 a float32."""
+    d = DEFAULTS.get(name)
+    if d is not None and d.type != REAL32:
+        return float(int(value))
+    return value
+
+
+# Taking off and landing on ArduCopter 4.5.6 SITL (flight.json, flight_speed.json):
+# NAV_TAKEOFF to liftoff (0.1 m) 3.29 s (landed state TAKEOFF 2.96 s after the command):
+# the motors spool up (MOT_SPOOL_TIME 0.5 s) and the throttle then slews up for
+# TKOFF_SLEW_TIME (2 s) until the copter leaves the ground (ArduCopter/takeoff.cpp
+# _AutoTakeoff::run, set_land_complete(false)). The emulator waits 2.75 s, then its
+# jerk-limited climb (PSC_JERK_Z) takes ~0.55 s to the first 0.1 m: 3.3 s, as recorded.
+TAKEOFF_DELAY_S = 2.75
+# Touchdown ("SIM Hit ground") to "Disarming motors": 2.08 s and 2.7 s recorded; the land
+# detector needs low throttle and no climb for LAND_DETECTOR_TRIGGER_SEC (1 s) after
+# the throttle has wound down (ArduCopter/land_detector.cpp), then ModeAuto / ModeLand
+# disarm (AP_Arming::Method::LANDED).
+TOUCHDOWN_TO_DISARM_S = 2.1
+# Measured, not from ArduPilot's code: SITL's copter descends at 0.46-0.48 m/s while
+# LAND_SPEED asks 0.5 m/s ("SIM Hit ground at 0.474127 m/s"): the vertical controller's
+# steady lag. The emulator's copter lands at this fraction of the commanded rate.
+LAND_RATE_ACHIEVED = 0.95
