@@ -7,9 +7,9 @@ ARDUPILOT_SITL is set) three ways, each on freshly started vehicles:
   their takeoff altitude, set each vehicle's current item and switch it to AUTO, one
   after the other, without waiting for confirmations (the fastest a hand-written script
   goes);
-- fly, no keeper: ``flight.fly.fly`` as ``ftlbo-mav fly --no-keeper`` runs it (settled
-  takeoff, AUTO from the first real leg for all in one burst);
-- fly: the same with the formation keeper (``ftlbo-mav fly``).
+- fly: ``flight.fly.fly`` as ``ftlbo-mav fly`` runs it (settled takeoff, AUTO from the
+  first real leg for all in one burst);
+- fly --keeper: the same with the (experimental) formation keeper.
 
 Prints formation error (RMS and worst, waypoint legs) and smallest separation per
 strategy and writes ``flight-benchmark.json``. Stops (exit 1) if any upload fails to
@@ -102,7 +102,7 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
             while not finished(planned, fleet.vehicles) and time.monotonic() < deadline:
                 time.sleep(0.1)
         else:
-            options = FlyOptions(keeper=KeeperOptions(enabled=strategy == "fly"))
+            options = FlyOptions(keeper=KeeperOptions(enabled=strategy == "fly --keeper"))
             keeper = make_keeper(planned, options.keeper)
             fly(planned, fleet.vehicles, options=options, timing=Timing(),
                 say=lambda _t: None, tick=lambda: None, keeper=keeper)
@@ -121,8 +121,12 @@ def main() -> int:
     parser.add_argument("--speedup", type=float, default=2.0,
                         help="emulator time scale / SITL --speedup")
     parser.add_argument("--out", default="flight-benchmark.json")
+    parser.add_argument("--vary", action="store_true",
+                        help="emulator only: each copter differs as a real fleet does (a "
+                             "start latency up to 0.3 s, WPNAV_JERK within 5%%; seeded by the "
+                             "run number)")
     parser.add_argument("--only", action="append", default=[],
-                        choices=["naive", "fly, no keeper", "fly"],
+                        choices=["naive", "fly", "fly --keeper"],
                         help="fly only this way (repeatable; default all three)")
     parser.add_argument("--set", dest="params", action="append", default=[],
                         metavar="SYSID:NAME=VALUE",
@@ -136,7 +140,7 @@ def main() -> int:
     scenario = load_scenario(args.scenario)
     homes = scenario_homes(scenario)
     binary = os.environ.get("ARDUPILOT_SITL")
-    rows = {k: [] for k in ("naive", "fly, no keeper", "fly") if not args.only or k in args.only}
+    rows = {k: [] for k in ("naive", "fly", "fly --keeper") if not args.only or k in args.only}
     with tempfile.TemporaryDirectory() as tmp:
         plan_dir = Path(tmp) / "plan"
         shipped = args.scenario.with_suffix("")
@@ -155,7 +159,7 @@ def main() -> int:
                     from ftlbo_mav.sim.server import Simulator
 
                     swarm = Simulator(homes=homes, base_port=0, time_scale=args.speedup,
-                                      seed=run)
+                                      seed=run, vary=args.vary)
                 with swarm as vehicles:
                     assignments = [Assignment(n, i + 1, m) for i, (n, m) in
                                    enumerate(zip(planned.names, planned.missions))]
@@ -176,7 +180,8 @@ def main() -> int:
                       f"{max(summary['final_distance_to_goal_m']):.2f} m", flush=True)
     print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "
           f"speedup {args.speedup:g}, {args.runs} runs each"
-          + (f"; parameters set: {', '.join(args.params)}" if args.params else ""))
+          + (f"; parameters set: {', '.join(args.params)}" if args.params else "")
+          + ("; per-vehicle variation (--vary)" if args.vary else ""))
     print("| flight | formation error RMS (median) | worst (max) | smallest separation on "
           "legs | smallest clearance | landing error (max) |")
     print("|---|---|---|---|---|---|")

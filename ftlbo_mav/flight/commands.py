@@ -126,8 +126,10 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @click.option("--control-port", type=click.IntRange(0, 65535), default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="127.0.0.1 port where `ftlbo-mav abort` reaches this flight (0: none).")
-@click.option("--no-keeper", is_flag=True,
-              help="Fly without the formation keeper (no speed nudges in flight).")
+@click.option("--keeper/--no-keeper", "use_keeper", default=False, show_default=True,
+              help="Trim leaders' speeds in flight to hold the formation (experimental: on "
+                   "ArduCopter SITL it has not yet helped, and made fast flights worse; "
+                   "see docs/flight.md).")
 @click.option("--arm-budget", type=click.FloatRange(min=0), default=60.0, show_default=True,
               help="Seconds to keep retrying a refused arm (EKF still converging).")
 @click.option("--preflight-timeout", type=click.FloatRange(min=0),
@@ -138,7 +140,7 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @timing_options
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
-                no_keeper, arm_budget, preflight_timeout, flight_timeout, timeout, retries,
+                use_keeper, arm_budget, preflight_timeout, flight_timeout, timeout, retries,
                 ready_timeout, discover_timeout, signing_key):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
@@ -153,7 +155,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     monitor = Monitor(planned)
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode,
-                         keeper=KeeperOptions(enabled=not no_keeper))
+                         keeper=KeeperOptions(enabled=use_keeper))
     keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,

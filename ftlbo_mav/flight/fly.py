@@ -347,7 +347,8 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
     # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
     now = time.monotonic()
-    age = np.array([[now - s.position_t] for s in st])
+    age = np.array([[now - (s.position_boot_s + s.clock_offset_s
+                            if s.clock_offset_s is not None else s.position_t)] for s in st])
     positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)
     speeds = np.array([s.ground_speed_m_s for s in st])
     for i, speed in keeper.update(positions, speeds, now).items():

@@ -10,7 +10,7 @@ gets its planned speed back. ArduCopter applies a new speed at once in AUTO
 AC_WPNav::set_speed_xy, which rescales the S-curve in flight).
 
 The keeper only nudges: each vehicle flies its own uploaded mission, and a leader is
-never asked to fly slower than ``min_fraction`` of the group's speed (nor below 0.5 m/s).
+never asked to fly slower than ``min_fraction`` of its own speed.
 If the link drops, a vehicle keeps the last speed it was given and still flies its whole
 mission; ArduCopter has no speed command that expires by itself.
 
@@ -29,23 +29,26 @@ ARDUCOPTER_WPNAV_SPEED_M_S = 10.0
 
 @dataclass(frozen=True)
 class KeeperOptions:
-    """When a vehicle leads the group by more than ``engage_m`` it is slowed so that it
-    gives the lead back over ``horizon_s`` seconds, never below ``min_fraction`` of the
-    group's speed (nor 0.5 m/s); below ``release_m`` it gets its planned speed back.
+    """When a vehicle flying at least ``min_speed_m_s`` leads the group by more than
+    ``engage_m``, its speed is capped just under its own so that it gives the lead back
+    over ``horizon_s`` seconds, never below ``min_fraction`` of its own speed; below
+    ``release_m`` it gets its planned speed back.
     Speeds are reconsidered every ``period_s`` and a new command goes out only when it
     differs by ``min_step_m_s``, or every ``refresh_s`` while a vehicle is slowed (a lost
     command is not final).
 
     The gentleness is measured, not a taste: ArduCopter answers a new speed through its
-    jerk-limited S-curve (WPNAV_JERK 1 m/s^3: about 1.5 s to lose 0.6 m/s), and on SITL
-    a keeper that acted on 5 cm of lead within a quarter of a second overshot into 1.1 m
-    RMS formation error where no keeper gave 0.06 m."""
+    jerk-limited S-curve (WPNAV_JERK 1 m/s^3: about 1.5 s to lose 0.6 m/s). On SITL a
+    keeper that acted on 5 cm of lead within a quarter of a second overshot into 1.1 m
+    RMS formation error where no keeper gave 0.06 m, and one that capped leaders at the
+    group's speed (low in corners) made 0.87 m of a flight that flew 0.04 m without it."""
 
-    enabled: bool = True
+    enabled: bool = False  # off by default until it helps on ArduPilot: docs/flight.md
     engage_m: float = 0.25
     release_m: float = 0.08
     horizon_s: float = 3.0
-    min_fraction: float = 0.7
+    min_fraction: float = 0.85
+    min_speed_m_s: float = 1.0
     period_s: float = 0.5
     min_step_m_s: float = 0.15
     refresh_s: float = 2.0
@@ -142,7 +145,6 @@ class FormationKeeper:
         self._last_t = now
         s = self.progress(positions)
         lead = s - s.mean()
-        reference = max(float(np.mean(speeds_m_s)), 0.0)
         out = {}
         for i, e in enumerate(lead):
             log.max_lead_m[i] = max(log.max_lead_m[i], float(abs(e)))
@@ -154,9 +156,15 @@ class FormationKeeper:
                     self._sent[i], self._sent_t[i] = out[i], now
                     log.commands[i] += 1
                 continue
+            own = float(speeds_m_s[i])
+            if not slowed and own < o.min_speed_m_s:
+                continue  # starting, turning or stopping: not the moment to nudge
             log.slowed_s[i] += dt if slowed else 0.0
             give_back = max(e - o.release_m, 0.0) / o.horizon_s
-            want = max(reference - give_back, o.min_fraction * reference, 0.5)
+            # a cap just under its own speed: ArduCopter re-plans the S-curve below it, and
+            # a cap far below (a corner's low group speed) made SITL copters brake hard
+            base = max(own, o.min_speed_m_s)
+            want = max(base - give_back, o.min_fraction * base, 0.5)
             want = round(min(want, self.planned_speed_m_s), 2)
             if not slowed or abs(want - last) >= o.min_step_m_s or \
                     now - self._sent_t[i] >= o.refresh_s:

@@ -54,6 +54,10 @@ class Status:
     seq: int = -1
     position_t: float = 0.0
     position_boot_s: float = 0.0
+    # ground clock minus vehicle clock, from the least-delayed report so far: a report's
+    # own time on the ground clock is position_boot_s + clock_offset_s (reports can arrive
+    # in bursts, so the arrival time overstates how fresh a position is)
+    clock_offset_s: float | None = None
     heartbeat_t: float = 0.0
     texts: list[str] = field(default_factory=list)
     acks: dict[int, int] = field(default_factory=dict)
@@ -110,7 +114,11 @@ class FlightVehicle:
                 s.ground_speed_m_s = (msg.vx ** 2 + msg.vy ** 2) ** 0.5 / 100.0
                 s.velocity_enu = (msg.vy / 100.0, msg.vx / 100.0, -msg.vz / 100.0)
                 s.position_t = now
-                s.position_boot_s = msg.time_boot_ms / 1000.0
+                boot_s = msg.time_boot_ms / 1000.0
+                if s.clock_offset_s is None or boot_s < s.position_boot_s:
+                    s.clock_offset_s = now - boot_s  # first report, or the vehicle rebooted
+                s.clock_offset_s = min(s.clock_offset_s, now - boot_s)
+                s.position_boot_s = boot_s
                 position = True
             elif kind == "MISSION_CURRENT":
                 s.seq = msg.seq

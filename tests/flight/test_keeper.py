@@ -17,6 +17,7 @@ from ftlbo_mav.mission.items import MissionItem
 CENTROID = np.array([[0.0, 0.0, 4.0], [10.0, 0.0, 4.0], [10.0, 10.0, 4.0]])
 OFFSETS = np.array([[0.0, 0.0, 2.0], [3.0, 0.0, -1.0], [-3.0, 0.0, -1.0]])
 PATHS = CENTROID[None] + OFFSETS[:, None]
+ON = KeeperOptions(enabled=True)  # off by default (docs/flight.md)
 
 
 def test_progress_is_the_distance_along_the_path_of_the_nearest_point():
@@ -43,7 +44,7 @@ def positions_at(progress):
 
 
 def test_a_leader_is_slowed_until_the_others_catch_up_then_released():
-    keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0, options=KeeperOptions())
+    keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0, options=ON)
     speeds = np.array([2.0, 2.0, 2.0])
     assert keeper.update(positions_at([5.0, 5.0, 5.0]), speeds, 0.0) == {}
     cmds = keeper.update(positions_at([5.9, 5.0, 5.0]), speeds, 1.0)  # uav1 leads by 0.6 m
@@ -55,7 +56,7 @@ def test_a_leader_is_slowed_until_the_others_catch_up_then_released():
 
 
 def test_a_slowed_vehicle_is_told_again_and_released_at_the_end():
-    keeper = FormationKeeper(PATHS, planned_speed_m_s=3.0, options=KeeperOptions())
+    keeper = FormationKeeper(PATHS, planned_speed_m_s=3.0, options=ON)
     speeds = np.full(3, 2.0)
     first = keeper.update(positions_at([12.0, 11.0, 11.0]), speeds, 0.0)
     again = keeper.update(positions_at([12.0, 11.0, 11.0]), speeds, 2.5)
@@ -66,7 +67,8 @@ def test_a_slowed_vehicle_is_told_again_and_released_at_the_end():
 def test_a_disabled_keeper_says_nothing_and_nudges_stay_bounded():
     off = FormationKeeper(PATHS, options=KeeperOptions(enabled=False))
     assert off.update(positions_at([9.0, 1.0, 1.0]), np.full(3, 2.0), 0.0) == {}
-    on = FormationKeeper(PATHS, planned_speed_m_s=10.0, options=KeeperOptions(min_fraction=0.5))
+    on = FormationKeeper(PATHS, planned_speed_m_s=10.0,
+                         options=KeeperOptions(enabled=True, min_fraction=0.5))
     (speed,) = on.update(positions_at([9.0, 1.0, 1.0]), np.full(3, 2.0), 0.0).values()
     assert speed == pytest.approx(1.0)  # half the group's speed, however far it leads
 
@@ -77,7 +79,7 @@ def test_planned_speed_is_the_missions_or_unknown():
 
 
 def test_a_keeper_without_a_known_cruise_speed_stays_silent():
-    keeper = FormationKeeper(PATHS, planned_speed_m_s=None)
+    keeper = FormationKeeper(PATHS, planned_speed_m_s=None, options=ON)
     assert not keeper.active
     assert keeper.update(positions_at([9.0, 1.0, 1.0]), np.full(3, 2.0), 0.0) == {}
 
@@ -101,9 +103,17 @@ def test_auto_starts_at_the_first_real_leg_and_keeps_the_cruise_speed():
 
 
 def test_hysteresis_small_leads_are_left_alone_and_a_slowed_leader_waits_for_the_group():
-    keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0)
+    keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0, options=ON)
     speeds = np.full(3, 2.8)
     assert keeper.update(positions_at([5.3, 5.0, 5.0]), speeds, 0.0) == {}  # 0.2 m: no
     assert list(keeper.update(positions_at([5.45, 5.0, 5.0]), speeds, 1.0)) == [0]  # 0.3 m
     assert keeper.update(positions_at([5.2, 5.0, 5.0]), speeds, 2.0) == {}  # 0.13 m: waits
     assert keeper.update(positions_at([5.05, 5.0, 5.0]), speeds, 3.0) == {0: 10.0}
+
+
+def test_a_leader_below_walking_pace_is_not_nudged_and_caps_stay_near_its_own_speed():
+    keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0, options=ON)
+    assert keeper.update(positions_at([6.0, 5.0, 5.0]), np.array([0.6, 2.0, 2.0]), 0.0) == {}
+    (cap,) = keeper.update(positions_at([9.0, 5.0, 5.0]), np.array([3.0, 0.4, 0.4]),
+                           1.0).values()
+    assert cap == pytest.approx(0.85 * 3.0)  # not the laggards' 0.4 m/s
