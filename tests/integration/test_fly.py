@@ -29,6 +29,7 @@ from .fleet import BACKEND, free_udp_port, vehicles
 pytestmark = pytest.mark.sitl
 
 SPEEDUP = 4.0
+CORNER_CUT_TOLERANCE_M = 0.05
 OPTIONS = VehicleOptions(heartbeat_s=0.25)
 HOMES = scenario_homes(load_scenario(EXAMPLE))
 
@@ -67,7 +68,11 @@ def test_fly_the_example_all_land_at_the_goal_in_formation(plan_dir):
     summary = json.loads((plan_dir / "flight" / "summary.json").read_text())
     assert (plan_dir / "flight" / "report.png").stat().st_size > 20_000
     assert summary["leg_seconds"] > 1.0
-    assert summary["inside_obstacle"] is False and summary["min_clearance_m"] > 0
+    # the clearance the plan promised, less what ArduCopter's S-curve cuts at the tangent
+    # waypoints (measured on SITL: 0.03-0.04 m of the 1 m)
+    promised = load_planned_flight(plan_dir).clearance_m
+    assert summary["inside_obstacle"] is False
+    assert summary["min_clearance_m"] >= promised - CORNER_CUT_TOLERANCE_M
     assert max(summary["final_distance_to_goal_m"]) < 1.0
     assert min(summary["position_rate_hz"].values()) >= 5.0
     csv = (plan_dir / "flight" / "flight.csv").read_text().splitlines()

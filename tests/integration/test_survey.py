@@ -44,7 +44,9 @@ def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
         assert flown.exit_code == 0, flown.output
     assert "all vehicles finished their missions" in flown.stdout
     summary = json.loads((out / "flight" / "summary.json").read_text())
-    assert summary["inside_obstacle"] is False and summary["min_clearance_m"] > 0
+    # the promised clearance less a stated corner tolerance, as in test_fly
+    assert summary["inside_obstacle"] is False
+    assert summary["min_clearance_m"] >= scenario.clearance_m - 0.05, summary["min_clearance_m"]
     assert max(summary["final_distance_to_goal_m"]) < 1.0  # back where they took off
     # every UAV passed each of its lane ends (via point + its offset), in order
     record = FlightRecord.from_csv((out / "flight" / "flight.csv").read_text())
