@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
 import pytest
@@ -17,7 +18,9 @@ from pymavlink.dialects.v20 import ardupilotmega as R
 from ftlbo_mav.ardupilot import storage
 from ftlbo_mav.ardupilot.storage import WireItem
 
-DATA = Path(__file__).parents[1] / "data" / "ardupilot-4.5.6" / "mission_items.json"
+SHIPPED = Path(__file__).parents[1] / "data" / "ardupilot-4.5.6"
+# FTLBO_RECORDINGS: a folder written by `python -m sitl.record` (a newer ArduPilot)
+DATA = Path(os.environ.get("FTLBO_RECORDINGS", SHIPPED)) / "mission_items.json"
 RECORDING = json.loads(DATA.read_text())
 
 
@@ -49,13 +52,13 @@ def test_every_recorded_item_is_stored_as_arducopter_stored_it(case):
 
 def test_the_recording_covers_the_interesting_cases():
     """Not a tautology check: the recording holds items that do change on storage."""
-    changed = [it for it in RECORDED if it["differences"]]
+    changed = [it for it in RECORDED if not _same(wire(it["sent"]), wire(it["read_back"]))]
     assert len(changed) >= 15 and len(RECORDED) >= 30
 
 
 def _bad_cases():
     out = []
-    for case in RECORDING["bad_uploads"]["cases"]:
+    for case in RECORDING.get("bad_uploads", {"cases": []})["cases"]:
         items = case.get("items_sent")
         if not items or not case["acks"]:
             continue
@@ -77,6 +80,7 @@ def test_every_recorded_refusal_gets_the_recorded_ack(name, item, ack, items):
     assert result == ack
 
 
+@pytest.mark.skipif("bad_uploads" not in RECORDING, reason="not in this recording")
 def test_bad_cases_cover_each_kind_of_refusal():
     assert {b[2] for b in BAD} >= {R.MAV_MISSION_UNSUPPORTED_FRAME, R.MAV_MISSION_UNSUPPORTED,
                                    R.MAV_MISSION_INVALID_PARAM5_X, R.MAV_MISSION_INVALID_PARAM1,
@@ -123,8 +127,8 @@ def test_our_own_sitl_read_back_is_what_the_model_predicts():
     from ftlbo_mav.link.codec import kept, mission_differences, to_wire
     from ftlbo_mav.mission.waypoints import read_waypoints
 
-    sent = read_waypoints(DATA.with_name("quirks-sent.waypoints"))
-    back = read_waypoints(DATA.with_name("quirks-read-back.waypoints"))
+    sent = read_waypoints(SHIPPED / "quirks-sent.waypoints")
+    back = read_waypoints(SHIPPED / "quirks-read-back.waypoints")
     assert mission_differences(sent, back) == []
     for s, b in zip(sent[1:], back[1:]):
         want, got = kept(s), to_wire(b)

@@ -3,6 +3,8 @@ ArduPilot build is configured."""
 
 from __future__ import annotations
 
+import json
+import math
 import socket
 import sys
 from pathlib import Path
@@ -55,3 +57,24 @@ def test_swarm_starts_waits_until_ready_and_stops_every_process(tmp_path):
                                     catch_exceptions=False)
         assert result.exit_code == 0, result.output
     assert all(p.poll() is not None for p in procs)
+
+
+def test_the_recorder_writes_a_recording_the_storage_tests_read(tmp_path):
+    """`python -m sitl.record` with the stand-in binary: the plumbing, not ArduPilot (the
+    stand-in stores items with our own model; on SITL the same run checks ArduPilot)."""
+    if not ports_free(1):
+        pytest.skip("TCP 5760 in use (SITL or `ftlbo-mav sim` running)")
+    from ftlbo_mav.ardupilot import storage
+    from sitl import record
+
+    binary = tmp_path / "arducopter"
+    binary.write_text(f"#!/bin/sh\ncd {ROOT}\nexec {sys.executable} {FAKE} \"$@\"\n")
+    binary.chmod(0o755)
+    assert record.main(["--out", str(tmp_path / "rec"), "--binary", str(binary)]) == 0
+    doc = json.loads((tmp_path / "rec" / "mission_items.json").read_text())
+    items = doc["main_upload"]["items"]
+    assert len(items) == len(record.reference_items()) and "sitl/record.py" in doc["about"]
+    for it in items[1:]:
+        sent, back = record.wire_from_json(it["sent"]), record.wire_from_json(it["read_back"])
+        assert storage.stored(sent).params == back.params or any(
+            math.isnan(a) for a in back.params)

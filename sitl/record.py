@@ -1,0 +1,183 @@
+"""Re-record what ArduCopter does, on your own SITL build, in the recordings' own format.
+
+``python -m sitl.record --out DIR`` (from the repository root, with ``ARDUPILOT_SITL``
+and ``ARDUPILOT_SITL_DEFAULTS`` set) starts one fresh SITL copter at the recordings' home
+and writes, in ``DIR``:
+
+- ``mission_items.json``: every item of ``tests/data/ardupilot-4.5.6/mission_items.json``
+  uploaded as it was sent there, and read back (``main_upload.items``: name, sent,
+  read_back), the part of that recording the storage model is held to;
+- ``flight.json`` (``--flight``): the example's uav1 mission flown once as the shared
+  recording did (GUIDED takeoff, hover, current item 2, AUTO): every MISSION_ITEM_REACHED
+  and GLOBAL_POSITION_INT row, times in seconds since AUTO.
+
+Then ``FTLBO_RECORDINGS=DIR python -m pytest tests/ardupilot tests/conformance`` holds the
+storage model (and the emulator) to the new recording, so a newer ArduPilot is checked the
+way 4.5.6 was. The version string the vehicle reports goes into each file's ``about``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from ftlbo_mav.ardupilot.storage import WireItem
+from ftlbo_mav.errors import FtlboError
+from ftlbo_mav.link.codec import from_wire, to_wire
+from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
+from ftlbo_mav.link.mission_protocol import Timing, Upload, download_mission, run_transfer
+
+from .launcher import SitlSwarm
+
+ROOT = Path(__file__).resolve().parents[1]
+REFERENCE = ROOT / "tests" / "data" / "ardupilot-4.5.6" / "mission_items.json"
+EXAMPLE_UAV1 = ROOT / "missions" / "nha-trang-orchard" / "uav1.waypoints"
+HOME = (12.2332099, 109.1145051, 0.0)  # where the shared recordings were made
+FIELDS = ("seq", "frame", "command", "current", "autocontinue", "param1", "param2",
+          "param3", "param4", "x", "y", "z")
+
+
+def _num(v):
+    return float(v) if isinstance(v, str) else v
+
+
+def _json_num(v):
+    return str(v) if isinstance(v, float) and not math.isfinite(v) else v
+
+
+def wire_from_json(d: dict) -> WireItem:
+    return WireItem(**{k: _num(d[k]) for k in FIELDS})
+
+
+def wire_to_json(w: WireItem) -> dict:
+    return {k: _json_num(getattr(w, k)) for k in FIELDS} | {"mission_type": 0}
+
+
+def reference_items(path: Path = REFERENCE) -> list[tuple[str, WireItem]]:
+    """``(name, item as sent)`` of the reference recording's main upload."""
+    doc = json.loads(path.read_text())
+    return [(it["name"], wire_from_json(it["sent"])) for it in doc["main_upload"]["items"]]
+
+
+def record_items(channel, *, timing: Timing) -> dict:
+    """Upload the reference items, read them back; the ``main_upload`` section."""
+    named = reference_items()
+    items = [from_wire(w) for _, w in named]
+    run_transfer(Upload(items, sysid=channel.sysid, compid=1,
+                        own=(channel.own_sysid, channel.own_compid), timing=timing,
+                        progress=None), channel)
+    back = download_mission(channel, timing=timing)
+    if len(back) != len(items):
+        raise FtlboError(f"read back {len(back)} items of {len(items)}")
+    return {"description": "the reference items uploaded (MISSION_ITEM_INT) and read back "
+                           "(MISSION_REQUEST_INT) by sitl/record.py",
+            "items": [{"name": name, "sent": wire_to_json(w), "read_back": wire_to_json(
+                to_wire(b))} for (name, w), b in zip(named, back)]}
+
+
+def version(channel, timeout_s: float = 5.0) -> str:
+    """The vehicle's banner ("ArduCopter V4.5.6 (bbf0b066)"), from its STATUSTEXT."""
+    channel.send(R.MAVLink_command_long_message(
+        channel.sysid, 1, R.MAV_CMD_DO_SEND_BANNER, 0, 0, 0, 0, 0, 0, 0, 0))
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        msg = channel.recv(0.2)
+        if msg is not None and msg.get_type() == "STATUSTEXT" and "V" in msg.text:
+            return msg.text.strip()
+    return "unknown version"
+
+
+def record_flight(link, sysid: int, *, timing: Timing, timeout_s: float = 300.0) -> dict:
+    """Fly the example's uav1 mission as the shared recording did; reached items and
+    positions, times in seconds since the AUTO command."""
+    from ftlbo_mav.flight.vehicle import FlightVehicle
+    from ftlbo_mav.mission.waypoints import read_waypoints
+
+    items = read_waypoints(EXAMPLE_UAV1)
+    with link.channel(sysid) as channel:
+        run_transfer(Upload(items, sysid=sysid, compid=1,
+                            own=(channel.own_sysid, channel.own_compid), timing=timing,
+                            progress=None), channel)
+    rows, reached = [], []
+    t0 = [None]
+
+    def watch(msg) -> None:
+        if msg.get_srcSystem() != sysid or t0[0] is None:
+            return
+        t = time.monotonic() - t0[0]
+        if msg.get_type() == "GLOBAL_POSITION_INT":
+            rows.append([round(t, 3), msg.time_boot_ms, msg.lat, msg.lon, msg.relative_alt])
+        elif msg.get_type() == "MISSION_ITEM_REACHED":
+            reached.append({"t": round(t, 3), "seq": msg.seq})
+
+    link.taps.append(watch)
+    v = FlightVehicle("uav1", sysid, link)
+    try:
+        v.set_mode("GUIDED", timeout_s=60)
+        v.arm(budget_s=90)
+        v.takeoff(items[1].alt_m)
+        v.wait_for(lambda s: abs(s.alt_m - items[1].alt_m) < 0.1 and abs(s.climb_m_s) < 0.1,
+                   60)
+        time.sleep(1.0)
+        v.set_current(2)
+        t0[0] = time.monotonic()
+        v.set_mode("AUTO")
+        v.wait_for(lambda s: not s.armed, timeout_s)
+    finally:
+        v.close()
+        link.taps.remove(watch)
+    return {"mission_file": str(EXAMPLE_UAV1.relative_to(ROOT)),
+            "mission_item_reached": reached,
+            "global_position_int": {"fields": ["t", "time_boot_ms", "lat_e7", "lon_e7",
+                                               "relative_alt_mm"], "rows": rows}}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m sitl.record", description=__doc__)
+    parser.add_argument("--out", required=True, type=Path, help="folder for the JSON files")
+    parser.add_argument("--binary", help="arducopter binary (default: $ARDUPILOT_SITL)")
+    parser.add_argument("--defaults", action="append", default=[],
+                        help="defaults .parm file (e.g. ArduPilot's copter.parm)")
+    parser.add_argument("--flight", action="store_true",
+                        help="also fly the example's uav1 mission (about two minutes)")
+    args = parser.parse_args(argv)
+    timing = Timing()
+    try:
+        with SitlSwarm(binary=args.binary, homes=[HOME], defaults=args.defaults) as swarm:
+            links = open_links(swarm.urls, connect_timeout_s=30.0)
+            try:
+                wait_ready(links, [1], timeout_s=180.0)
+                found, _missing = discover(links, [1], timeout_s=5.0)
+                with found[1].channel(1) as channel:
+                    banner = version(channel)
+                    print(f"recording {banner}", file=sys.stderr)
+                    items = record_items(channel, timing=timing)
+                about = (f"Recorded {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} by "
+                         f"sitl/record.py against {banner} SITL started by sitl/launcher.py "
+                         f"with defaults {[str(d) for d in swarm.defaults]}")
+                args.out.mkdir(parents=True, exist_ok=True)
+                (args.out / "mission_items.json").write_text(json.dumps(
+                    {"about": about, "main_upload": items}, indent=1) + "\n")
+                print(f"wrote {args.out / 'mission_items.json'}", file=sys.stderr)
+                if args.flight:
+                    flight = record_flight(found[1], 1, timing=timing)
+                    (args.out / "flight.json").write_text(json.dumps(
+                        {"about": about, **flight}, indent=1) + "\n")
+                    print(f"wrote {args.out / 'flight.json'}", file=sys.stderr)
+            finally:
+                for link in links:
+                    link.close()
+    except (FtlboError, ValueError, OSError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
