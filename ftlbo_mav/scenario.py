@@ -20,7 +20,7 @@ import numpy as np
 from .errors import ScenarioError
 from .formation import PLANES, regular_formation
 from .geo import LocalFrame
-from .mission.gis import read_obstacle_geojson
+from .obstacles import Cylinder, read_obstacle_geojson
 from .planning.survey import formation_width, lay_lanes
 
 ALGORITHMS = ("ftlbo-seeded", "ftlbo", "tlbo", "ga", "theta-pso")
@@ -63,16 +63,6 @@ class Survey:
     margin_m: float
     alt_m: float
     lanes: tuple[tuple[GeoPoint, GeoPoint], ...] = ()
-
-
-@dataclass(frozen=True)
-class Cylinder:
-    """A vertical cylinder obstacle (a tree, a pole), unbounded in height."""
-
-    lat_deg: float
-    lon_deg: float
-    radius_m: float
-    name: str = ""
 
 
 @dataclass(frozen=True)

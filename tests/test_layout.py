@@ -127,7 +127,6 @@ def test_the_graph_sees_the_package():
     assert "ftlbo_mav.ardupilot.storage" in GRAPH["ftlbo_mav.link.codec"]
 
 
-@pytest.mark.xfail(strict=True, reason="issue 15: scenario -> mission.gis -> ... -> scenario")
 def test_no_import_cycle():
     assert _cycles() == []
 
@@ -135,7 +134,6 @@ def test_no_import_cycle():
 INPUT_AND_PLANNING = {"scenario", "obstacles", "geo", "formation", "planning"}
 
 
-@pytest.mark.xfail(strict=True, reason="issue 15: scenario reads GeoJSON through mission.gis")
 def test_input_and_planning_import_nothing_downstream():
     assert _arrows(INPUT_AND_PLANNING, {"mission", "link", "flight", "sim"}) == []
 

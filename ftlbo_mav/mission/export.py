@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -21,21 +21,12 @@ from ..planning.problem import problem_from_scenario
 from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
 from .files import write_atomic
 from .gis import render_geojson, render_kml
-from .items import MissionItem, build_mission
+from .items import UavMission, build_mission  # UavMission re-exported: it lived here
 from .qgc_plan import render_plan
 from .waypoints import render_waypoints
 
 # Formats written on request next to the .waypoints files (``plan --formats``).
 FORMATS = ("geojson", "kml", "plan")
-
-
-@dataclass(frozen=True)
-class UavMission:
-    """One UAV's mission: its name (``uav1``...), offset and items."""
-
-    name: str
-    offset: tuple[float, float, float]
-    items: tuple[MissionItem, ...]
 
 
 def plan_missions(plan: Plan) -> list[UavMission]:

@@ -100,3 +100,12 @@ def build_mission(
     else:
         raise ValueError(f"unknown end action {end_action!r}")
     return [MissionItem(seq=i, **fields) for i, fields in enumerate(items)]
+
+
+@dataclass(frozen=True)
+class UavMission:
+    """One UAV's mission: its name (``uav1``...), offset and items."""
+
+    name: str
+    offset: tuple[float, float, float]
+    items: tuple[MissionItem, ...]

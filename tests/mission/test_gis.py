@@ -15,14 +15,9 @@ from hypothesis import strategies as st
 
 from ftlbo_mav.errors import ScenarioError
 from ftlbo_mav.mission.export import plan_missions
-from ftlbo_mav.mission.gis import (
-    geojson_document,
-    parse_obstacle_geojson,
-    render_geojson,
-    render_kml,
-    smallest_enclosing_circle,
-)
+from ftlbo_mav.mission.gis import geojson_document, render_geojson, render_kml
 from ftlbo_mav.mission.waypoints import parse_waypoints, render_waypoints
+from ftlbo_mav.obstacles import parse_obstacle_geojson, smallest_enclosing_circle
 from ftlbo_mav.planning.planner import plan
 from ftlbo_mav.scenario import load_scenario, parse_scenario
 
@@ -139,7 +134,7 @@ def test_kml_parses_has_one_folder_per_uav_and_round_trips():
 
 def _brute_force_circle(pts):
     """Smallest enclosing circle by trying every pair and triple (the reference)."""
-    from ftlbo_mav.mission.gis import _circumcircle
+    from ftlbo_mav.obstacles import _circumcircle
 
     best = (None, np.inf)
     candidates = [((a + b) / 2, np.hypot(*(a - b)) / 2) for a, b in itertools.combinations(pts, 2)]
