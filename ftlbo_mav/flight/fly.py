@@ -351,7 +351,10 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
                             if s.clock_offset_s is not None else s.position_t)] for s in st])
     positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)
     speeds = np.array([s.ground_speed_m_s for s in st])
-    for i, speed in keeper.update(positions, speeds, now).items():
+    # the keeper's periods run on the vehicles' clock (time_boot_ms), which an emulator
+    # with a time scale runs faster than ours
+    vehicle_now = max(s.position_boot_s for s in st)
+    for i, speed in keeper.update(positions, speeds, vehicle_now).items():
         vehicles[i].send_speed(speed)
     return True
 
