@@ -58,6 +58,7 @@ def test_a_leader_is_slowed_until_the_others_catch_up_then_released():
 def test_a_slowed_vehicle_is_told_again_and_released_at_the_end():
     keeper = FormationKeeper(PATHS, planned_speed_m_s=3.0, options=ON)
     speeds = np.full(3, 2.0)
+    keeper.update(positions_at([10.0, 10.0, 10.0]), speeds, -1.0)  # cruising, in shape
     first = keeper.update(positions_at([12.0, 11.0, 11.0]), speeds, 0.0)
     again = keeper.update(positions_at([12.0, 11.0, 11.0]), speeds, 2.5)
     assert list(first) == [0] and again == first
@@ -69,6 +70,7 @@ def test_a_disabled_keeper_says_nothing_and_nudges_stay_bounded():
     assert off.update(positions_at([9.0, 1.0, 1.0]), np.full(3, 2.0), 0.0) == {}
     on = FormationKeeper(PATHS, planned_speed_m_s=10.0,
                          options=KeeperOptions(enabled=True, min_fraction=0.5))
+    on.update(positions_at([1.0, 1.0, 1.0]), np.full(3, 2.0), -1.0)
     (speed,) = on.update(positions_at([9.0, 1.0, 1.0]), np.full(3, 2.0), 0.0).values()
     assert speed == pytest.approx(1.0)  # half the group's speed, however far it leads
 
@@ -113,7 +115,19 @@ def test_hysteresis_small_leads_are_left_alone_and_a_slowed_leader_waits_for_the
 
 def test_a_leader_below_walking_pace_is_not_nudged_and_caps_stay_near_its_own_speed():
     keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0, options=ON)
-    assert keeper.update(positions_at([6.0, 5.0, 5.0]), np.array([0.6, 2.0, 2.0]), 0.0) == {}
-    (cap,) = keeper.update(positions_at([9.0, 5.0, 5.0]), np.array([3.0, 0.4, 0.4]),
-                           1.0).values()
+    slow = np.array([0.6, 2.0, 2.0])
+    keeper.update(positions_at([5.0, 5.0, 5.0]), slow, -1.0)
+    assert keeper.update(positions_at([6.0, 5.0, 5.0]), slow, 0.0) == {}
+    fast = np.array([3.0, 0.4, 0.4])
+    keeper.update(positions_at([8.0, 5.0, 5.0]), fast, 1.0)
+    (cap,) = keeper.update(positions_at([9.0, 5.0, 5.0]), fast, 2.0).values()
     assert cap == pytest.approx(0.85 * 3.0)  # not the laggards' 0.4 m/s
+
+
+def test_no_nudge_while_the_group_accelerates():
+    keeper = FormationKeeper(PATHS, planned_speed_m_s=10.0, options=ON)
+    keeper.update(positions_at([2.0, 2.0, 2.0]), np.full(3, 1.5), 0.0)
+    accelerating = np.array([2.5, 2.2, 2.2])  # 1 m/s in a second
+    assert keeper.update(positions_at([4.0, 3.4, 3.4]), accelerating, 1.0) == {}
+    steady = np.array([2.6, 2.4, 2.4])
+    assert list(keeper.update(positions_at([6.6, 5.8, 5.8]), steady, 2.0)) == [0]
