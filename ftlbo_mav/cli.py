@@ -193,8 +193,10 @@ def plot_command(folder, out_dir):
         click.echo(f"  wrote {path}")
 
 
-# The MAVLink bridge (ftlbo_mav/link/commands.py): upload, download, sim.
-from .link.commands import download, sim, upload
+# The MAVLink bridge (ftlbo_mav/link/commands.py): upload, download; the emulator
+# (ftlbo_mav/sim/commands.py): sim.
+from .link.commands import download, upload
+from .sim.commands import sim
 
 main.add_command(upload)
 main.add_command(download)

@@ -10,8 +10,6 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-import pytest
-
 PACKAGE = "ftlbo_mav"
 ROOT = Path(__file__).resolve().parents[1] / PACKAGE
 
@@ -138,7 +136,6 @@ def test_input_and_planning_import_nothing_downstream():
     assert _arrows(INPUT_AND_PLANNING, {"mission", "link", "flight", "sim"}) == []
 
 
-@pytest.mark.xfail(strict=True, reason="issue 15: link/commands.py registers the sim command")
 def test_link_imports_nothing_from_the_emulator():
     assert _arrows({"link"}, {"sim"}) == []
 

@@ -1,0 +1,120 @@
+"""``ftlbo-mav sim``: run emulated ArduCopters; parse options, build the emulator, print.
+
+Registered on the main group in :mod:`ftlbo_mav.cli`. The emulator's modules are imported
+when the command runs, so the CLI starts as fast as before.
+"""
+
+from __future__ import annotations
+
+import click
+
+from ..ardupilot.storage import SITL_MISSION_CAPACITY
+from ..cli_errors import user_errors
+from ..errors import FtlboError
+from ..link.endpoints import BadInput
+from ..link.signing import load_key
+
+
+def _endpoint(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    if not host or not port.isdigit():
+        raise BadInput(f"--udp-out {text}: expected HOST:PORT, e.g. 127.0.0.1:14550")
+    return host, int(port)
+
+
+@click.command()
+@click.option("--count", type=click.IntRange(1, 254), default=None,
+              help="Number of vehicles (default: the scenario's UAVs, else 3).")
+@click.option("--scenario", type=click.Path(dir_okay=False),
+              help="Put the homes at each UAV's start position.")
+@click.option("--base-port", type=click.IntRange(0, 65535), default=5760, show_default=True,
+              help="Vehicle i listens on TCP base-port + 10*i (0: any free ports).")
+@click.option("--udp-out", metavar="HOST:PORT",
+              help="Also send every vehicle's traffic to one UDP address (a shared link: "
+                   "connect with udpin:HOST:PORT).")
+@click.option("--loss", type=click.FloatRange(0, 1), default=0.0, help="Packet loss each way.")
+@click.option("--loss-up", type=click.FloatRange(0, 1), default=None,
+              help="Loss of packets to the vehicles (overrides --loss).")
+@click.option("--loss-down", type=click.FloatRange(0, 1), default=None,
+              help="Loss of packets from the vehicles (overrides --loss).")
+@click.option("--duplicate", type=click.FloatRange(0, 1), default=0.0,
+              help="Fraction of packets duplicated.")
+@click.option("--reorder", type=click.FloatRange(0, 1), default=0.0,
+              help="Fraction of packets held back behind later ones.")
+@click.option("--latency-ms", type=click.FloatRange(min=0), default=0.0, help="One-way delay.")
+@click.option("--boot-delay", type=click.FloatRange(min=0), default=0.0,
+              help="Seconds after start during which uploads get NO_SPACE (like ArduPilot).")
+@click.option("--capacity", type=click.IntRange(min=0), default=SITL_MISSION_CAPACITY,
+              show_default=True,
+              help="Mission items a vehicle can hold.")
+@click.option("--silent", "silent", multiple=True, type=int, metavar="SYSID",
+              help="This vehicle says nothing at all (repeatable).")
+@click.option("--mute", "mute", multiple=True, type=int, metavar="SYSID",
+              help="This vehicle sends HEARTBEATs but ignores the mission protocol.")
+@click.option("--signing-key", type=click.Path(dir_okay=False),
+              help="Vehicles require MAVLink 2 signing with this key.")
+@click.option("--seed", type=int, default=0, help="Seed of the fault decisions.")
+@click.option("--arm-delay", type=click.FloatRange(min=0), default=None,
+              help="Seconds after start before arming is allowed (the EKF's position "
+                   "estimate; ArduCopter SITL: about 42 s). Default: --boot-delay.")
+@click.option("--speed", type=click.FloatRange(min=0.2), default=10.0, show_default=True,
+              help="WPNAV_SPEED, m/s: the horizontal speed limit between waypoints "
+                   "(ArduCopter's default; short legs stay slower, as on ArduCopter).")
+@click.option("--boot-scale", type=click.FloatRange(min=0), default=None,
+              help="Boot as ArduCopter 4.5.6 SITL was recorded to (ready 2.2 s, home 19.8 s, "
+                   "armable 42.1 s), every time multiplied by this (e.g. 0.1). Overrides "
+                   "--boot-delay and --arm-delay.")
+@click.option("--vary", is_flag=True,
+              help="Make each vehicle differ a little, as a real fleet does (a start "
+                   "latency of up to 0.3 s, WPNAV_JERK within 5%), seeded by --seed.")
+@click.option("--time-scale", type=click.FloatRange(min=0.01), default=1.0, show_default=True,
+              help="Run the vehicles' clock this many times faster than real time.")
+@user_errors
+def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
+        latency_ms, boot_delay, capacity, silent, mute, signing_key, seed, arm_delay, speed,
+        boot_scale, vary, time_scale):
+    """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
+    from ..ardupilot.commands import RECORDED_BOOT
+    from ..scenario import load_scenario
+    from .faults import Faults
+    from .homes import default_homes, scenario_homes
+    from .mission_server import MissionServerOptions
+    from .physics import FlightLimits
+    from .server import Simulator
+    from .vehicle import VehicleOptions
+
+    if scenario:
+        homes = scenario_homes(load_scenario(scenario))
+        if count is not None and count != len(homes):
+            raise BadInput(f"--count {count}, but {scenario} has {len(homes)} UAVs")
+    else:
+        homes = default_homes(count or 3)
+    n = len(homes)
+    link = {"loss_up": loss if loss_up is None else loss_up,
+            "loss_down": loss if loss_down is None else loss_down,
+            "duplicate": duplicate, "reorder": reorder, "latency_s": latency_ms / 1000.0}
+    faults = [Faults(**link, silent=(i + 1) in silent, mute=(i + 1) in mute) for i in range(n)]
+    options = VehicleOptions(ready_after_s=boot_delay, position_after_s=arm_delay,
+                             boot=None if boot_scale is None else RECORDED_BOOT.scaled(boot_scale),
+                             limits=FlightLimits.with_speed(speed),
+                             mission=MissionServerOptions(capacity=capacity,
+                                                          boot_no_space_s=boot_delay))
+    key = load_key(signing_key) if signing_key else None
+    simulator = Simulator(homes=homes, base_port=base_port,
+                          udp_out=_endpoint(udp_out) if udp_out else None, faults=faults,
+                          options=options, signing_key=key, seed=seed, time_scale=time_scale,
+                          vary=vary)
+
+    def ready() -> None:
+        for i, (url, home) in enumerate(zip(simulator.urls, homes)):
+            click.echo(f"vehicle sysid {i + 1}: {url}  home {home[0]:.7f}, {home[1]:.7f}, "
+                       f"{home[2]:.1f} m")
+        if simulator.udp_url:
+            click.echo(f"all vehicles also on UDP: connect with {simulator.udp_url}")
+        click.echo("emulating; Ctrl-C to stop")
+
+    try:
+        simulator.run(ready)
+    except OSError as exc:
+        raise FtlboError(f"cannot listen on TCP port {base_port}+: {exc.strerror or exc} "
+                         "(is SITL or another `ftlbo-mav sim` running? try --base-port)") from None
