@@ -20,6 +20,7 @@ from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
 from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
 from .files import write_atomic
+from .geodetic import GeodeticPlan, geodetic_view
 from .gis import render_geojson, render_kml
 from .items import UavMission, build_mission  # UavMission re-exported: it lived here
 from .qgc_plan import render_plan
@@ -29,12 +30,14 @@ from .waypoints import render_waypoints
 FORMATS = ("geojson", "kml", "plan")
 
 
-def plan_missions(plan: Plan) -> list[UavMission]:
-    """One mission per UAV: home at its own start on the ground, its own path."""
+def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[UavMission]:
+    """One mission per UAV: home at its own start on the ground, its own path.
+
+    ``geodetic``: the plan's :func:`geodetic_view` (computed here when not given)."""
     missions = []
     settings = plan.scenario.mission
-    for n, path in enumerate(plan.uav_paths):
-        lla = plan.lla(path)
+    view = geodetic if geodetic is not None else geodetic_view(plan)
+    for n, lla in enumerate(view.uav_paths):
         items = build_mission(
             home=(float(lla[0, 0]), float(lla[0, 1])),
             takeoff_alt_m=float(lla[0, 2]),
@@ -83,12 +86,15 @@ def _leg_document(leg: Leg, first: int) -> dict:
     }
 
 
-def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> dict:
+def plan_document(
+    plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None
+) -> dict:
     """The ``plan.json`` content. ``written``: whether the mission files were written.
 
     Totals at the top (cost, bound, evaluations, seconds: sums over the legs), one entry
     per leg in ``legs`` (``first_point``: index of the leg's start in ``centroid``)."""
     s, sc = plan.settings, plan.scenario
+    view = geodetic if geodetic is not None else geodetic_view(plan)
     firsts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs[:-1]])
     survey = sc.survey
     return {
@@ -128,15 +134,15 @@ def plan_document(plan: Plan, missions: list[UavMission], *, written: bool) -> d
             "lanes": [[[a.lat_deg, a.lon_deg], [b.lat_deg, b.lon_deg]] for a, b in survey.lanes],
         },
         "legs": [_leg_document(leg, int(f)) for leg, f in zip(plan.legs, firsts)],
-        "centroid": _points(plan.lla(plan.centroid)),
+        "centroid": _points(view.centroid),
         "uavs": [
             {
                 "name": m.name,
                 "offset": list(m.offset),
-                "waypoints": _points(plan.lla(path)),
+                "waypoints": _points(path),
                 "mission_file": f"{m.name}.waypoints" if written else None,
             }
-            for m, path in zip(missions, plan.uav_paths)
+            for m, path in zip(missions, view.uav_paths)
         ],
     }
 
@@ -160,7 +166,8 @@ def write_plan(
     if unknown:
         raise ValueError(f"unknown format {unknown[0]!r}; known: {', '.join(FORMATS)}")
     out_dir = Path(out_dir)
-    missions = plan_missions(plan)
+    view = geodetic_view(plan)  # the one conversion to degrees every writer takes
+    missions = plan_missions(plan, geodetic=view)
     write_missions = plan.feasible or allow_infeasible
     written = []
     if write_missions:
@@ -170,10 +177,12 @@ def write_plan(
                 text = render_plan(m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s)
                 written.append(write_atomic(out_dir / f"{m.name}.plan", text))
     if "geojson" in formats:
-        written.append(write_atomic(out_dir / "plan.geojson", render_geojson(plan, missions)))
+        text = render_geojson(plan, missions, geodetic=view)
+        written.append(write_atomic(out_dir / "plan.geojson", text))
     if "kml" in formats:
-        written.append(write_atomic(out_dir / "plan.kml", render_kml(plan, missions)))
-    doc = plan_document(plan, missions, written=write_missions)
+        text = render_kml(plan, missions, geodetic=view)
+        written.append(write_atomic(out_dir / "plan.kml", text))
+    doc = plan_document(plan, missions, written=write_missions, geodetic=view)
     written.append(write_atomic(out_dir / "plan.json", json.dumps(doc, indent=2) + "\n"))
     return written
 

@@ -8,7 +8,8 @@ missions (RFC 7946 speaks of ellipsoidal height; every feature says so in its
 ``altitude_reference`` property). KML uses ``relativeToGround``, which Google Earth draws
 above the terrain under each point: the same thing over flat ground.
 
-Obstacles read from GeoJSON (input) are :mod:`ftlbo_mav.obstacles`.
+Positions come from the plan's one geodetic view (:mod:`.geodetic`). Obstacles read from
+GeoJSON (input) are :mod:`ftlbo_mav.obstacles`.
 """
 
 from __future__ import annotations
@@ -18,8 +19,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
+from .geodetic import GeodeticPlan, geodetic_view
 from .items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
 
 if TYPE_CHECKING:  # for annotations only
@@ -27,7 +27,6 @@ if TYPE_CHECKING:  # for annotations only
     from .items import UavMission
 
 ALTITUDE_REFERENCE = "metres above home (MAVLink GLOBAL_RELATIVE_ALT)"
-CIRCLE_VERTICES = 72
 KML_NS = "http://www.opengis.net/kml/2.2"
 
 # Mission items that carry a position (home is item 0, a NAV_WAYPOINT).
@@ -43,19 +42,6 @@ def uav_colour(n: int) -> str:
     return UAV_COLOURS[n % len(UAV_COLOURS)]
 
 
-# --------------------------------------------------------------------------- geometry
-
-
-def circle_ring_enu(centre, radius_m: float, *, vertices: int = CIRCLE_VERTICES) -> np.ndarray:
-    """A closed counter-clockwise ring around ``centre`` (2,), shape ``(vertices+1, 2)`` metres."""
-    angle = np.linspace(0.0, 2.0 * np.pi, vertices + 1)
-    ring = np.asarray(centre, float)[None, :2] + radius_m * np.stack(
-        [np.cos(angle), np.sin(angle)], axis=1
-    )
-    ring[-1] = ring[0]
-    return ring
-
-
 # --------------------------------------------------------------------------- export
 
 
@@ -67,28 +53,6 @@ def _position(lat: float, lon: float, alt: float | None = None) -> list[float]:
     return pos
 
 
-def _ring_lla(plan: Plan, ring_enu: np.ndarray) -> np.ndarray:
-    """ENU ring ``(n, 2)`` on the ground -> ``(n, 3)`` lat, lon, alt rows, closed exactly."""
-    enu = np.column_stack([ring_enu, np.zeros(len(ring_enu))])
-    lla = plan.lla(enu)
-    lla[-1] = lla[0]
-    return lla
-
-
-def _area_ring(plan: Plan) -> list[tuple[float, float]]:
-    """The area's lat/lon rectangle, counter-clockwise from the south-west corner."""
-    s = plan.scenario
-    lat = sorted([s.corner_a.lat_deg, s.corner_b.lat_deg])
-    lon = sorted([s.corner_a.lon_deg, s.corner_b.lon_deg])
-    corners = [(lat[0], lon[0]), (lat[0], lon[1]), (lat[1], lon[1]), (lat[1], lon[0])]
-    return corners + corners[:1]
-
-
-def _obstacle_rings(plan: Plan) -> list[np.ndarray]:
-    centres, radii = plan.scenario.obstacles_enu()
-    return [_ring_lla(plan, circle_ring_enu(c, r)) for c, r in zip(centres, radii)]
-
-
 def _positioned_items(mission: UavMission):
     return [it for it in mission.items if it.command in _POSITIONED]
 
@@ -97,24 +61,28 @@ def _feature(geometry: dict, **properties: Any) -> dict:
     return {"type": "Feature", "geometry": geometry, "properties": properties}
 
 
-def geojson_document(plan: Plan, missions: Sequence[UavMission]) -> dict:
+def geojson_document(
+    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None
+) -> dict:
     """The plan as an RFC 7946 FeatureCollection (a plain ``dict``, ready for ``json``).
 
     Every feature has a ``kind`` property: ``area``, ``obstacle``, ``centroid_path``,
-    ``uav_path`` or ``mission_item``.
+    ``uav_path`` or ``mission_item``. ``geodetic``: the plan's :func:`geodetic_view`
+    (computed here when not given).
     """
     s = plan.scenario
+    view = geodetic if geodetic is not None else geodetic_view(plan)
     features = [
         _feature(
             {"type": "Polygon",
-             "coordinates": [[_position(lat, lon) for lat, lon in _area_ring(plan)]]},
+             "coordinates": [[_position(lat, lon) for lat, lon in view.area_ring]]},
             kind="area",
             name=s.name,
             min_altitude_m=s.min_altitude_m,
             max_altitude_m=s.max_altitude_m,
         )
     ]
-    for k, (cyl, ring) in enumerate(zip(s.obstacles, _obstacle_rings(plan))):
+    for k, (cyl, ring) in enumerate(zip(s.obstacles, view.obstacle_rings)):
         features.append(
             _feature(
                 {"type": "Polygon", "coordinates": [[_position(lat, lon) for lat, lon, _ in ring]]},
@@ -128,16 +96,16 @@ def geojson_document(plan: Plan, missions: Sequence[UavMission]) -> dict:
         )
     features.append(
         _feature(
-            {"type": "LineString", "coordinates": [_position(*p) for p in plan.lla(plan.centroid)]},
+            {"type": "LineString", "coordinates": [_position(*p) for p in view.centroid]},
             kind="centroid_path",
             feasible=plan.feasible,
             altitude_reference=ALTITUDE_REFERENCE,
         )
     )
-    for n, (mission, path) in enumerate(zip(missions, plan.uav_paths)):
+    for n, (mission, path) in enumerate(zip(missions, view.uav_paths)):
         features.append(
             _feature(
-                {"type": "LineString", "coordinates": [_position(*p) for p in plan.lla(path)]},
+                {"type": "LineString", "coordinates": [_position(*p) for p in path]},
                 kind="uav_path",
                 uav=mission.name,
                 offset_m=list(mission.offset),
@@ -160,8 +128,10 @@ def geojson_document(plan: Plan, missions: Sequence[UavMission]) -> dict:
     return {"type": "FeatureCollection", "name": s.name or "ftlbo-mav plan", "features": features}
 
 
-def render_geojson(plan: Plan, missions: Sequence[UavMission]) -> str:
-    return json.dumps(geojson_document(plan, missions), indent=1) + "\n"
+def render_geojson(
+    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None
+) -> str:
+    return json.dumps(geojson_document(plan, missions, geodetic=geodetic), indent=1) + "\n"
 
 
 def _kml_colour(hex_rgb: str, alpha: int = 0xFF) -> str:
@@ -222,14 +192,18 @@ def _kml_polygon(
     _sub(ring, "coordinates", _kml_coords(rows))
 
 
-def render_kml(plan: Plan, missions: Sequence[UavMission]) -> str:
+def render_kml(
+    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None
+) -> str:
     """The plan as KML 2.2: area and obstacles, the centroid, then one folder per UAV.
 
     Altitudes are ``relativeToGround``. Obstacles are drawn as prisms up to the top of
-    the altitude band, so Google Earth shows the cylinders the paths avoid.
+    the altitude band, so Google Earth shows the cylinders the paths avoid. ``geodetic``:
+    the plan's :func:`geodetic_view` (computed here when not given).
     """
     ET.register_namespace("", KML_NS)
     s = plan.scenario
+    view = geodetic if geodetic is not None else geodetic_view(plan)
     root = ET.Element(f"{{{KML_NS}}}kml")
     doc = _sub(root, "Document")
     _sub(doc, "name", s.name or "ftlbo-mav plan")
@@ -244,20 +218,20 @@ def render_kml(plan: Plan, missions: Sequence[UavMission]) -> str:
 
     area = _sub(doc, "Folder")
     _sub(area, "name", "Area and obstacles")
-    _kml_polygon(area, "area", "area", [(lat, lon, 0.0) for lat, lon in _area_ring(plan)],
+    _kml_polygon(area, "area", "area", [(lat, lon, 0.0) for lat, lon in view.area_ring],
                  height_m=None)
-    for k, (cyl, ring) in enumerate(zip(s.obstacles, _obstacle_rings(plan))):
+    for k, (cyl, ring) in enumerate(zip(s.obstacles, view.obstacle_rings)):
         _kml_polygon(area, cyl.name or f"obstacle {k + 1} (r {cyl.radius_m:g} m)", "obstacle",
                      ring, height_m=s.max_altitude_m)
 
     centroid = _sub(doc, "Folder")
     _sub(centroid, "name", "Centroid")
-    _kml_line(centroid, "centroid path", "centroid", plan.lla(plan.centroid))
+    _kml_line(centroid, "centroid path", "centroid", view.centroid)
 
-    for mission, path in zip(missions, plan.uav_paths):
+    for mission, path in zip(missions, view.uav_paths):
         folder = _sub(doc, "Folder")
         _sub(folder, "name", mission.name)
-        _kml_line(folder, f"{mission.name} path", mission.name, plan.lla(path))
+        _kml_line(folder, f"{mission.name} path", mission.name, path)
         for it in _positioned_items(mission):
             pm = _sub(folder, "Placemark")
             _sub(pm, "name", f"{mission.name} #{it.seq}")

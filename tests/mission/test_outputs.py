@@ -1,0 +1,34 @@
+"""Every file ``write_plan`` writes, byte for byte, from one stored plan of the example.
+
+``tests/data/orchard-plan/plan.json`` is ``ftlbo-mav plan missions/nha-trang-orchard.toml
+--formats all``; the digests are of what ``write_plan`` wrote from it (read back with
+``read_plan``) before the writers shared one geodetic view (issue 15). A change in any
+writer's output, however small, shows here.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from ftlbo_mav.mission.export import FORMATS, read_plan, write_plan
+
+STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"
+
+EXPECTED = {
+    "plan.geojson": "0faf4f1890ba9489c526da8137455a93549fdefccb6a41b917d5dc728e4333e3",
+    "plan.json": "d3460c789d16006bfd6a17f8121d37f8e95b275e683e8d348982d837a8e9a4bb",
+    "plan.kml": "34978a2a892e1c305510fc2fa59d7fd71aeee24cf29841a226208da315009848",
+    "uav1.plan": "07c2c82fc64bcfa5015f814294223e7a2a6648583903c37f6b00af0e631d657f",
+    "uav1.waypoints": "c5989eff6b30ed4ee87b7cea965815d1a8e0dec678b8e241247a2ab954fc4171",
+    "uav2.plan": "9c6c1aa1f5de9aa20d576bad24a1848e0d04f9744349cea4a355d5364aa69bd8",
+    "uav2.waypoints": "ee850c15c93d8de3a20218b342ff86f2128b750f5bbaba2e3992092a7135f191",
+    "uav3.plan": "2d598e9e86d6f8758a19dd8cf5292401cf73ad9dcee620b7cb6c6b3656996e60",
+    "uav3.waypoints": "b974a5acb6b8dd6841cc92ef4573d7b12e2bd81e5c87f1878978eb7a1c07dfe4",
+}
+
+
+def test_every_format_is_written_as_before(tmp_path):
+    written = write_plan(read_plan(STORED), tmp_path, formats=FORMATS)
+    digests = {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in written}
+    assert digests == EXPECTED
