@@ -110,3 +110,25 @@ def set_mode_base_ok(base_mode: float) -> bool:
     """GCS_MAVLINK::_set_mode_common: only custom modes; DO_SET_MODE with param1 lacking
     MAV_MODE_FLAG_CUSTOM_MODE_ENABLED is answered MAV_RESULT_DENIED."""
     return bool(int(base_mode) & R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
+
+
+NAV_LAST = R.MAV_CMD_NAV_LAST  # 95: commands below are navigation commands (AP_Mission)
+
+# AP_Mission / ModeAuto::start_command: "Mission: <seq> <name>" (AP_Mission::Mission_Command::type)
+MISSION_COMMAND_NAMES = {
+    R.MAV_CMD_NAV_TAKEOFF: "Takeoff", R.MAV_CMD_NAV_WAYPOINT: "WP", R.MAV_CMD_NAV_LAND: "Land",
+    R.MAV_CMD_NAV_RETURN_TO_LAUNCH: "RTL", R.MAV_CMD_NAV_LOITER_UNLIM: "LoitUnlim",
+    R.MAV_CMD_DO_CHANGE_SPEED: "ChangeSpeed",
+}
+
+
+def mission_started(seq: int, command: int) -> tuple[int, str] | None:
+    """What ArduCopter says when it starts mission item ``seq`` ("Mission: 3 WP"), or None
+    for a command it starts silently (as far as recorded)."""
+    name = MISSION_COMMAND_NAMES.get(command)
+    return None if name is None else (R.MAV_SEVERITY_INFO, f"Mission: {seq} {name}")
+
+
+def reached_command(seq: int) -> tuple[int, str]:
+    """ModeAuto::verify_nav_wp, once a waypoint is reached: "Reached command #N"."""
+    return (R.MAV_SEVERITY_INFO, f"Reached command #{seq}")

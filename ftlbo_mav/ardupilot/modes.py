@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import enum
 
+from pymavlink.dialects.v20 import ardupilotmega as R
+
 
 class CopterMode(enum.IntEnum):
     """ArduCopter's custom modes (ArduCopter/mode.h, ``enum class Number``)."""
@@ -43,3 +45,25 @@ def mode_name(number: int) -> str:
         return CopterMode(number).name
     except ValueError:
         return str(number)
+
+
+# Modes in which ArduCopter sets MAV_MODE_FLAG_GUIDED_ENABLED
+# (ArduCopter/GCS_Mavlink.cpp GCS_MAVLINK_Copter::base_mode)
+GUIDED_ENABLED_MODES = frozenset({
+    CopterMode.AUTO, CopterMode.RTL, CopterMode.LOITER, CopterMode.AVOID_ADSB,
+    CopterMode.FOLLOW, CopterMode.GUIDED, CopterMode.CIRCLE, CopterMode.POSHOLD,
+    CopterMode.BRAKE, CopterMode.SMART_RTL,
+})
+
+
+def heartbeat_base_mode(mode: int, *, armed: bool) -> int:
+    """HEARTBEAT ``base_mode`` as ArduCopter sends it in ``mode`` (GCS_MAVLINK_Copter::
+    base_mode): stabilize and manual input always, guided in :data:`GUIDED_ENABLED_MODES`,
+    safety-armed when armed, and custom mode enabled."""
+    base = R.MAV_MODE_FLAG_STABILIZE_ENABLED | R.MAV_MODE_FLAG_MANUAL_INPUT_ENABLED
+    if mode in GUIDED_ENABLED_MODES:
+        base |= R.MAV_MODE_FLAG_GUIDED_ENABLED
+    if armed:
+        base |= R.MAV_MODE_FLAG_SAFETY_ARMED
+    base |= R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+    return base

@@ -18,10 +18,6 @@ from ..mission.items import MissionItem
 
 MISSION_TYPE_MISSION = 0
 
-# Kept for readers of the emulator: the commands whose item carries a position
-# (AP_Mission::stored_in_location); any other command comes back in frame 0.
-POSITION_COMMANDS = storage.LOCATION_COMMANDS
-
 # Altitudes: ArduPilot truncates ``z * 100.0f`` (float32) to whole centimetres, so 0.53 m
 # is kept as 52 cm (0.53f * 100.0f = 52.999996); a read-back stored once more can lose
 # another centimetre, and a vehicle that keeps items as sent has not truncated at all:

@@ -51,12 +51,15 @@ from ..ardupilot.commands import (
     FORCE_DISARM_MAGIC,
     INSTANT_BOOT,
     MISSING_TAKEOFF,
+    NAV_LAST,
     NEEDS_POSITION,
     READY,
     BootTimeline,
     arm_refusals,
+    mission_started,
     mode_change_failed,
     mode_not_armable,
+    reached_command,
     set_mode_base_ok,
 )
 from ..ardupilot.modes import CopterMode, mode_name
@@ -83,11 +86,6 @@ FLOWN_MODES = frozenset({STABILIZE, CopterMode.ALT_HOLD, AUTO, GUIDED, LOITER, R
 STEP_S = 0.02
 _WGS84_A = 6378137.0
 _WGS84_E2 = 6.69437999014e-3
-_NAV_LAST = 95  # MAV_CMD_NAV_LAST: commands below are navigation commands (AP_Mission)
-# AP_Mission / ModeAuto::start_command: "Mission: <seq> <name>" (AP_Mission::Mission_Command::type)
-_MISSION_TEXT = {CMD_NAV_TAKEOFF: "Takeoff", CMD_NAV_WAYPOINT: "WP", CMD_NAV_LAND: "Land",
-                 CMD_NAV_RETURN_TO_LAUNCH: "RTL", CMD_NAV_LOITER_UNLIM: "LoitUnlim",
-                 CMD_DO_CHANGE_SPEED: "ChangeSpeed"}
 # ModeAuto::set_next_wp: the next commands the copter flies through instead of stopping
 _FLY_THROUGH = (CMD_NAV_WAYPOINT, CMD_NAV_LOITER_UNLIM)
 
@@ -205,7 +203,7 @@ class Autopilot:
         """AP_Mission::starts_with_takeoff_cmd / is_takeoff_next: the first navigation
         command from the current one is a takeoff."""
         for item in self.mission[max(self.current, 1):]:
-            if item.command < _NAV_LAST:
+            if item.command < NAV_LAST:
                 return item.command == CMD_NAV_TAKEOFF
         return False
 
@@ -295,9 +293,9 @@ class Autopilot:
         # "Mission: 1 Takeoff" and MISSION_CURRENT 1 after the landing's disarm)
         if self.mode == AUTO and len(self.mission) > 1:
             self.current = 1
-            name = _MISSION_TEXT.get(self.mission[1].command)
-            if name:
-                self._pending.append(_text((R.MAV_SEVERITY_INFO, f"Mission: 1 {name}")))
+            started = mission_started(1, self.mission[1].command)
+            if started:
+                self._pending.append(_text(started))
         else:
             self.current = 0
 
@@ -428,7 +426,7 @@ class Autopilot:
 
     def _next_nav(self) -> MissionItem | None:
         for item in self.mission[self.current + 1:]:
-            if item.command < _NAV_LAST:
+            if item.command < NAV_LAST:
                 return item
         return None
 
@@ -449,7 +447,7 @@ class Autopilot:
         (ModeAuto::start_command, "Mission: N <name>")."""
         self._phase = ""
         self._wait_until = None
-        while (item := self._item()) is not None and item.command >= _NAV_LAST:
+        while (item := self._item()) is not None and item.command >= NAV_LAST:
             self._announce_start(item)
             if item.command == CMD_DO_CHANGE_SPEED and item.param2 > 0:
                 self.change_speed(float(item.param2))  # ModeAuto::do_change_speed
@@ -487,9 +485,9 @@ class Autopilot:
             self._start_item()
 
     def _announce_start(self, item: MissionItem) -> None:
-        name = _MISSION_TEXT.get(item.command)
-        if name:
-            self._pending.append(_text((R.MAV_SEVERITY_INFO, f"Mission: {self.current} {name}")))
+        started = mission_started(self.current, item.command)
+        if started:
+            self._pending.append(_text(started))
 
     def _takeoff_point(self) -> np.ndarray | None:
         """ModeAuto::wp_start right after a takeoff: the takeoff's completion point."""
@@ -502,7 +500,7 @@ class Autopilot:
         MISSION_ITEM_REACHED, then the next item."""
         item = self._item()
         if item is not None and item.command == CMD_NAV_WAYPOINT:
-            out.append(_text((R.MAV_SEVERITY_INFO, f"Reached command #{self.current}")))
+            out.append(_text(reached_command(self.current)))
         out.append(R.MAVLink_mission_item_reached_message(self.current))
         self.current += 1
         self._start_item()

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot.commands import INSTANT_BOOT, BootTimeline
-from ..ardupilot.modes import CopterMode
+from ..ardupilot.modes import CopterMode, heartbeat_base_mode
 from ..ardupilot.navigation import PARAM_COUNT
 from ..ardupilot.streams import data_stream_messages
 from ..mission.items import MissionItem
@@ -34,10 +34,6 @@ from .physics import FlightLimits
 R = mavlink2
 Link = Hashable
 
-# Modes in which ArduCopter sets MAV_MODE_FLAG_GUIDED_ENABLED (GCS_Mavlink.cpp base_mode())
-_GUIDED_MODES = {CopterMode.AUTO, CopterMode.RTL, CopterMode.LOITER, CopterMode.AVOID_ADSB,
-                 CopterMode.FOLLOW, CopterMode.GUIDED, CopterMode.CIRCLE, CopterMode.POSHOLD,
-                 CopterMode.BRAKE, CopterMode.SMART_RTL}
 TIMESYNC_S = 10.0  # GCS_MAVLINK::update_send: TIMESYNC every 10 s, asked or not
 
 
@@ -331,12 +327,7 @@ class Vehicle:
     # -- what ArduCopter sends
     def heartbeat(self):
         s = self.state
-        base = R.MAV_MODE_FLAG_STABILIZE_ENABLED | R.MAV_MODE_FLAG_MANUAL_INPUT_ENABLED
-        if s.mode in _GUIDED_MODES:
-            base |= R.MAV_MODE_FLAG_GUIDED_ENABLED
-        if s.armed:
-            base |= R.MAV_MODE_FLAG_SAFETY_ARMED
-        base |= R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+        base = heartbeat_base_mode(s.mode, armed=s.armed)
         status = R.MAV_STATE_ACTIVE if s.armed else R.MAV_STATE_STANDBY
         # GCS_Common.cpp send_heartbeat: frame type, ARDUPILOTMEGA, base_mode, custom mode
         return R.MAVLink_heartbeat_message(R.MAV_TYPE_QUADROTOR, R.MAV_AUTOPILOT_ARDUPILOTMEGA,
