@@ -1,4 +1,4 @@
-"""Scenario files: TOML -> a validated, frozen :class:`Scenario`.
+"""Scenario files: TOML -> a validated, frozen :class:`~.model.Scenario`.
 
 Every mistake a user can make in a scenario ends here as a :class:`ScenarioError` naming
 the file, the field and the problem. The key names are fixed (see ``missions/*.toml`` and
@@ -8,286 +8,30 @@ a typo that is silently ignored plans a different survey than the one intended.
 
 from __future__ import annotations
 
-import math
 import tomllib
-from dataclasses import dataclass, field, replace
-from functools import cached_property
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .errors import ScenarioError
-from .formation import PLANES, regular_formation
-from .geo import LocalFrame
-from .obstacles import Cylinder, read_obstacle_geojson
-from .planning.survey import formation_width, lay_lanes
-
-ALGORITHMS = ("ftlbo-seeded", "ftlbo", "tlbo", "ga", "theta-pso")
-"""Every name in planning.optimizers.OPTIMIZERS; the first is the default. ``ftlbo`` is
-the paper's FTLBO; ``ftlbo-seeded`` is FTLBO from geometric seed routes (docs/planning.md)."""
-END_ACTIONS = ("land", "rtl", "loiter")
-AUTO = "auto"
-"""``waypoints = "auto"``: per leg, the fewest waypoints whose plan is within
-:data:`ftlbo_mav.planning.planner.AUTO_TARGET` of the leg's lower bound."""
-
-
-@dataclass(frozen=True)
-class GeoPoint:
-    """A position: degrees WGS84 and metres above home."""
-
-    lat_deg: float
-    lon_deg: float
-    alt_m: float = 0.0
-
-
-@dataclass(frozen=True)
-class ViaPoint:
-    """A point the centroid passes between start and goal: degrees WGS84, metres above
-    home, and a label (``"via 1"``, ``"lane 2 start"``... when the file gives none)."""
-
-    lat_deg: float
-    lon_deg: float
-    alt_m: float
-    name: str = ""
-
-
-@dataclass(frozen=True)
-class Survey:
-    """A ``[survey]``: lanes ``spacing_m`` apart along ``heading_deg`` (degrees clockwise
-    from north), ``margin_m`` inside the area's sides, flown at ``alt_m``. ``lanes``:
-    each lane's (entry, exit) in flight order; its ends are the scenario's via points."""
-
-    spacing_m: float
-    heading_deg: float
-    margin_m: float
-    alt_m: float
-    lanes: tuple[tuple[GeoPoint, GeoPoint], ...] = ()
-
-
-@dataclass(frozen=True)
-class Weights:
-    """The paper's alpha, beta, gamma (eq. 5)."""
-
-    length: float = 1.0
-    safety: float = 1.0
-    task: float = 1.0
-
-
-@dataclass(frozen=True)
-class PlannerSettings:
-    """Optimizer settings; the defaults are the paper's experiment, except the algorithm:
-    the seeded FTLBO (near-optimal paths, same budget) rather than the paper's FTLBO."""
-
-    algorithm: str = ALGORITHMS[0]
-    students: int = 100
-    waypoints: int | str = 10
-    """Free waypoints per leg, or :data:`AUTO`."""
-    iterations: int = 150
-    seed: int = 0
-    weights: Weights = field(default_factory=Weights)
-
-
-@dataclass(frozen=True)
-class MissionSettings:
-    """How the per-UAV missions end and how fast they fly."""
-
-    end_action: str = "land"
-    speed_m_s: float | None = None
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """A survey: area, altitude band, start, via points and goal of the centroid,
-    formation, obstacles. ``via``: every point passed between start and goal in flight
-    order (the ``[[via]]`` points, then the lane ends of ``survey``)."""
-
-    corner_a: GeoPoint
-    corner_b: GeoPoint
-    min_altitude_m: float
-    max_altitude_m: float
-    start: GeoPoint
-    goal: GeoPoint
-    offsets: tuple[tuple[float, float, float], ...]
-    clearance_m: float = 1.0
-    obstacles: tuple[Cylinder, ...] = ()
-    planner: PlannerSettings = field(default_factory=PlannerSettings)
-    mission: MissionSettings = field(default_factory=MissionSettings)
-    name: str = ""
-    source: str = "<scenario>"
-    via: tuple[ViaPoint, ...] = ()
-    survey: Survey | None = None
-
-    @cached_property
-    def frame(self) -> LocalFrame:
-        """ENU frame with its origin at the area's south-west corner."""
-        return LocalFrame(
-            origin_lat_deg=min(self.corner_a.lat_deg, self.corner_b.lat_deg),
-            origin_lon_deg=min(self.corner_a.lon_deg, self.corner_b.lon_deg),
-        )
-
-    @property
-    def offsets_m(self) -> np.ndarray:
-        """Formation offsets, shape ``(N, 3)`` metres ENU."""
-        return np.array(self.offsets, dtype=float).reshape(-1, 3)
-
-    @property
-    def uav_count(self) -> int:
-        return len(self.offsets)
-
-    def area_bounds_enu(self) -> tuple[np.ndarray, np.ndarray]:
-        """Horizontal bounds of the area, ``(lower (2,), upper (2,))`` metres east/north.
-
-        The lat/lon rectangle is very nearly an ENU rectangle; the inner box of its four
-        corners is used, so a point inside the box is inside the rectangle.
-        """
-        lat = [self.corner_a.lat_deg, self.corner_b.lat_deg]
-        lon = [self.corner_a.lon_deg, self.corner_b.lon_deg]
-        lo_lat, hi_lat, lo_lon, hi_lon = min(lat), max(lat), min(lon), max(lon)
-        corners = self.frame.to_enu(
-            lat_deg=[lo_lat, lo_lat, hi_lat, hi_lat], lon_deg=[lo_lon, hi_lon, lo_lon, hi_lon]
-        )
-        lower = np.array([max(corners[0, 0], corners[2, 0]), max(corners[0, 1], corners[1, 1])])
-        upper = np.array([min(corners[1, 0], corners[3, 0]), min(corners[2, 1], corners[3, 1])])
-        return lower, upper
-
-    def start_enu(self) -> np.ndarray:
-        return self.frame.to_enu(
-            lat_deg=self.start.lat_deg, lon_deg=self.start.lon_deg, alt_m=self.start.alt_m
-        )
-
-    def goal_enu(self) -> np.ndarray:
-        return self.frame.to_enu(
-            lat_deg=self.goal.lat_deg, lon_deg=self.goal.lon_deg, alt_m=self.goal.alt_m
-        )
-
-    def route_enu(self) -> np.ndarray:
-        """Start, every via point and the goal, ``(V + 2, 3)`` metres ENU: leg ``k`` runs
-        from row ``k`` to row ``k + 1``."""
-        points = [self.start, *self.via, self.goal]
-        return self.frame.to_enu(lat_deg=[p.lat_deg for p in points],
-                                 lon_deg=[p.lon_deg for p in points],
-                                 alt_m=[p.alt_m for p in points]).reshape(-1, 3)
-
-    def route_names(self) -> tuple[str, ...]:
-        """``"start"``, each via point's name, ``"goal"``: the ends of the legs."""
-        return ("start", *(v.name for v in self.via), "goal")
-
-    def obstacles_enu(self) -> tuple[np.ndarray, np.ndarray]:
-        """Cylinder axes ``(K, 2)`` metres east/north and radii ``(K,)`` metres (no clearance)."""
-        if not self.obstacles:
-            return np.zeros((0, 2)), np.zeros(0)
-        centres = self.frame.to_enu(
-            lat_deg=[c.lat_deg for c in self.obstacles],
-            lon_deg=[c.lon_deg for c in self.obstacles],
-        )[:, :2]
-        return centres, np.array([c.radius_m for c in self.obstacles], dtype=float)
-
-
-# --------------------------------------------------------------------------- reading
-
-
-class _Table:
-    """One TOML table being read: tracks which keys were used, to refuse the rest."""
-
-    def __init__(self, data: Any, path: str, source: str) -> None:
-        if not isinstance(data, dict):
-            raise ScenarioError(source, path, f"must be a table, got {_kind(data)}")
-        self.data, self.path, self.source = data, path, source
-        self.used: set[str] = set()
-
-    def _field(self, key: str) -> str:
-        return f"{self.path}.{key}" if self.path else key
-
-    def error(self, key: str, problem: str) -> ScenarioError:
-        return ScenarioError(self.source, self._field(key), problem)
-
-    def has(self, key: str) -> bool:
-        return key in self.data
-
-    def raw(self, key: str, default: Any = ..., *, required: bool = True) -> Any:
-        self.used.add(key)
-        if key in self.data:
-            return self.data[key]
-        if default is not ... or not required:
-            return None if default is ... else default
-        raise self.error(key, "missing (required)")
-
-    def number(self, key: str, default: Any = ..., *, lo=None, hi=None, lo_open=False) -> float:
-        value = self.raw(key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(key, f"must be a number, got {_kind(value)}")
-        value = float(value)
-        if not math.isfinite(value):
-            raise self.error(key, "must be a finite number")
-        if lo is not None and (value <= lo if lo_open else value < lo):
-            raise self.error(key, f"must be {'>' if lo_open else '>='} {lo:g}, got {value:g}")
-        if hi is not None and value > hi:
-            raise self.error(key, f"must be <= {hi:g}, got {value:g}")
-        return value
-
-    def integer(self, key: str, default: Any = ..., *, lo: int | None = None) -> int:
-        value = self.raw(key, default)
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise self.error(key, f"must be an integer, got {_kind(value)}")
-        if lo is not None and value < lo:
-            raise self.error(key, f"must be >= {lo}, got {value}")
-        return value
-
-    def string(self, key: str, default: Any = ..., *, choices=None) -> str:
-        value = self.raw(key, default)
-        if not isinstance(value, str):
-            raise self.error(key, f"must be a string, got {_kind(value)}")
-        if choices is not None and value not in choices:
-            raise self.error(key, f"must be one of {', '.join(choices)}; got {value!r}")
-        return value
-
-    def table(self, key: str, *, required: bool = True) -> _Table | None:
-        value = self.raw(key, required=required)
-        if value is None and not required:
-            return None
-        return _Table(value, self._field(key), self.source)
-
-    def lat_lon(self, key: str) -> tuple[float, float]:
-        value = self.raw(key)
-        if (
-            not isinstance(value, list)
-            or len(value) != 2
-            or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)
-        ):
-            raise self.error(key, f"must be [lat, lon] in degrees, got {value!r}")
-        lat, lon = float(value[0]), float(value[1])
-        _check_lat_lon(lat, lon, lambda what, problem: self.error(f"{key}[{what}]", problem))
-        return lat, lon
-
-    def point(self, *, alt: bool = True) -> GeoPoint:
-        lat = self.number("lat")
-        lon = self.number("lon")
-        _check_lat_lon(lat, lon, lambda what, problem: self.error(("lat", "lon")[what], problem))
-        return GeoPoint(lat_deg=lat, lon_deg=lon, alt_m=self.number("alt") if alt else 0.0)
-
-    def done(self) -> None:
-        unknown = sorted(set(self.data) - self.used)
-        if unknown:
-            raise self.error(unknown[0], "unknown key (a typo?)")
-
-
-def _check_lat_lon(lat: float, lon: float, error) -> None:
-    if not -90.0 <= lat <= 90.0:
-        raise error(0, f"latitude {lat:g} is outside [-90, 90]")
-    if not -180.0 <= lon <= 180.0:
-        raise error(1, f"longitude {lon:g} is outside [-180, 180]")
-
-
-def _kind(value: Any) -> str:
-    return {
-        bool: "a boolean",
-        int: "an integer",
-        float: "a number",
-        str: "a string",
-        list: "an array",
-        dict: "a table",
-    }.get(type(value), type(value).__name__)
+from ..errors import ScenarioError
+from ..formation import PLANES, regular_formation
+from ..obstacles import Cylinder, read_obstacle_geojson
+from ..planning.survey import formation_width, lay_lanes
+from .model import (
+    ALGORITHMS,
+    AUTO,
+    END_ACTIONS,
+    GeoPoint,
+    MissionSettings,
+    PlannerSettings,
+    Scenario,
+    Survey,
+    ViaPoint,
+    Weights,
+)
+from .tables import Table
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -311,7 +55,7 @@ def parse_scenario(
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(source, "", f"malformed TOML: {exc}") from None
-    root = _Table(data, "", source)
+    root = Table(data, "", source)
 
     name = root.string("name", "")
     area = root.table("area")
@@ -373,7 +117,7 @@ def parse_scenario(
     return scenario
 
 
-def _read_offsets(form: _Table) -> np.ndarray:
+def _read_offsets(form: Table) -> np.ndarray:
     if form.has("offsets"):
         for key in ("count", "radius", "plane"):
             if form.has(key):
@@ -403,7 +147,7 @@ def _read_obstacles(rows: Any, source: str) -> tuple[Cylinder, ...]:
         raise ScenarioError(source, "obstacles", "must be an array of tables ([[obstacles]])")
     cylinders = []
     for i, row in enumerate(rows):
-        t = _Table(row, f"obstacles[{i}]", source)
+        t = Table(row, f"obstacles[{i}]", source)
         point = t.point(alt=False)
         radius = t.number("radius", lo=0.0, lo_open=True)
         label = t.string("name", "")
@@ -417,7 +161,7 @@ def _read_via(rows: Any, source: str) -> tuple[ViaPoint, ...]:
         raise ScenarioError(source, "via", "must be an array of tables ([[via]])")
     points = []
     for i, row in enumerate(rows):
-        t = _Table(row, f"via[{i}]", source)
+        t = Table(row, f"via[{i}]", source)
         point = t.point()
         label = t.string("name", f"via {i + 1}")
         t.done()
@@ -425,7 +169,7 @@ def _read_via(rows: Any, source: str) -> tuple[ViaPoint, ...]:
     return tuple(points)
 
 
-def _read_survey(t: _Table, *, default_alt: float) -> Survey:
+def _read_survey(t: Table, *, default_alt: float) -> Survey:
     spacing = t.number("spacing", lo=0.0, lo_open=True)
     heading = t.number("heading")
     margin = t.number("margin", spacing / 2, lo=0.0)
@@ -483,7 +227,7 @@ def survey_width(s: Scenario) -> float | None:
     return formation_width(s.offsets_m, s.survey.heading_deg)
 
 
-def _read_planner(t: _Table | None) -> PlannerSettings:
+def _read_planner(t: Table | None) -> PlannerSettings:
     if t is None:
         return PlannerSettings()
     algorithm = t.string("algorithm", ALGORITHMS[0], choices=ALGORITHMS)
@@ -510,7 +254,7 @@ def _read_planner(t: _Table | None) -> PlannerSettings:
     return PlannerSettings(algorithm, students, waypoints, iterations, seed, weights)
 
 
-def _read_mission(t: _Table | None) -> MissionSettings:
+def _read_mission(t: Table | None) -> MissionSettings:
     if t is None:
         return MissionSettings()
     end = t.string("end_action", "land", choices=END_ACTIONS)

@@ -1,0 +1,175 @@
+"""The scenario as values: a frozen :class:`Scenario` and its parts, and its ENU frame.
+
+Read from TOML by :mod:`.reader`; every name here is also :mod:`ftlbo_mav.scenario`'s
+(``Cylinder`` with them: it lives in :mod:`ftlbo_mav.obstacles`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ..geo import LocalFrame
+from ..obstacles import Cylinder
+
+ALGORITHMS = ("ftlbo-seeded", "ftlbo", "tlbo", "ga", "theta-pso")
+"""Every name in planning.optimizers.OPTIMIZERS; the first is the default. ``ftlbo`` is
+the paper's FTLBO; ``ftlbo-seeded`` is FTLBO from geometric seed routes (docs/planning.md)."""
+END_ACTIONS = ("land", "rtl", "loiter")
+AUTO = "auto"
+"""``waypoints = "auto"``: per leg, the fewest waypoints whose plan is within
+:data:`ftlbo_mav.planning.planner.AUTO_TARGET` of the leg's lower bound."""
+
+
+@dataclass(frozen=True)
+class GeoPoint:
+    """A position: degrees WGS84 and metres above home."""
+
+    lat_deg: float
+    lon_deg: float
+    alt_m: float = 0.0
+
+
+@dataclass(frozen=True)
+class ViaPoint:
+    """A point the centroid passes between start and goal: degrees WGS84, metres above
+    home, and a label (``"via 1"``, ``"lane 2 start"``... when the file gives none)."""
+
+    lat_deg: float
+    lon_deg: float
+    alt_m: float
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Survey:
+    """A ``[survey]``: lanes ``spacing_m`` apart along ``heading_deg`` (degrees clockwise
+    from north), ``margin_m`` inside the area's sides, flown at ``alt_m``. ``lanes``:
+    each lane's (entry, exit) in flight order; its ends are the scenario's via points."""
+
+    spacing_m: float
+    heading_deg: float
+    margin_m: float
+    alt_m: float
+    lanes: tuple[tuple[GeoPoint, GeoPoint], ...] = ()
+
+
+@dataclass(frozen=True)
+class Weights:
+    """The paper's alpha, beta, gamma (eq. 5)."""
+
+    length: float = 1.0
+    safety: float = 1.0
+    task: float = 1.0
+
+
+@dataclass(frozen=True)
+class PlannerSettings:
+    """Optimizer settings; the defaults are the paper's experiment, except the algorithm:
+    the seeded FTLBO (near-optimal paths, same budget) rather than the paper's FTLBO."""
+
+    algorithm: str = ALGORITHMS[0]
+    students: int = 100
+    waypoints: int | str = 10
+    """Free waypoints per leg, or :data:`AUTO`."""
+    iterations: int = 150
+    seed: int = 0
+    weights: Weights = field(default_factory=Weights)
+
+
+@dataclass(frozen=True)
+class MissionSettings:
+    """How the per-UAV missions end and how fast they fly."""
+
+    end_action: str = "land"
+    speed_m_s: float | None = None
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A survey: area, altitude band, start, via points and goal of the centroid,
+    formation, obstacles. ``via``: every point passed between start and goal in flight
+    order (the ``[[via]]`` points, then the lane ends of ``survey``)."""
+
+    corner_a: GeoPoint
+    corner_b: GeoPoint
+    min_altitude_m: float
+    max_altitude_m: float
+    start: GeoPoint
+    goal: GeoPoint
+    offsets: tuple[tuple[float, float, float], ...]
+    clearance_m: float = 1.0
+    obstacles: tuple[Cylinder, ...] = ()
+    planner: PlannerSettings = field(default_factory=PlannerSettings)
+    mission: MissionSettings = field(default_factory=MissionSettings)
+    name: str = ""
+    source: str = "<scenario>"
+    via: tuple[ViaPoint, ...] = ()
+    survey: Survey | None = None
+
+    @cached_property
+    def frame(self) -> LocalFrame:
+        """ENU frame with its origin at the area's south-west corner."""
+        return LocalFrame(
+            origin_lat_deg=min(self.corner_a.lat_deg, self.corner_b.lat_deg),
+            origin_lon_deg=min(self.corner_a.lon_deg, self.corner_b.lon_deg),
+        )
+
+    @property
+    def offsets_m(self) -> np.ndarray:
+        """Formation offsets, shape ``(N, 3)`` metres ENU."""
+        return np.array(self.offsets, dtype=float).reshape(-1, 3)
+
+    @property
+    def uav_count(self) -> int:
+        return len(self.offsets)
+
+    def area_bounds_enu(self) -> tuple[np.ndarray, np.ndarray]:
+        """Horizontal bounds of the area, ``(lower (2,), upper (2,))`` metres east/north.
+
+        The lat/lon rectangle is very nearly an ENU rectangle; the inner box of its four
+        corners is used, so a point inside the box is inside the rectangle.
+        """
+        lat = [self.corner_a.lat_deg, self.corner_b.lat_deg]
+        lon = [self.corner_a.lon_deg, self.corner_b.lon_deg]
+        lo_lat, hi_lat, lo_lon, hi_lon = min(lat), max(lat), min(lon), max(lon)
+        corners = self.frame.to_enu(
+            lat_deg=[lo_lat, lo_lat, hi_lat, hi_lat], lon_deg=[lo_lon, hi_lon, lo_lon, hi_lon]
+        )
+        lower = np.array([max(corners[0, 0], corners[2, 0]), max(corners[0, 1], corners[1, 1])])
+        upper = np.array([min(corners[1, 0], corners[3, 0]), min(corners[2, 1], corners[3, 1])])
+        return lower, upper
+
+    def start_enu(self) -> np.ndarray:
+        return self.frame.to_enu(
+            lat_deg=self.start.lat_deg, lon_deg=self.start.lon_deg, alt_m=self.start.alt_m
+        )
+
+    def goal_enu(self) -> np.ndarray:
+        return self.frame.to_enu(
+            lat_deg=self.goal.lat_deg, lon_deg=self.goal.lon_deg, alt_m=self.goal.alt_m
+        )
+
+    def route_enu(self) -> np.ndarray:
+        """Start, every via point and the goal, ``(V + 2, 3)`` metres ENU: leg ``k`` runs
+        from row ``k`` to row ``k + 1``."""
+        points = [self.start, *self.via, self.goal]
+        return self.frame.to_enu(lat_deg=[p.lat_deg for p in points],
+                                 lon_deg=[p.lon_deg for p in points],
+                                 alt_m=[p.alt_m for p in points]).reshape(-1, 3)
+
+    def route_names(self) -> tuple[str, ...]:
+        """``"start"``, each via point's name, ``"goal"``: the ends of the legs."""
+        return ("start", *(v.name for v in self.via), "goal")
+
+    def obstacles_enu(self) -> tuple[np.ndarray, np.ndarray]:
+        """Cylinder axes ``(K, 2)`` metres east/north and radii ``(K,)`` metres (no clearance)."""
+        if not self.obstacles:
+            return np.zeros((0, 2)), np.zeros(0)
+        centres = self.frame.to_enu(
+            lat_deg=[c.lat_deg for c in self.obstacles],
+            lon_deg=[c.lon_deg for c in self.obstacles],
+        )[:, :2]
+        return centres, np.array([c.radius_m for c in self.obstacles], dtype=float)

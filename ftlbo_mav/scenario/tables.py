@@ -1,0 +1,113 @@
+"""One TOML table of a scenario being read: typed fields, each mistake a
+:class:`~ftlbo_mav.errors.ScenarioError` naming file and field, unknown keys refused."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ..errors import ScenarioError
+from .model import GeoPoint
+
+
+class Table:
+    """One TOML table being read: tracks which keys were used, to refuse the rest."""
+
+    def __init__(self, data: Any, path: str, source: str) -> None:
+        if not isinstance(data, dict):
+            raise ScenarioError(source, path, f"must be a table, got {_kind(data)}")
+        self.data, self.path, self.source = data, path, source
+        self.used: set[str] = set()
+
+    def _field(self, key: str) -> str:
+        return f"{self.path}.{key}" if self.path else key
+
+    def error(self, key: str, problem: str) -> ScenarioError:
+        return ScenarioError(self.source, self._field(key), problem)
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def raw(self, key: str, default: Any = ..., *, required: bool = True) -> Any:
+        self.used.add(key)
+        if key in self.data:
+            return self.data[key]
+        if default is not ... or not required:
+            return None if default is ... else default
+        raise self.error(key, "missing (required)")
+
+    def number(self, key: str, default: Any = ..., *, lo=None, hi=None, lo_open=False) -> float:
+        value = self.raw(key, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.error(key, f"must be a number, got {_kind(value)}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.error(key, "must be a finite number")
+        if lo is not None and (value <= lo if lo_open else value < lo):
+            raise self.error(key, f"must be {'>' if lo_open else '>='} {lo:g}, got {value:g}")
+        if hi is not None and value > hi:
+            raise self.error(key, f"must be <= {hi:g}, got {value:g}")
+        return value
+
+    def integer(self, key: str, default: Any = ..., *, lo: int | None = None) -> int:
+        value = self.raw(key, default)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(key, f"must be an integer, got {_kind(value)}")
+        if lo is not None and value < lo:
+            raise self.error(key, f"must be >= {lo}, got {value}")
+        return value
+
+    def string(self, key: str, default: Any = ..., *, choices=None) -> str:
+        value = self.raw(key, default)
+        if not isinstance(value, str):
+            raise self.error(key, f"must be a string, got {_kind(value)}")
+        if choices is not None and value not in choices:
+            raise self.error(key, f"must be one of {', '.join(choices)}; got {value!r}")
+        return value
+
+    def table(self, key: str, *, required: bool = True) -> Table | None:
+        value = self.raw(key, required=required)
+        if value is None and not required:
+            return None
+        return Table(value, self._field(key), self.source)
+
+    def lat_lon(self, key: str) -> tuple[float, float]:
+        value = self.raw(key)
+        if (
+            not isinstance(value, list)
+            or len(value) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value)
+        ):
+            raise self.error(key, f"must be [lat, lon] in degrees, got {value!r}")
+        lat, lon = float(value[0]), float(value[1])
+        _check_lat_lon(lat, lon, lambda what, problem: self.error(f"{key}[{what}]", problem))
+        return lat, lon
+
+    def point(self, *, alt: bool = True) -> GeoPoint:
+        lat = self.number("lat")
+        lon = self.number("lon")
+        _check_lat_lon(lat, lon, lambda what, problem: self.error(("lat", "lon")[what], problem))
+        return GeoPoint(lat_deg=lat, lon_deg=lon, alt_m=self.number("alt") if alt else 0.0)
+
+    def done(self) -> None:
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise self.error(unknown[0], "unknown key (a typo?)")
+
+
+def _check_lat_lon(lat: float, lon: float, error) -> None:
+    if not -90.0 <= lat <= 90.0:
+        raise error(0, f"latitude {lat:g} is outside [-90, 90]")
+    if not -180.0 <= lon <= 180.0:
+        raise error(1, f"longitude {lon:g} is outside [-180, 180]")
+
+
+def _kind(value: Any) -> str:
+    return {
+        bool: "a boolean",
+        int: "an integer",
+        float: "a number",
+        str: "a string",
+        list: "an array",
+        dict: "a table",
+    }.get(type(value), type(value).__name__)
