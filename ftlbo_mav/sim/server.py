@@ -324,7 +324,11 @@ class Simulator:
         """Serve until interrupted (Ctrl-C) or terminated (SIGTERM), then stop cleanly."""
 
         def started() -> None:
-            asyncio.get_running_loop().add_signal_handler(signal.SIGTERM, self._stopping.set)
+            loop = asyncio.get_running_loop()
+            # Ctrl-C and kill stop the same clean way (a KeyboardInterrupt raised inside
+            # the loop could land in a busy step and leave the process hanging)
+            loop.add_signal_handler(signal.SIGTERM, self._stopping.set)
+            loop.add_signal_handler(signal.SIGINT, self._stopping.set)
             ready()
 
         try:
