@@ -31,7 +31,7 @@ from ftlbo_mav.ardupilot.storage import WireItem
 from ftlbo_mav.errors import FtlboError
 from ftlbo_mav.link.codec import from_wire, to_wire
 from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
-from ftlbo_mav.link.mission_protocol import Timing, Upload, download_mission, run_transfer
+from ftlbo_mav.link.mission_protocol import Timing, download_mission, upload_mission
 
 from .launcher import SitlSwarm
 
@@ -69,9 +69,7 @@ def record_items(channel, *, timing: Timing) -> dict:
     """Upload the reference items, read them back; the ``main_upload`` section."""
     named = reference_items()
     items = [from_wire(w) for _, w in named]
-    run_transfer(Upload(items, sysid=channel.sysid, compid=1,
-                        own=(channel.own_sysid, channel.own_compid), timing=timing,
-                        progress=None), channel)
+    upload_mission(channel, items, timing=timing)
     back = download_mission(channel, timing=timing)
     if len(back) != len(items):
         raise FtlboError(f"read back {len(back)} items of {len(items)}")
@@ -101,9 +99,7 @@ def record_flight(link, sysid: int, *, timing: Timing, timeout_s: float = 300.0)
 
     items = read_waypoints(EXAMPLE_UAV1)
     with link.channel(sysid) as channel:
-        run_transfer(Upload(items, sysid=sysid, compid=1,
-                            own=(channel.own_sysid, channel.own_compid), timing=timing,
-                            progress=None), channel)
+        upload_mission(channel, items, timing=timing)
     rows, reached = [], []
     t0 = [None]
 
