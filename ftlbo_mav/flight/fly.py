@@ -29,6 +29,7 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..errors import FtlboError
+from ..geo import LocalFrame
 from ..link.codec import mission_differences
 from ..link.endpoints import (
     LinkError,
@@ -209,7 +210,7 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options:
         pending[0].wait_for(hovering(targets[vehicles.index(pending[0])]), 0.2)
 
 
-def first_leg(mission, *, hold_m: float = 0.5) -> tuple[int, list]:
+def first_leg(mission, frame: LocalFrame, *, hold_m: float = 0.5) -> tuple[int, list]:
     """``(seq, speed items)``: where AUTO starts, and the DO_CHANGE_SPEED items it skips.
 
     After the takeoff each vehicle already hovers at its start point, which is also the
@@ -229,7 +230,7 @@ def first_leg(mission, *, hold_m: float = 0.5) -> tuple[int, list]:
             speeds.append(it)
             continue
         at_start = (it.command == CMD_NAV_WAYPOINT and it.param1 == 0
-                    and _ground_distance(it, home) <= hold_m
+                    and _ground_distance(frame, it, home) <= hold_m
                     and abs(it.alt_m - takeoff.alt_m) <= hold_m)
         if at_start and it.seq + 1 < len(mission):
             continue
@@ -237,18 +238,16 @@ def first_leg(mission, *, hold_m: float = 0.5) -> tuple[int, list]:
     return seq + 1, []
 
 
-def _ground_distance(a, b) -> float:
-    """Metres between two items' positions (small distances, spherical earth)."""
-    lat = np.radians((a.lat_deg + b.lat_deg) / 2)
-    dn = np.radians(a.lat_deg - b.lat_deg) * 6_371_000.0
-    de = np.radians(a.lon_deg - b.lon_deg) * 6_371_000.0 * np.cos(lat)
-    return float(np.hypot(dn, de))
+def _ground_distance(frame: LocalFrame, a, b) -> float:
+    """Horizontal metres between two items' positions, in the plan's ENU frame."""
+    enu = frame.to_enu(lat_deg=[a.lat_deg, b.lat_deg], lon_deg=[a.lon_deg, b.lon_deg])
+    return float(np.hypot(*(enu[0, :2] - enu[1, :2])))
 
 
 def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> float:
     """Set every current item to the first real leg (:func:`first_leg`), then AUTO in
     one burst. Returns the monotonic time of the burst."""
-    starts = [first_leg(m) for m in planned.missions]
+    starts = [first_leg(m, planned.frame) for m in planned.missions]
 
     def prepare(pair) -> None:
         v, (seq, speeds) = pair

@@ -88,20 +88,23 @@ def test_a_keeper_without_a_known_cruise_speed_stays_silent():
 
 def test_auto_starts_at_the_first_real_leg_and_keeps_the_cruise_speed():
     from ftlbo_mav.flight.fly import first_leg
+    from ftlbo_mav.geo import LocalFrame
     from ftlbo_mav.mission.items import build_mission
+
+    frame = LocalFrame(origin_lat_deg=12.2331044, origin_lon_deg=109.1144313)
 
     path = [(12.2332099, 109.1145051, 4.0), (12.2332254, 109.1145969, 4.0),
             (12.2332408, 109.1146886, 4.0)]
     plain = build_mission(home=(12.2332099, 109.1145051), takeoff_alt_m=4.0, path=path)
     assert [it.command for it in plain[:4]] == [16, 22, 16, 16]
-    assert first_leg(plain) == (3, [])  # item 2 is the start point it hovers at
+    assert first_leg(plain, frame) == (3, [])  # item 2 is the start point it hovers at
     fast = build_mission(home=(12.2332099, 109.1145051), takeoff_alt_m=4.0, path=path,
                          speed_m_s=3.0)
-    seq, speeds = first_leg(fast)
+    seq, speeds = first_leg(fast, frame)
     assert seq == 4 and [(s.command, s.param2) for s in speeds] == [(178, 3.0)]
     # a first waypoint elsewhere than the start point is a leg of its own: not skipped
     away = build_mission(home=(12.2332099, 109.1145051), takeoff_alt_m=4.0, path=path[1:])
-    assert first_leg(away) == (2, [])
+    assert first_leg(away, frame) == (2, [])
 
 
 def test_hysteresis_small_leads_are_left_alone_and_a_slowed_leader_waits_for_the_group():
