@@ -12,11 +12,13 @@ import click
 
 from . import __version__
 from .cli_errors import user_errors
-from .mission.export import FORMATS, read_plan, write_plan
+from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files, read_plan
+from .mission.files import OutputFolder
 from .planning.optimizers import OPTIMIZERS
 from .planning.planner import AUTO_TARGET
 from .planning.planner import plan as plan_scenario
 from .scenario import AUTO, load_scenario
+from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINTS, MIN_STUDENTS
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -44,32 +46,37 @@ def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
 
 
 class WaypointCount(click.ParamType):
-    """``--waypoints``: an integer >= 1, or ``auto``."""
+    """``--waypoints``: an integer within 1..MAX_WAYPOINTS, or ``auto``."""
 
     name = "M|auto"
 
     def convert(self, value, param, ctx):
-        if isinstance(value, int) or value == AUTO:
+        if value == AUTO:
             return value
         try:
             count = int(value)
         except ValueError:
             count = 0
-        if count < 1:
-            self.fail(f"{value!r} is neither an integer >= 1 nor {AUTO}", param, ctx)
+        if not 1 <= count <= MAX_WAYPOINTS:
+            self.fail(f"{value!r} is neither an integer within 1..{MAX_WAYPOINTS} nor {AUTO}",
+                      param, ctx)
         return count
 
 
 WAYPOINTS = WaypointCount()
+# The scenario's [planner] ranges (scenario/model.py), for the options that override them.
+SEED = click.IntRange(0, MAX_SEED)
+ITERATIONS = click.IntRange(1, MAX_ITERATIONS)
+STUDENTS = click.IntRange(MIN_STUDENTS, MAX_STUDENTS)
 
 
 @main.command()
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=str))
 @click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for uavN.waypoints and plan.json (created if needed).")
-@click.option("--seed", type=click.IntRange(min=0), help="Random seed (default: the scenario's).")
-@click.option("--iterations", type=click.IntRange(min=1), help="Iterations L.")
-@click.option("--students", type=click.IntRange(min=4), help="Class size (population).")
+@click.option("--seed", type=SEED, help="Random seed (default: the scenario's).")
+@click.option("--iterations", type=ITERATIONS, help="Iterations L.")
+@click.option("--students", type=STUDENTS, help="Class size (population).")
 @click.option("--waypoints", type=WAYPOINTS,
               help="Free waypoints m per leg, or auto: per leg the fewest within 0.5% of "
                    "its lower bound.")
@@ -89,6 +96,34 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
          formats, make_plots, quiet):
     """Plan SCENARIO (TOML) and write one Mission Planner mission per UAV."""
     scn = load_scenario(scenario)
+    if scn.dropped_obstacles:
+        click.echo(f"note: {scn.dropped_obstacles} obstacles left out: they cannot reach any "
+                   "UAV's path inside the area", err=True)
+    # the output folder is checked (a temporary one made beside it) before any planning;
+    # everything is moved into it at the end, or nothing (a failure, Ctrl-C)
+    with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json") as out:
+        result = _plan_with_progress(scn, seed=seed, iterations=iterations, students=students,
+                                     waypoints=waypoints, algorithm=algorithm, quiet=quiet)
+        files = plan_files(result, allow_infeasible=allow_infeasible, formats=formats)
+        if make_plots:
+            from .plots import figure_files  # matplotlib only when asked: a faster start
+
+            files = {**files, **figure_files(result)}
+        paths = out.write_all(files)
+    click.echo(format_summary(result))
+    for path in paths:
+        click.echo(f"  wrote {path}")
+    if not result.feasible:
+        for line in result.violations:
+            click.echo(f"  violation: {line}", err=True)
+        if not allow_infeasible:
+            click.echo("no mission files written: the best plan is infeasible "
+                       "(see plan.json; --allow-infeasible writes them anyway)", err=True)
+        sys.exit(1)
+
+
+def _plan_with_progress(scn, *, seed, iterations, students, waypoints, algorithm, quiet):
+    """:func:`plan_scenario` with a progress bar on stderr and one line per leg."""
     settings = scn.planner
     per_leg = iterations or settings.iterations
     legs = len(scn.via) + 1
@@ -116,21 +151,7 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
                                notice=tell, on_leg=on_leg)
     for line in said:
         click.echo(line, err=True)
-    paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible, formats=formats)
-    if make_plots:
-        from .plots import write_figures  # matplotlib only when asked: a faster start
-
-        paths += write_figures(result, out_dir)
-    click.echo(format_summary(result))
-    for path in paths:
-        click.echo(f"  wrote {path}")
-    if not result.feasible:
-        for line in result.violations:
-            click.echo(f"  violation: {line}", err=True)
-        if not allow_infeasible:
-            click.echo("no mission files written: the best plan is infeasible "
-                       "(see plan.json; --allow-infeasible writes them anyway)", err=True)
-        sys.exit(1)
+    return result
 
 
 def format_summary(result) -> str:
@@ -187,9 +208,12 @@ def format_leg(index: int, count: int, leg) -> str:
 @user_errors
 def plot_command(folder, out_dir):
     """Draw the plan in FOLDER (written by `plan`): 3D view, projections, convergence."""
-    from .plots import write_figures  # matplotlib only when asked: a faster start
+    from .plots import figure_files  # matplotlib only when asked: a faster start
 
-    for path in write_figures(read_plan(folder), out_dir or folder):
+    plan = read_plan(folder)
+    with OutputFolder(out_dir or folder) as out:
+        paths = out.write_all(figure_files(plan))
+    for path in paths:
         click.echo(f"  wrote {path}")
 
 
@@ -208,15 +232,14 @@ main.add_command(sim)
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=str))
 @click.option("-o", "--output", "out_dir", required=True, type=click.Path(file_okay=False),
               help="Folder for table.md, table.csv, compare.json, convergence.png.")
-@click.option("--runs", type=click.IntRange(min=1), default=30, show_default=True,
+@click.option("--runs", type=click.IntRange(1, 100_000), default=30, show_default=True,
               help="Seeds 0..RUNS-1 per algorithm.")
 @click.option("--algorithms", default="ftlbo,tlbo,ga,theta-pso,ftlbo-seeded", show_default=True,
               help="Comma-separated algorithm names (ftlbo,tlbo,ga,theta-pso is the paper's set).")
-@click.option("--processes", type=click.IntRange(min=1),
+@click.option("--processes", type=click.IntRange(1, 256),
               help="Worker processes (default: the number of cores).")
-@click.option("--iterations", type=click.IntRange(min=1),
-              help="Iterations L (default: scenario's).")
-@click.option("--students", type=click.IntRange(min=4), help="Class size (default: scenario's).")
+@click.option("--iterations", type=ITERATIONS, help="Iterations L (default: scenario's).")
+@click.option("--students", type=STUDENTS, help="Class size (default: scenario's).")
 @click.option("--waypoints", type=WAYPOINTS,
               help="Waypoints m per leg, or auto (default: scenario's).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
@@ -224,7 +247,7 @@ main.add_command(sim)
 def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, students,
                     waypoints, quiet):
     """Run several algorithms over many seeds on SCENARIO: table, figure and JSON."""
-    from .compare import compare, table_markdown, write_comparison
+    from .compare import compare, comparison_files, table_markdown
     from .planning.optimizers import OPTIMIZERS as known
 
     names = [a.strip() for a in algorithms.split(",") if a.strip()]
@@ -234,13 +257,15 @@ def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, 
             f"unknown algorithm {bad[0]!r}; known: {', '.join(known)}" if bad
             else "give at least one algorithm", param_hint="--algorithms")
     scn = load_scenario(scenario)
-    with click.progressbar(length=runs * len(names), label="comparing", file=sys.stderr,
-                           hidden=quiet) as bar:
-        result = compare(scn, algorithms=names, runs=runs, processes=processes,
-                         iterations=iterations, students=students, waypoints=waypoints,
-                         progress=lambda _run: bar.update(1))
+    with OutputFolder(out_dir) as out:  # checked before the runs, written after them
+        with click.progressbar(length=runs * len(names), label="comparing", file=sys.stderr,
+                               hidden=quiet) as bar:
+            result = compare(scn, algorithms=names, runs=runs, processes=processes,
+                             iterations=iterations, students=students, waypoints=waypoints,
+                             progress=lambda _run: bar.update(1))
+        paths = out.write_all(comparison_files(result))
     click.echo(table_markdown(result), nl=False)
-    for path in write_comparison(result, out_dir):
+    for path in paths:
         click.echo(f"  wrote {path}")
 
 from .flight.commands import abort_command, fly_command, monitor

@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .mission.files import write_atomic
+from .mission.files import OutputFolder
 from .planning.optimizers import OPTIMIZERS, evaluation_budget
-from .planning.planner import plan
+from .planning.planner import check_size, plan
 from .scenario import Scenario
 
 CONVERGED_WITHIN = 1e-3
@@ -210,6 +210,8 @@ def compare(
     if unknown:
         raise ValueError(f"unknown algorithm {unknown[0]!r}; known: {', '.join(OPTIMIZERS)}")
     overrides = {"students": students, "iterations": iterations, "waypoints": waypoints}
+    check_size(scenario, replace(scenario.planner, **{
+        k: v for k, v in overrides.items() if v is not None}), repeats=runs * len(algorithms))
     jobs = [(a, seed, overrides) for a in algorithms for seed in range(runs)]
     processes = processes or os.cpu_count() or 1
     results: dict[tuple[str, int], Run] = {}
@@ -387,16 +389,20 @@ def convergence_figure(comparison: Comparison):
     return fig
 
 
-def write_comparison(comparison: Comparison, out_dir: str | Path) -> list[Path]:
-    """Write ``table.md``, ``table.csv``, ``compare.json`` and ``convergence.png``."""
+def comparison_files(comparison: Comparison) -> dict[str, str | bytes]:
+    """``table.md``, ``table.csv``, ``compare.json`` and ``convergence.png`` by name (pure)."""
     from .plots import render_png
 
-    out_dir = Path(out_dir)
-    return [
-        write_atomic(out_dir / "table.md", table_markdown(comparison)),
-        write_atomic(out_dir / "table.csv", table_csv(comparison)),
-        write_atomic(out_dir / "compare.json",
-                     json.dumps(compare_document(comparison), indent=1) + "\n"),
-        write_atomic(out_dir / "convergence.png", render_png(convergence_figure(comparison))),
-    ]
+    return {
+        "table.md": table_markdown(comparison),
+        "table.csv": table_csv(comparison),
+        "compare.json": json.dumps(compare_document(comparison), indent=1) + "\n",
+        "convergence.png": render_png(convergence_figure(comparison)),
+    }
 
+
+def write_comparison(comparison: Comparison, out_dir: str | Path) -> list[Path]:
+    """Write :func:`comparison_files` into ``out_dir``, all or none."""
+    files = comparison_files(comparison)
+    with OutputFolder(out_dir) as out:
+        return out.write_all(files)

@@ -25,5 +25,20 @@ class ScenarioError(FtlboError):
         super().__init__(f"{where}: {problem}")
 
 
-class MissionFileError(FtlboError):
-    """A mission file (``.waypoints``) cannot be read or does not parse."""
+class BadInput(FtlboError):
+    """A malformed input (an option value, a file, a size too large to plan): exit code 2.
+
+    ``bad_input`` is what :func:`ftlbo_mav.cli_errors.user_errors` looks at; subclasses
+    of other kinds set it too."""
+
+    bad_input = True
+
+
+class MissionFileError(BadInput):
+    """A mission file (``.waypoints``, a plan folder's ``plan.json``) cannot be read, does
+    not parse, or holds a value that does not fit where it goes."""
+
+
+class OutputError(BadInput):
+    """An output cannot be written (the path is a file, not writable, a name too long):
+    nothing of the command's outputs was written, what was there is untouched."""

@@ -44,11 +44,19 @@ def regular_formation(*, count: int, radius_m: float, plane: str = "horizontal")
     return offsets
 
 
+def closest_pair(offsets: np.ndarray) -> tuple[int, int, float] | None:
+    """The two UAVs of the formation closest to each other: ``(i, j, metres)`` (3D, i < j,
+    0-based); ``None`` for one UAV. ``offsets``: ``(N, 3)`` metres ENU."""
+    offsets = np.asarray(offsets, float).reshape(-1, 3)
+    if len(offsets) < 2:
+        return None
+    dist = np.linalg.norm(offsets[:, None, :] - offsets[None, :, :], axis=-1)
+    i, j = np.triu_indices(len(offsets), 1)
+    k = int(np.argmin(dist[i, j]))
+    return int(i[k]), int(j[k]), float(dist[i[k], j[k]])
+
+
 def min_separation(offsets: np.ndarray) -> float:
     """Smallest 3D distance between two UAVs of the formation, metres (inf for one UAV)."""
-    offsets = np.asarray(offsets, float)
-    if len(offsets) < 2:
-        return float("inf")
-    diff = offsets[:, None, :] - offsets[None, :, :]
-    dist = np.linalg.norm(diff, axis=-1)
-    return float(dist[np.triu_indices(len(offsets), 1)].min())
+    pair = closest_pair(offsets)
+    return float("inf") if pair is None else pair[2]

@@ -9,7 +9,8 @@
 
 Axes are metres east / north / up from the area's south-west corner (the scenario's ENU
 frame), altitudes above home. The ``figure_*`` functions build figures and touch no
-files; :func:`write_figures` renders them to PNG and writes them atomically.
+files; :func:`figure_files` renders them to PNG, :func:`write_figures` writes them all or
+none.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle
 
-from .mission.files import write_atomic
+from .mission.files import OutputFolder
 from .mission.gis import OBSTACLE_COLOUR, uav_colour
 from .planning.planner import Plan
 
@@ -346,7 +347,13 @@ def render_png(fig: Figure) -> bytes:
     return buf.getvalue()
 
 
+def figure_files(plan: Plan) -> dict[str, bytes]:
+    """Every figure of :data:`FIGURES` as PNG bytes, by file name (no files touched)."""
+    return {name: render_png(make(plan)) for name, make in FIGURES.items()}
+
+
 def write_figures(plan: Plan, out_dir: str | Path) -> list[Path]:
-    """Write every figure of :data:`FIGURES` into ``out_dir``; returns the paths."""
-    out_dir = Path(out_dir)
-    return [write_atomic(out_dir / name, render_png(make(plan))) for name, make in FIGURES.items()]
+    """Write every figure of :data:`FIGURES` into ``out_dir``, all or none; returns the paths."""
+    files = figure_files(plan)
+    with OutputFolder(out_dir) as out:
+        return out.write_all(files)

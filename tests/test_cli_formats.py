@@ -105,10 +105,10 @@ def test_plot_shipped_example(example_path, tmp_path):
 
 def test_plot_without_a_plan_is_one_line_error(tmp_path):
     result = CliRunner().invoke(main, ["plot", str(tmp_path)])
-    assert result.exit_code == 1
+    assert result.exit_code == 2  # a bad plan folder is bad input
     assert result.stderr.strip().splitlines() == [
         f"error: {tmp_path / 'plan.json'}: no such file (run `ftlbo-mav plan` first)"]
     (tmp_path / "plan.json").write_text('{"seed": 1}')
     result = CliRunner().invoke(main, ["plot", str(tmp_path)])
-    assert result.exit_code == 1 and "not a plan.json" in result.stderr
+    assert result.exit_code == 2 and "not a plan.json" in result.stderr
     assert "Traceback" not in result.output

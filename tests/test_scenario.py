@@ -61,13 +61,13 @@ BAD = {
         "start", "obstacles[0]"),
     "goal puts a UAV outside the band": (
         ("alt = 4.0\n[formation]", "alt = 6.0\n[formation]"), "goal.alt", "altitude band"),
-    "non-positive radius": (("radius = 3.0", "radius = 0.0"), "obstacles[0].radius", "> 0"),
+    "non-positive radius": (("radius = 3.0", "radius = 0.0"), "obstacles[0].radius", "within (0,"),
     "unknown key": (("clearance = 1.0", "clearence = 1.0"), "formation.clearence", "unknown key"),
     "wrong type": (("students = 12", 'students = "twelve"'), "planner.students", "integer"),
     "missing field": (("max_altitude = 7.0\n", ""), "area.max_altitude", "missing"),
     "malformed TOML": (("[goal]", "[goal"), "", "malformed TOML"),
-    "waypoints < 1": (("waypoints = 4", "waypoints = 0"), "planner.waypoints", ">= 1"),
-    "students < 4": (("students = 12", "students = 3"), "planner.students", ">= 4"),
+    "waypoints < 1": (("waypoints = 4", "waypoints = 0"), "planner.waypoints", "within [1,"),
+    "students < 4": (("students = 12", "students = 3"), "planner.students", "within [4,"),
 }
 
 

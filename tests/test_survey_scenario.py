@@ -39,7 +39,7 @@ AT_START = "lat = 12.2332099\nlon = 109.1145051"
      "puts UAV 3 outside the area"),  # 1 m inside the west side, UAV 3 is 3 m west
     (HEAD.replace(GOAL, AT_START), "goal", "a loop needs [[via]] points"),
     (HEAD + via(12.2332099, 109.1145051), "via[0]", "same place as start"),
-    (HEAD + '\n[survey]\nspacing = 0\nheading = 0\n', "survey.spacing", "must be > 0"),
+    (HEAD + '\n[survey]\nspacing = 0\nheading = 0\n', "survey.spacing", "must be within (0,"),
     (HEAD + '\n[survey]\nspacing = 10\nheading = 0\nmargin = 40\n', "survey.margin",
      "leaves no room"),
     (HEAD + '\n[survey]\nspacing = 10\nheading = 0\nalt = 9\n', "survey.alt",
@@ -126,7 +126,7 @@ def test_plan_json_reports_every_leg_and_the_total(tmp_path):
 def test_waypoints_auto_from_the_command_line_and_refused_words(small_path, tmp_path):
     bad = CliRunner().invoke(main, ["plan", str(small_path), "-o", str(tmp_path / "o"),
                                     "--waypoints", "lots"])
-    assert bad.exit_code == 2 and "neither an integer >= 1 nor auto" in bad.output
+    assert bad.exit_code == 2 and "neither an integer within 1..1000 nor auto" in bad.output
     zero = CliRunner().invoke(main, ["plan", str(small_path), "-o", str(tmp_path / "o"),
                                      "--waypoints", "0"])
     assert zero.exit_code == 2

@@ -23,7 +23,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot.streams import READINESS, StreamRequests
-from ..errors import FtlboError
+from ..errors import BadInput, FtlboError
 
 GCS_SYSID = 255
 GCS_COMPID = mavlink2.MAV_COMP_ID_MISSIONPLANNER  # 190
@@ -32,12 +32,6 @@ FIRST_TCP_PORT = 5760  # SITL instance i listens on 5760 + 10 * i
 
 class LinkError(FtlboError):
     """A link cannot be opened, or a requested vehicle is not on any link."""
-
-
-class BadInput(FtlboError):
-    """A malformed option value (system ids, connection string); exit code 2."""
-
-    bad_input = True
 
 
 def parse_sysids(text: str) -> list[int]:

@@ -1,8 +1,10 @@
 """A plan's outputs: one mission per UAV and the ``plan.json`` summary.
 
-``plan_missions`` and ``plan_document`` are pure; ``write_plan`` and ``read_plan`` are
-the only functions here that touch files (writing through
-:func:`~ftlbo_mav.mission.files.write_atomic`).
+``plan_missions``, ``plan_document`` and ``plan_files`` are pure; ``write_plan`` and
+``read_plan`` are the only functions here that touch files (writing all or nothing
+through :class:`~ftlbo_mav.mission.files.OutputFolder`). ``plan.json`` records the
+SHA-256 of every mission file written with it (``uavs[i].mission_sha256``), so that a
+folder whose files come from different plans is refused (:func:`check_plan_folder`).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
 from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
-from .files import write_atomic
+from .files import OutputFolder, digest, read_mission_text
 from .geodetic import GeodeticPlan, geodetic_view
 from .gis import render_geojson, render_kml
 from .items import UavMission, build_mission  # UavMission re-exported: it lived here
@@ -28,6 +30,12 @@ from .waypoints import render_waypoints
 
 # Formats written on request next to the .waypoints files (``plan --formats``).
 FORMATS = ("geojson", "kml", "plan")
+
+PLAN_OUTPUTS = (r"uav\d+\.waypoints", r"uav\d+\.plan", r"plan\.json", r"plan\.geojson",
+                r"plan\.kml", r"plan-3d\.png", r"plan-ground\.png", r"plan-vertical\.png",
+                r"convergence\.png")
+"""What a plan folder holds of one plan (:func:`write_plan`, ``plan --plot``): a re-plan
+removes those of an earlier plan it does not write, so a folder never mixes two plans."""
 
 
 def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[UavMission]:
@@ -87,9 +95,11 @@ def _leg_document(leg: Leg, first: int) -> dict:
 
 
 def plan_document(
-    plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None
+    plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None,
+    digests: dict[str, str] | None = None,
 ) -> dict:
-    """The ``plan.json`` content. ``written``: whether the mission files were written.
+    """The ``plan.json`` content. ``written``: whether the mission files were written;
+    ``digests``: their SHA-256 by UAV name (:func:`~.files.digest` of the text written).
 
     Totals at the top (cost, bound, evaluations, seconds: sums over the legs), one entry
     per leg in ``legs`` (``first_point``: index of the leg's start in ``centroid``)."""
@@ -114,6 +124,7 @@ def plan_document(
         "length_ratio": _round(plan.length_ratio, 6),
         "history": [_finite(h) for h in plan.history],
         "clearance": plan.scenario.clearance_m,
+        "min_separation": plan.scenario.min_separation_m,
         "area": {
             "corner_a": [sc.corner_a.lat_deg, sc.corner_a.lon_deg],
             "corner_b": [sc.corner_b.lat_deg, sc.corner_b.lon_deg],
@@ -141,10 +152,39 @@ def plan_document(
                 "offset": list(m.offset),
                 "waypoints": _points(path),
                 "mission_file": f"{m.name}.waypoints" if written else None,
+                "mission_sha256": (digests or {}).get(m.name) if written else None,
             }
             for m, path in zip(missions, view.uav_paths)
         ],
     }
+
+
+def plan_files(
+    plan: Plan, *, allow_infeasible: bool = False, formats: tuple[str, ...] = ()
+) -> dict[str, str]:
+    """Every output file of ``plan`` by name, ``plan.json`` last (pure; see :func:`write_plan`)."""
+    unknown = sorted(set(formats) - set(FORMATS))
+    if unknown:
+        raise ValueError(f"unknown format {unknown[0]!r}; known: {', '.join(FORMATS)}")
+    view = geodetic_view(plan)  # the one conversion to degrees every writer takes
+    missions = plan_missions(plan, geodetic=view)
+    write_missions = plan.feasible or allow_infeasible
+    files: dict[str, str] = {}
+    if write_missions:
+        for m in missions:
+            files[f"{m.name}.waypoints"] = render_waypoints(m.items)
+            if "plan" in formats:
+                files[f"{m.name}.plan"] = render_plan(
+                    m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s)
+    if "geojson" in formats:
+        files["plan.geojson"] = render_geojson(plan, missions, geodetic=view)
+    if "kml" in formats:
+        files["plan.kml"] = render_kml(plan, missions, geodetic=view)
+    digests = {m.name: digest(files[f"{m.name}.waypoints"])
+               for m in missions if write_missions}
+    doc = plan_document(plan, missions, written=write_missions, geodetic=view, digests=digests)
+    files["plan.json"] = json.dumps(doc, indent=2) + "\n"
+    return files
 
 
 def write_plan(
@@ -160,31 +200,50 @@ def write_plan(
     QGroundControl ``uavN.plan`` next to each ``uavN.waypoints``. Returns the paths
     written. An infeasible plan gets its ``plan.json`` (with the violations), GeoJSON and
     KML, to be looked at, but no mission files (``.waypoints``, ``.plan``) unless
-    ``allow_infeasible``.
+    ``allow_infeasible``. All or nothing: the outputs of an earlier plan in ``out_dir``
+    (:data:`PLAN_OUTPUTS`) that this one does not write are removed; a failure raises
+    :class:`~ftlbo_mav.errors.OutputError` with ``out_dir`` untouched.
     """
-    unknown = sorted(set(formats) - set(FORMATS))
-    if unknown:
-        raise ValueError(f"unknown format {unknown[0]!r}; known: {', '.join(FORMATS)}")
-    out_dir = Path(out_dir)
-    view = geodetic_view(plan)  # the one conversion to degrees every writer takes
-    missions = plan_missions(plan, geodetic=view)
-    write_missions = plan.feasible or allow_infeasible
-    written = []
-    if write_missions:
-        for m in missions:
-            written.append(write_atomic(out_dir / f"{m.name}.waypoints", render_waypoints(m.items)))
-            if "plan" in formats:
-                text = render_plan(m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s)
-                written.append(write_atomic(out_dir / f"{m.name}.plan", text))
-    if "geojson" in formats:
-        text = render_geojson(plan, missions, geodetic=view)
-        written.append(write_atomic(out_dir / "plan.geojson", text))
-    if "kml" in formats:
-        text = render_kml(plan, missions, geodetic=view)
-        written.append(write_atomic(out_dir / "plan.kml", text))
-    doc = plan_document(plan, missions, written=write_missions, geodetic=view)
-    written.append(write_atomic(out_dir / "plan.json", json.dumps(doc, indent=2) + "\n"))
-    return written
+    files = plan_files(plan, allow_infeasible=allow_infeasible, formats=formats)
+    with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json") as out:
+        return out.write_all(files)
+
+
+def check_plan_folder(folder: str | Path, doc: dict, *, source: str) -> list[Path]:
+    """The mission files ``doc`` (a folder's ``plan.json``) lists, checked to be the ones
+    it was written with (their SHA-256) and to be all the folder holds; returns them in
+    UAV order. :class:`MissionFileError` naming the file otherwise."""
+    folder = Path(folder)
+    replan = "; plan again with `ftlbo-mav plan` into an empty folder"
+    try:
+        uavs = doc["uavs"]
+        listed = [(u["mission_file"], u.get("mission_sha256")) for u in uavs]
+    except (KeyError, TypeError) as exc:
+        raise MissionFileError(f"{source}: not a plan.json written by ftlbo-mav "
+                               f"(missing or bad {exc}){replan}") from None
+    on_disk = sorted(p.name for p in folder.glob("uav*.waypoints"))
+    if any(name is None for name, _ in listed):
+        if on_disk:
+            raise MissionFileError(f"{source}: its plan has no mission files (infeasible), but "
+                                   f"{folder} holds {', '.join(on_disk)} of another plan{replan}")
+        raise MissionFileError(f"{source}: the plan is infeasible and has no mission files")
+    extra = sorted(set(on_disk) - {name for name, _ in listed})
+    if extra:
+        raise MissionFileError(f"{folder / extra[0]}: not a mission of the plan in {source} "
+                               f"(it has {len(listed)} UAVs){replan}")
+    paths = []
+    for name, sha in listed:
+        path = folder / str(name)
+        if Path(str(name)).name != name:
+            raise MissionFileError(f"{source}: mission_file {name!r} is not a file name")
+        if not isinstance(sha, str):
+            raise MissionFileError(f"{source}: no mission_sha256 for {name}: written by an "
+                                   f"older ftlbo-mav, so its files cannot be matched{replan}")
+        if digest(read_mission_text(path)) != sha:
+            raise MissionFileError(f"{path}: not the mission file the plan in {source} was "
+                                   f"written with (its SHA-256 differs){replan}")
+        paths.append(path)
+    return paths
 
 
 def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
@@ -274,7 +333,7 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
                 seconds=float(leg["seconds"]),
                 lower_bound_length=None if leg_bound is None else float(leg_bound),
                 tried=tuple(int(t) for t in leg.get("waypoints_tried", []))))
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
         raise MissionFileError(
             f"{source}: not a plan.json this version of ftlbo-mav can read (missing or bad "
             f"{exc}); plan again with `ftlbo-mav plan`"
@@ -310,15 +369,29 @@ def _infinite(value) -> float:
     return math.inf if value is None else float(value)
 
 
-def read_plan(folder: str | Path) -> Plan:
-    """Read ``folder/plan.json`` back into a :class:`Plan`; see :func:`plan_from_document`."""
+def read_plan_json(folder: str | Path) -> tuple[dict, str]:
+    """``folder/plan.json`` as a dict, and its path as text; :class:`MissionFileError`
+    when it is missing, unreadable, not JSON, not an object, or holds NaN or infinity."""
     path = Path(folder) / "plan.json"
+    if not Path(folder).is_dir():
+        raise MissionFileError(f"{folder}: no such folder (run `ftlbo-mav plan` first)")
+
+    def not_finite(name: str):
+        raise ValueError(f"{name} is not a finite number")
+
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        doc = json.loads(path.read_text(encoding="utf-8"), parse_constant=not_finite)
     except FileNotFoundError:
         raise MissionFileError(f"{path}: no such file (run `ftlbo-mav plan` first)") from None
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise MissionFileError(f"{path}: cannot read: {exc}") from None
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise MissionFileError(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}"
+                               ) from None
     if not isinstance(doc, dict):
-        raise MissionFileError(f"{path}: not a plan.json")
-    return plan_from_document(doc, source=str(path))
+        raise MissionFileError(f"{path}: not a plan.json (not a JSON object)")
+    return doc, str(path)
+
+
+def read_plan(folder: str | Path) -> Plan:
+    """Read ``folder/plan.json`` back into a :class:`Plan`; see :func:`plan_from_document`."""
+    doc, source = read_plan_json(folder)
+    return plan_from_document(doc, source=source)

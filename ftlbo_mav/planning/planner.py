@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..errors import BadInput
 from ..scenario import AUTO, PlannerSettings, Scenario
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
@@ -155,6 +156,7 @@ def plan(
     }
     settings = replace(settings, **{k: v for k, v in overrides.items() if v is not None})
     _check_settings(settings)
+    check_size(scenario, settings)
     points, names = scenario.route_enu(), scenario.route_names()
     base = problem_from_scenario(scenario, waypoints=_count(settings))
     rng = np.random.default_rng(settings.seed)
@@ -193,6 +195,50 @@ def _check_settings(settings: PlannerSettings) -> None:
     m = settings.waypoints
     if m != AUTO and (isinstance(m, bool) or not isinstance(m, int) or m < 1):
         raise ValueError(f'waypoints must be an integer >= 1 or "{AUTO}", got {m!r}')
+
+
+MEMORY_LIMIT_BYTES = 1 << 30
+"""The most the optimizer's arrays may take (the class and its trial copies)."""
+WORK_LIMIT = 5e10
+"""The most UAV-segment x obstacle checks one plan may need: about 20 minutes at the ~40
+million a second of this 2-core machine (README, "Speed")."""
+MISSION_ITEMS_LIMIT = 65_535
+"""MAVLink's MISSION_COUNT is 16 bits."""
+_POPULATION_COPIES = 8  # class, trial class, elites, costs...: a generous count
+
+
+class PlanTooLarge(BadInput):
+    """A plan whose size would need more memory or time than is sane; said before
+    anything is allocated."""
+
+
+def check_size(scenario: Scenario, settings: PlannerSettings, *, repeats: int = 1) -> None:
+    """Refuse, before allocating, a plan that needs more than :data:`MEMORY_LIMIT_BYTES`,
+    :data:`WORK_LIMIT` checks (over ``repeats`` plans: a comparison's runs) or
+    :data:`MISSION_ITEMS_LIMIT` items per mission."""
+    legs = len(scenario.via) + 1
+    auto = settings.waypoints == AUTO
+    m = (AUTO_MAX + AUTO_TRIES) if auto else int(settings.waypoints)  # most per leg
+    typical = AUTO_TRIES * AUTO_NO_ROUTE if auto else m  # waypoints optimized per leg
+    what = ((f"{repeats} runs x " if repeats > 1 else "")
+            + f"{settings.students} students x {'auto' if auto else m} waypoints x "
+            f"{settings.iterations} iterations x {legs} leg{'s' if legs > 1 else ''} x "
+            f"{scenario.uav_count} UAVs x {max(len(scenario.obstacles), 1)} obstacles")
+    memory = settings.students * m * 3 * 8 * _POPULATION_COPIES
+    if memory > MEMORY_LIMIT_BYTES:
+        raise PlanTooLarge(f"{scenario.source}: {what} would need about "
+                           f"{memory / 2**30:.1f} GiB for the optimizer's class (at most "
+                           f"{MEMORY_LIMIT_BYTES / 2**30:g} GiB): fewer students or waypoints")
+    work = (float(repeats) * settings.students * settings.iterations * legs * (typical + 1)
+            * scenario.uav_count * max(len(scenario.obstacles), 1))
+    if work > WORK_LIMIT:
+        raise PlanTooLarge(f"{scenario.source}: {what} is {work:.1e} segment-obstacle checks "
+                           f"(at most {WORK_LIMIT:.0e}, about 20 minutes here): fewer "
+                           "students, iterations or waypoints")
+    items = legs * (m + 1) + 1 + 4  # home, takeoff, speed, path points, end
+    if not auto and items > MISSION_ITEMS_LIMIT:
+        raise PlanTooLarge(f"{scenario.source}: {what} makes missions of {items} items; "
+                           f"MAVLink counts at most {MISSION_ITEMS_LIMIT}: fewer waypoints")
 
 
 def _count(settings: PlannerSettings) -> int:

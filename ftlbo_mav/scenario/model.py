@@ -22,6 +22,38 @@ AUTO = "auto"
 """``waypoints = "auto"``: per leg, the fewest waypoints whose plan is within
 :data:`ftlbo_mav.planning.planner.AUTO_TARGET` of the leg's lower bound."""
 
+# The ranges a scenario's numbers (and the command line's overrides of them) must be in:
+# finite, physically meaningful, and representable where they go (altitudes and speeds
+# become float32 mission fields on the vehicle; a UAV needs one MAVLink system id). The
+# reader (.reader) and the CLI's option types both take them from here.
+MAX_ALTITUDE_M = 10_000.0
+"""Altitudes above home (the band, start, goal, via points, survey): 10 km."""
+MAX_OFFSET_M = 1_000.0
+"""A formation offset's east, north or up component, and a regular formation's radius."""
+MAX_DISTANCE_M = 1_000.0
+"""Clearance, min_separation, survey spacing and margin."""
+MAX_RADIUS_M = 10_000.0
+"""An obstacle's radius."""
+MAX_AREA_SIDE_M = 100_000.0
+"""The area's sides: the local flat (ENU) frame and the planner's grid are built for a
+field, not a country."""
+MAX_SPEED_M_S = 100.0
+"""``[mission] speed``."""
+MAX_WEIGHT = 1e6
+"""The cost weights alpha, beta, gamma."""
+MAX_UAVS = 254
+"""One MAVLink system id (1..254) per UAV."""
+MIN_SEPARATION_M = 2.0
+"""``[formation] min_separation``'s default: the closest two UAVs of the formation may be."""
+MIN_STUDENTS, MAX_STUDENTS = 4, 100_000
+MAX_WAYPOINTS = 1_000
+"""Free waypoints of one leg (``"auto"`` looks at up to 256)."""
+MAX_ITERATIONS = 1_000_000
+MAX_SEED = 2**63 - 1
+"""Seeds are written to plan.json and read back as 64-bit integers."""
+MAX_LANES = 1_000
+"""Survey lanes (each one two via points, each one leg)."""
+
 
 @dataclass(frozen=True)
 class GeoPoint:
@@ -108,6 +140,11 @@ class Scenario:
     source: str = "<scenario>"
     via: tuple[ViaPoint, ...] = ()
     survey: Survey | None = None
+    min_separation_m: float = MIN_SEPARATION_M
+    """No two UAVs of the formation are closer than this (metres)."""
+    dropped_obstacles: int = 0
+    """Obstacles of the file that cannot touch any UAV's path inside the area (their
+    disc, radius + clearance, does not reach it): left out of ``obstacles``."""
 
     @cached_property
     def frame(self) -> LocalFrame:

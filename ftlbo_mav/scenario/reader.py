@@ -16,13 +16,28 @@ from typing import Any
 import numpy as np
 
 from ..errors import ScenarioError
-from ..formation import PLANES, regular_formation
+from ..formation import PLANES, closest_pair, regular_formation
 from ..obstacles import Cylinder, read_obstacle_geojson
 from ..planning.survey import formation_width, lay_lanes
 from .model import (
     ALGORITHMS,
     AUTO,
     END_ACTIONS,
+    MAX_ALTITUDE_M,
+    MAX_AREA_SIDE_M,
+    MAX_DISTANCE_M,
+    MAX_ITERATIONS,
+    MAX_LANES,
+    MAX_OFFSET_M,
+    MAX_RADIUS_M,
+    MAX_SEED,
+    MAX_SPEED_M_S,
+    MAX_STUDENTS,
+    MAX_UAVS,
+    MAX_WAYPOINTS,
+    MAX_WEIGHT,
+    MIN_SEPARATION_M,
+    MIN_STUDENTS,
     GeoPoint,
     MissionSettings,
     PlannerSettings,
@@ -31,7 +46,7 @@ from .model import (
     ViaPoint,
     Weights,
 )
-from .tables import Table
+from .tables import Table, checked_number
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -63,20 +78,23 @@ def parse_scenario(
     lat_b, lon_b = area.lat_lon("corner_b")
     if lat_a == lat_b or lon_a == lon_b:
         raise area.error("corner_b", "must differ from corner_a in both latitude and longitude")
-    h_min = area.number("min_altitude", lo=0.0, lo_open=True)
-    h_max = area.number("max_altitude")
+    h_min = area.number("min_altitude", lo=0.0, hi=MAX_ALTITUDE_M, lo_open=True, unit="m")
+    h_max = area.number("max_altitude", lo=0.0, hi=MAX_ALTITUDE_M, lo_open=True, unit="m")
     if h_min >= h_max:
         raise area.error("min_altitude", f"must be below max_altitude ({h_min:g} >= {h_max:g})")
     area.done()
 
     start_t, goal_t = root.table("start"), root.table("goal")
-    start, goal = start_t.point(), goal_t.point()
+    start, goal = start_t.point(max_alt=MAX_ALTITUDE_M), goal_t.point(max_alt=MAX_ALTITUDE_M)
     start_t.done()
     goal_t.done()
 
     form = root.table("formation")
     offsets = _read_offsets(form)
-    clearance = form.number("clearance", 1.0, lo=0.0)
+    clearance = form.number("clearance", 1.0, lo=0.0, hi=MAX_DISTANCE_M, unit="m")
+    separation = form.number("min_separation", MIN_SEPARATION_M, lo=0.0, hi=MAX_DISTANCE_M,
+                             unit="m")
+    _check_separation(form, offsets, separation)
     form.done()
 
     obstacles = _read_obstacles(root.raw("obstacles", []), source)
@@ -103,7 +121,9 @@ def parse_scenario(
         name=name,
         source=source,
         via=via,
+        min_separation_m=separation,
     )
+    _check_area_size(scenario)
     if obstacles_file:
         # obstacles_file (optional): a GeoJSON file of obstacles, relative to the scenario
         # file: Points with a `radius` in metres, Polygons -> their smallest enclosing
@@ -111,10 +131,49 @@ def parse_scenario(
         path = (base_dir if base_dir is not None else Path(".")) / obstacles_file
         extra = read_obstacle_geojson(path, frame=scenario.frame)
         scenario = replace(scenario, obstacles=scenario.obstacles + extra)
+    scenario = _drop_unreachable_obstacles(scenario)
     if survey is not None:
         scenario = _with_lanes(scenario, survey)
     _check_geometry(scenario)
     return scenario
+
+
+def _check_area_size(s: Scenario) -> None:
+    lower, upper = s.area_bounds_enu()
+    side = float(np.max(upper - lower))
+    if not side <= MAX_AREA_SIDE_M:
+        raise ScenarioError(s.source, "area.corner_b",
+                            f"makes an area {side / 1000:.0f} km across: at most "
+                            f"{MAX_AREA_SIDE_M / 1000:g} km a side (the local flat frame is "
+                            "made for a field, not a country)")
+
+
+def _drop_unreachable_obstacles(s: Scenario) -> Scenario:
+    """Leave out the obstacles whose disc (radius + clearance) does not reach the area:
+    every UAV waypoint is inside the area, so every UAV segment is too (it is convex), and
+    such a cylinder can touch none of them. Their count is kept in ``dropped_obstacles``."""
+    if not s.obstacles:
+        return s
+    centres, radii = s.obstacles_enu()
+    lower, upper = s.area_bounds_enu()
+    outside = np.maximum(np.maximum(lower - centres, centres - upper), 0.0)
+    reach = np.hypot(outside[:, 0], outside[:, 1]) <= radii + s.clearance_m + 1.0  # 1 m spare
+    if reach.all():
+        return s
+    kept = tuple(c for c, r in zip(s.obstacles, reach) if r)
+    return replace(s, obstacles=kept, dropped_obstacles=len(s.obstacles) - len(kept))
+
+
+def _check_separation(form: Table, offsets: np.ndarray, separation: float) -> None:
+    """No two UAVs of the formation closer than ``min_separation`` (3D), the pair named."""
+    pair = closest_pair(offsets)
+    if pair is None:
+        return
+    i, j, dist = pair
+    if dist < separation:
+        key = "offsets" if form.has("offsets") else "radius"
+        raise form.error(key, f"puts UAV {i + 1} and UAV {j + 1} {dist:.2f} m apart, closer "
+                              f"than min_separation = {separation:g} m")
 
 
 def _read_offsets(form: Table) -> np.ndarray:
@@ -125,6 +184,9 @@ def _read_offsets(form: Table) -> np.ndarray:
         rows = form.raw("offsets")
         if not isinstance(rows, list) or not rows:
             raise form.error("offsets", "must be a non-empty array of [east, north, up] rows")
+        if len(rows) > MAX_UAVS:
+            raise form.error("offsets", f"has {len(rows)} UAVs: at most {MAX_UAVS} (one "
+                                        "MAVLink system id each)")
         for i, row in enumerate(rows):
             if (
                 not isinstance(row, list)
@@ -133,11 +195,15 @@ def _read_offsets(form: Table) -> np.ndarray:
             ):
                 raise form.error(f"offsets[{i}]",
                                  f"must be [east, north, up] in metres, got {row!r}")
+            for axis, v in zip(("east", "north", "up"), row):
+                checked_number(v, lambda problem, i=i, axis=axis: form.error(
+                    f"offsets[{i}]", f"{axis} {problem}"), lo=-MAX_OFFSET_M, hi=MAX_OFFSET_M,
+                    unit="m")
         return np.array(rows, dtype=float)
     if not form.has("count"):
         raise form.error("offsets", "missing: give offsets, or count and radius")
-    count = form.integer("count", lo=1)
-    radius = form.number("radius", lo=0.0)
+    count = form.integer("count", lo=1, hi=MAX_UAVS)
+    radius = form.number("radius", lo=0.0, hi=MAX_OFFSET_M, unit="m")
     plane = form.string("plane", "horizontal", choices=PLANES)
     return regular_formation(count=count, radius_m=radius, plane=plane)
 
@@ -149,7 +215,7 @@ def _read_obstacles(rows: Any, source: str) -> tuple[Cylinder, ...]:
     for i, row in enumerate(rows):
         t = Table(row, f"obstacles[{i}]", source)
         point = t.point(alt=False)
-        radius = t.number("radius", lo=0.0, lo_open=True)
+        radius = t.number("radius", lo=0.0, hi=MAX_RADIUS_M, lo_open=True, unit="m")
         label = t.string("name", "")
         t.done()
         cylinders.append(Cylinder(point.lat_deg, point.lon_deg, radius, label))
@@ -162,7 +228,7 @@ def _read_via(rows: Any, source: str) -> tuple[ViaPoint, ...]:
     points = []
     for i, row in enumerate(rows):
         t = Table(row, f"via[{i}]", source)
-        point = t.point()
+        point = t.point(max_alt=MAX_ALTITUDE_M)
         label = t.string("name", f"via {i + 1}")
         t.done()
         points.append(ViaPoint(point.lat_deg, point.lon_deg, point.alt_m, label))
@@ -170,10 +236,10 @@ def _read_via(rows: Any, source: str) -> tuple[ViaPoint, ...]:
 
 
 def _read_survey(t: Table, *, default_alt: float) -> Survey:
-    spacing = t.number("spacing", lo=0.0, lo_open=True)
-    heading = t.number("heading")
-    margin = t.number("margin", spacing / 2, lo=0.0)
-    alt = t.number("alt", default_alt)
+    spacing = t.number("spacing", lo=0.0, hi=MAX_DISTANCE_M, lo_open=True, unit="m")
+    heading = t.number("heading", lo=-360.0, hi=360.0, unit="degrees")
+    margin = t.number("margin", spacing / 2, lo=0.0, hi=MAX_DISTANCE_M, unit="m")
+    alt = t.number("alt", default_alt, lo=-MAX_ALTITUDE_M, hi=MAX_ALTITUDE_M, unit="m")
     t.done()
     return Survey(spacing_m=spacing, heading_deg=heading, margin_m=margin, alt_m=alt)
 
@@ -197,6 +263,12 @@ def _with_lanes(s: Scenario, survey: Survey) -> Scenario:
             f"leaves no room for a lane: the area is {upper[0] - lower[0]:.1f} m x "
             f"{upper[1] - lower[1]:.1f} m, the margin {survey.margin_m:g} m on every side and "
             "the formation must stay inside (reduce the margin)")
+    across = float(np.hypot(*(hi - lo)))  # no lane set is wider than the diagonal
+    if across / survey.spacing_m > MAX_LANES:
+        raise ScenarioError(
+            s.source, "survey.spacing",
+            f"{survey.spacing_m:g} m would lay up to {across / survey.spacing_m:.0f} lanes "
+            f"across {across:.0f} m: at most {MAX_LANES} (a wider spacing)")
     centres, radii = s.obstacles_enu()
     discs_c = (centres[None, :, :] - offsets[None, :, :2].transpose(1, 0, 2)).reshape(-1, 2)
     discs_r = np.tile(radii + s.clearance_m, len(offsets))
@@ -231,23 +303,25 @@ def _read_planner(t: Table | None) -> PlannerSettings:
     if t is None:
         return PlannerSettings()
     algorithm = t.string("algorithm", ALGORITHMS[0], choices=ALGORITHMS)
-    students = t.integer("students", 100, lo=4)
+    students = t.integer("students", 100, lo=MIN_STUDENTS, hi=MAX_STUDENTS)
     if t.raw("waypoints", 10) == AUTO:
         waypoints = AUTO
     else:
         value = t.raw("waypoints")
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise t.error("waypoints", f'must be an integer >= 1 or "{AUTO}", got {value!r}')
+        if (isinstance(value, bool) or not isinstance(value, int)
+                or not 1 <= value <= MAX_WAYPOINTS):
+            raise t.error("waypoints", f'must be an integer within [1, {MAX_WAYPOINTS}] or '
+                                       f'"{AUTO}", got {value!r}')
         waypoints = value
-    iterations = t.integer("iterations", 150, lo=1)
-    seed = t.integer("seed", 0, lo=0)
+    iterations = t.integer("iterations", 150, lo=1, hi=MAX_ITERATIONS)
+    seed = t.integer("seed", 0, lo=0, hi=MAX_SEED)
     weights = Weights()
     w = t.table("weights", required=False)
     if w is not None:
         weights = Weights(
-            length=w.number("length", 1.0, lo=0.0),
-            safety=w.number("safety", 1.0, lo=0.0),
-            task=w.number("task", 1.0, lo=0.0),
+            length=w.number("length", 1.0, lo=0.0, hi=MAX_WEIGHT),
+            safety=w.number("safety", 1.0, lo=0.0, hi=MAX_WEIGHT),
+            task=w.number("task", 1.0, lo=0.0, hi=MAX_WEIGHT),
         )
         w.done()
     t.done()
@@ -258,7 +332,8 @@ def _read_mission(t: Table | None) -> MissionSettings:
     if t is None:
         return MissionSettings()
     end = t.string("end_action", "land", choices=END_ACTIONS)
-    speed = t.number("speed", None, lo=0.0, lo_open=True) if t.has("speed") else None
+    speed = (t.number("speed", None, lo=0.0, hi=MAX_SPEED_M_S, lo_open=True, unit="m/s")
+             if t.has("speed") else None)
     t.used.add("speed")
     t.done()
     return MissionSettings(end_action=end, speed_m_s=speed)

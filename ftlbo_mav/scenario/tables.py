@@ -36,25 +36,18 @@ class Table:
             return None if default is ... else default
         raise self.error(key, "missing (required)")
 
-    def number(self, key: str, default: Any = ..., *, lo=None, hi=None, lo_open=False) -> float:
-        value = self.raw(key, default)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(key, f"must be a number, got {_kind(value)}")
-        value = float(value)
-        if not math.isfinite(value):
-            raise self.error(key, "must be a finite number")
-        if lo is not None and (value <= lo if lo_open else value < lo):
-            raise self.error(key, f"must be {'>' if lo_open else '>='} {lo:g}, got {value:g}")
-        if hi is not None and value > hi:
-            raise self.error(key, f"must be <= {hi:g}, got {value:g}")
-        return value
+    def number(self, key: str, default: Any = ..., *, lo=None, hi=None, lo_open=False,
+               unit: str = "") -> float:
+        return checked_number(self.raw(key, default), lambda problem: self.error(key, problem),
+                              lo=lo, hi=hi, lo_open=lo_open, unit=unit)
 
-    def integer(self, key: str, default: Any = ..., *, lo: int | None = None) -> int:
+    def integer(self, key: str, default: Any = ..., *, lo: int | None = None,
+                hi: int | None = None) -> int:
         value = self.raw(key, default)
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.error(key, f"must be an integer, got {_kind(value)}")
-        if lo is not None and value < lo:
-            raise self.error(key, f"must be >= {lo}, got {value}")
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            raise self.error(key, f"must be within {_range(lo, hi)}, got {value}")
         return value
 
     def string(self, key: str, default: Any = ..., *, choices=None) -> str:
@@ -83,16 +76,51 @@ class Table:
         _check_lat_lon(lat, lon, lambda what, problem: self.error(f"{key}[{what}]", problem))
         return lat, lon
 
-    def point(self, *, alt: bool = True) -> GeoPoint:
+    def point(self, *, alt: bool = True, max_alt: float | None = None) -> GeoPoint:
+        """``lat``, ``lon`` (degrees) and, with ``alt``, ``alt`` (metres, within
+        ``[-max_alt, max_alt]`` when given)."""
         lat = self.number("lat")
         lon = self.number("lon")
         _check_lat_lon(lat, lon, lambda what, problem: self.error(("lat", "lon")[what], problem))
-        return GeoPoint(lat_deg=lat, lon_deg=lon, alt_m=self.number("alt") if alt else 0.0)
+        height = 0.0
+        if alt:
+            height = self.number("alt", lo=None if max_alt is None else -max_alt, hi=max_alt,
+                                 unit="m")
+        return GeoPoint(lat_deg=lat, lon_deg=lon, alt_m=height)
 
     def done(self) -> None:
         unknown = sorted(set(self.data) - self.used)
         if unknown:
             raise self.error(unknown[0], "unknown key (a typo?)")
+
+
+def checked_number(value: Any, error, *, lo=None, hi=None, lo_open=False,
+                   unit: str = "") -> float:
+    """``value`` as a float when it is a finite number in range, else ``error(problem)``
+    raised: the one check every number of a scenario goes through. ``lo_open``: ``lo``
+    itself is out; ``unit`` is said with the range (``"m"``)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise error(f"must be a number, got {_kind(value)}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise error(f"must be a finite number{_said(lo, hi, lo_open, unit)}, got {value}")
+    if (lo is not None and (value <= lo if lo_open else value < lo)) or (
+            hi is not None and value > hi):
+        raise error(f"must be {_range(lo, hi, lo_open, unit)}, got {value:g}")
+    return value
+
+
+def _range(lo, hi, lo_open: bool = False, unit: str = "") -> str:
+    u = f" {unit}" if unit else ""
+    if lo is not None and hi is not None:
+        return f"within {'(' if lo_open else '['}{lo:g}, {hi:g}]{u}"
+    if lo is not None:
+        return f"{'>' if lo_open else '>='} {lo:g}{u}"
+    return f"<= {hi:g}{u}"
+
+
+def _said(lo, hi, lo_open: bool, unit: str) -> str:
+    return "" if lo is None and hi is None else f" {_range(lo, hi, lo_open, unit)}"
 
 
 def _check_lat_lon(lat: float, lon: float, error) -> None:

@@ -3,7 +3,8 @@
 ``tests/data/orchard-plan/plan.json`` is ``ftlbo-mav plan missions/nha-trang-orchard.toml
 --formats all``; the digests are of what ``write_plan`` wrote from it (read back with
 ``read_plan``) before the writers shared one geodetic view (issue 15). A change in any
-writer's output, however small, shows here.
+writer's output, however small, shows here. plan.json's changed in issue 12: it records
+``min_separation`` and each mission file's SHA-256 (``mission_sha256``).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"
 
 EXPECTED = {
     "plan.geojson": "0faf4f1890ba9489c526da8137455a93549fdefccb6a41b917d5dc728e4333e3",
-    "plan.json": "d3460c789d16006bfd6a17f8121d37f8e95b275e683e8d348982d837a8e9a4bb",
+    "plan.json": "fb794d75e14572c9d0d2fe1d68f753c06f810a02e89168672c8931dc988b768c",
     "plan.kml": "34978a2a892e1c305510fc2fa59d7fd71aeee24cf29841a226208da315009848",
     "uav1.plan": "07c2c82fc64bcfa5015f814294223e7a2a6648583903c37f6b00af0e631d657f",
     "uav1.waypoints": "c5989eff6b30ed4ee87b7cea965815d1a8e0dec678b8e241247a2ab954fc4171",
