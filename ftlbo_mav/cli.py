@@ -6,7 +6,9 @@ stderr and a non-zero exit code; a traceback is a bug.
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 
 import click
 
@@ -25,6 +27,14 @@ from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINT
 @click.version_option(__version__, prog_name="ftlbo-mav")
 def main() -> None:
     """Plan formation flights for a small UAV swarm and get them onto ArduPilot vehicles."""
+    if threading.current_thread() is threading.main_thread():
+        # `kill` stops every command the way Ctrl-C does: through its clean-up (a
+        # half-written output folder removed, vehicles sent home by `fly`)
+        signal.signal(signal.SIGTERM, _terminate)
+
+
+def _terminate(_signum, _frame) -> None:
+    raise KeyboardInterrupt
 
 
 # Commands are registered below, one module per concern.

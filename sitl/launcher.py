@@ -19,7 +19,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Self
 
-from ftlbo_mav.link.endpoints import default_urls, open_links, wait_ready
+from ftlbo_mav.errors import BadInput
+from ftlbo_mav.link.endpoints import LinkError, default_urls, open_links, wait_ready
 
 IDENTITY_PARAMS = "SYSID_THISMAV {sysid}\n"
 
@@ -51,8 +52,12 @@ class SitlSwarm:
                  ready_timeout_s: float = 180.0):
         binary = binary or os.environ.get("ARDUPILOT_SITL")
         if not binary:
-            raise ValueError("no SITL binary: pass binary= or set ARDUPILOT_SITL")
+            raise BadInput("no SITL binary: pass binary= (--binary) or set ARDUPILOT_SITL")
         self.binary = Path(binary)
+        if not self.binary.is_file() or not os.access(self.binary, os.X_OK):
+            raise BadInput(f"{self.binary}: not an executable file (the arducopter SITL binary)")
+        if not 1 <= len(homes) <= 254:
+            raise BadInput(f"{len(homes)} copters: SITL instances are system ids 1..254")
         self.homes = list(homes)
         env_defaults = os.environ.get("ARDUPILOT_SITL_DEFAULTS", "")
         self.defaults = [Path(p) for p in defaults] + [
@@ -83,17 +88,32 @@ class SitlSwarm:
                         stdin=subprocess.DEVNULL, start_new_session=True))
                 finally:
                     log.close()
-            links = open_links(self.urls, connect_timeout_s=30.0)
+            try:
+                links = open_links(self.urls, connect_timeout_s=30.0)
+            except LinkError:
+                self.check_running()  # a SITL that died says so, not "cannot connect"
+                raise
             try:
                 wait_ready(links, list(range(1, len(self.homes) + 1)),
                            timeout_s=self.ready_timeout_s)
             finally:
                 for link in links:
                     link.close()  # SITL takes the next client once this one has left
+            self.check_running()  # ready means every process is still there
         except BaseException:
             self.__exit__(None, None, None)
             raise
         return self
+
+    def check_running(self) -> None:
+        """:class:`LinkError` naming every instance whose process has exited."""
+        dead = [(i, p.returncode) for i, p in enumerate(self.processes) if p.poll() is not None]
+        if dead:
+            logs = self._workdir / f"instance{dead[0][0]}" / "sitl.log"
+            raise LinkError("SITL " + ", ".join(f"instance {i} (sysid {i + 1}) exited with code "
+                                                f"{code}" for i, code in dead)
+                            + f"; see {logs}" + (" (kept with --workdir)" if self._own_workdir
+                                                 else ""))
 
     def __exit__(self, *exc) -> None:
         for p in self.processes:

@@ -14,6 +14,7 @@ from pathlib import Path
 import click
 
 from ..cli_errors import user_errors
+from ..cli_types import LINK_URL, PORT, SYSIDS, FiniteFloat
 from ..link.commands import _timing, _urls, timing_options
 from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
@@ -27,9 +28,9 @@ from .report import render_report_png, summarize
 from .vehicle import FlightAborted
 
 _link_options = [
-    click.option("--sysid", "sysid_text", required=True,
+    click.option("--sysid", "sysid_text", required=True, type=SYSIDS,
                  help="Vehicle system ids: a range 1..3 or a list 1,2,5; uav1 is the first."),
-    click.option("--connect", "connect", multiple=True, metavar="URL",
+    click.option("--connect", "connect", multiple=True, type=LINK_URL,
                  help="pymavlink connection string(s); default: system id s on "
                       "tcp:127.0.0.1:5760 + 10*(s-1), as SITL and `ftlbo-mav sim` listen."),
 ]
@@ -117,25 +118,25 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @click.command(name="fly")
 @click.argument("plan_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
 @link_options
-@click.option("--forward", metavar="URL",
+@click.option("--forward", type=LINK_URL,
               help="Relay everything to a ground station, e.g. udpout:127.0.0.1:14550.")
 @click.option("--log-dir", type=click.Path(file_okay=False, path_type=Path),
               help="Where the flight log and report go (default PLAN_DIR/flight).")
 @click.option("--abort-mode", type=click.Choice(["RTL", "LAND"]), default="RTL",
               show_default=True, help="Where Ctrl-C sends every vehicle.")
-@click.option("--control-port", type=click.IntRange(0, 65535), default=DEFAULT_CONTROL_PORT,
+@click.option("--control-port", type=PORT, default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="127.0.0.1 port where `ftlbo-mav abort` reaches this flight (0: none).")
 @click.option("--keeper/--no-keeper", "use_keeper", default=False, show_default=True,
               help="Trim leaders' speeds in flight to hold the formation (experimental: on "
                    "ArduCopter SITL it has not yet helped, and made fast flights worse; "
                    "see docs/flight.md).")
-@click.option("--arm-budget", type=click.FloatRange(min=0), default=60.0, show_default=True,
+@click.option("--arm-budget", type=FiniteFloat(0, 86_400), default=60.0, show_default=True,
               help="Seconds to keep retrying a refused arm (EKF still converging).")
-@click.option("--preflight-timeout", type=click.FloatRange(min=0),
+@click.option("--preflight-timeout", type=FiniteFloat(0, 86_400),
               default=60.0, show_default=True,
               help="Seconds to wait for a 3D GPS fix and passing pre-arm checks.")
-@click.option("--flight-timeout", type=click.FloatRange(min=1), default=900.0,
+@click.option("--flight-timeout", type=FiniteFloat(1, 86_400), default=900.0,
               show_default=True, help="Abort if the missions have not ended by then.")
 @timing_options
 @user_errors
@@ -186,16 +187,16 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
 @click.argument("plan_dir", required=False,
                 type=click.Path(exists=True, file_okay=False, path_type=Path))
 @link_options
-@click.option("--forward", metavar="URL",
+@click.option("--forward", type=LINK_URL,
               help="Relay everything to a ground station, e.g. udpout:127.0.0.1:14550.")
-@click.option("--duration", type=click.FloatRange(min=0.1), default=None,
+@click.option("--duration", type=FiniteFloat(0.1, 86_400), default=None,
               help="Stop after this many seconds (default: until Ctrl-C, or until every "
                    "vehicle has landed after flying).")
 @click.option("--log-dir", type=click.Path(file_okay=False, path_type=Path),
               help="Where the flight log and report go (default PLAN_DIR/monitor).")
-@click.option("--rate", type=click.FloatRange(min=1), default=10.0, show_default=True,
+@click.option("--rate", type=FiniteFloat(1, 1000), default=10.0, show_default=True,
               help="Position reports per second requested from each vehicle.")
-@click.option("--discover-timeout", type=click.FloatRange(min=0.1), default=5.0,
+@click.option("--discover-timeout", type=FiniteFloat(0.1, 86_400), default=5.0,
               show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
@@ -233,10 +234,10 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
 @click.command(name="abort")
 @link_options
 @click.option("--land", is_flag=True, help="LAND where they are instead of RTL.")
-@click.option("--control-port", type=click.IntRange(0, 65535), default=DEFAULT_CONTROL_PORT,
+@click.option("--control-port", type=PORT, default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="Reach a running `ftlbo-mav fly` here first (0: open links directly).")
-@click.option("--discover-timeout", type=click.FloatRange(min=0.1), default=5.0,
+@click.option("--discover-timeout", type=FiniteFloat(0.1, 86_400), default=5.0,
               show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -10,6 +9,7 @@ import numpy as np
 
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
+from ..mission.export import check_plan_folder, read_plan_json
 from ..mission.items import CMD_NAV_TAKEOFF, MissionItem
 from ..mission.waypoints import read_waypoints
 
@@ -45,14 +45,13 @@ class PlannedFlight:
 
 
 def load_planned_flight(folder: str | Path) -> PlannedFlight:
+    """``folder``'s plan and its mission files, checked to belong together
+    (:func:`~ftlbo_mav.mission.export.check_plan_folder`); :class:`PlanFolderError`."""
     folder = Path(folder)
-    doc_path = folder / "plan.json"
     try:
-        doc = json.loads(doc_path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise PlanFolderError(f"{doc_path}: no such file (run `ftlbo-mav plan` first)") from None
-    except (OSError, ValueError) as exc:
-        raise PlanFolderError(f"{doc_path}: cannot read: {exc}") from None
+        doc, doc_path = read_plan_json(folder)
+    except MissionFileError as exc:
+        raise PlanFolderError(str(exc)) from None
     try:
         uavs = doc["uavs"]
         lat_a, lon_a = doc["area"]["corner_a"]
@@ -77,19 +76,17 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
                                    lon_deg=[o["lon"] for o in obstacles])[:, :2]
         radii = np.array([o["radius"] for o in obstacles], float)
         clearance = float(doc.get("clearance", 0.0))
-        files = [u["mission_file"] for u in uavs]
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise PlanFolderError(f"{doc_path}: not a plan.json written by ftlbo-mav ({exc})") from None
-    if any(f is None for f in files):
-        raise PlanFolderError(f"{doc_path}: the plan is infeasible and has no mission files")
     missions = []
-    for f in files:
-        try:
-            items = tuple(read_waypoints(folder / f))
-        except MissionFileError as exc:
-            raise PlanFolderError(str(exc)) from None
-        if not any(it.command == CMD_NAV_TAKEOFF for it in items):
-            raise PlanFolderError(f"{folder / f}: no NAV_TAKEOFF item; `fly` takes off with it")
-        missions.append(items)
+    try:
+        paths = check_plan_folder(folder, doc, source=doc_path)
+        for path in paths:
+            items = tuple(read_waypoints(path))
+            if not any(it.command == CMD_NAV_TAKEOFF for it in items):
+                raise PlanFolderError(f"{path}: no NAV_TAKEOFF item; `fly` takes off with it")
+            missions.append(items)
+    except MissionFileError as exc:
+        raise PlanFolderError(str(exc)) from None
     return PlannedFlight(folder, names, offsets, paths, tuple(missions), frame, centres, radii,
                          clearance)

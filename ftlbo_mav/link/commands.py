@@ -14,7 +14,9 @@ from pathlib import Path
 import click
 
 from ..cli_errors import user_errors
+from ..cli_types import LINK_URL, SYSIDS, FiniteFloat
 from ..errors import MissionFileError
+from ..mission.export import check_plan_folder, read_plan_json
 from ..mission.waypoints import read_waypoints, write_waypoints
 from .codec import storage_warnings
 from .endpoints import (
@@ -41,7 +43,13 @@ def _timing(timeout: float, retries: int, ready_timeout: float) -> Timing:
 
 
 def mission_files(folder: Path) -> list[Path]:
-    """``uav1.waypoints``, ``uav2.waypoints``, ... in UAV order; gaps are an error."""
+    """``uav1.waypoints``, ``uav2.waypoints``, ... in UAV order; gaps are an error.
+
+    A folder with a ``plan.json`` must hold exactly the mission files it was written with
+    (:func:`~ftlbo_mav.mission.export.check_plan_folder`): never a mix of two plans."""
+    if (folder / "plan.json").exists():
+        doc, source = read_plan_json(folder)
+        return check_plan_folder(folder, doc, source=source)
     found = {}
     for p in folder.glob("uav*.waypoints"):
         m = re.fullmatch(r"uav(\d+)\.waypoints", p.name)
@@ -93,14 +101,14 @@ class ProgressBoard:
 
 
 _timing_options = [
-    click.option("--timeout", type=click.FloatRange(min=0.05), default=1.5, show_default=True,
+    click.option("--timeout", type=FiniteFloat(0.05, 3600), default=1.5, show_default=True,
                  help="Seconds without an answer before a message is resent."),
-    click.option("--retries", type=click.IntRange(min=0), default=5, show_default=True,
+    click.option("--retries", type=click.IntRange(0, 1000), default=5, show_default=True,
                  help="Resends of one step before it fails."),
-    click.option("--ready-timeout", type=click.FloatRange(min=0), default=15.0,
+    click.option("--ready-timeout", type=FiniteFloat(0, 86_400), default=15.0,
                  show_default=True,
                  help="Seconds a booting (NO_SPACE) or busy (DENIED) vehicle is waited for."),
-    click.option("--discover-timeout", type=click.FloatRange(min=0.1), default=5.0,
+    click.option("--discover-timeout", type=FiniteFloat(0.1, 86_400), default=5.0,
                  show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT."),
     click.option("--signing-key", type=click.Path(dir_okay=False),
                  help="MAVLink 2 signing key file (64 hex digits, or a passphrase)."),
@@ -115,13 +123,13 @@ def timing_options(func):
 
 @click.command()
 @click.argument("mission_dir", type=click.Path(exists=True, file_okay=False, path_type=Path))
-@click.option("--sysid", "sysid_text", required=True,
+@click.option("--sysid", "sysid_text", required=True, type=SYSIDS,
               help="Vehicle system ids: a range 1..3 or a list 1,2,5; uav1 goes to the first.")
-@click.option("--connect", "connect", multiple=True, metavar="URL",
+@click.option("--connect", "connect", multiple=True, type=LINK_URL,
               help="pymavlink connection string; repeat it (or give several separated by "
                    "spaces) for one link per vehicle. Default: system id s on "
                    "tcp:127.0.0.1:5760 + 10*(s-1), where SITL and `ftlbo-mav sim` listen.")
-@click.option("--capacity", type=click.IntRange(min=1), default=None,
+@click.option("--capacity", type=click.IntRange(1, 65535), default=None,
               help="Mission items the vehicles hold (ArduCopter SITL: 650): longer missions "
                    "are refused before anything is sent. Without it the vehicle's own "
                    "NO_SPACE answer refuses them, also before any item is sent.")
@@ -170,7 +178,7 @@ def upload(mission_dir, sysid_text, connect, capacity, timeout, retries, ready_t
 @click.command()
 @click.option("--sysid", type=click.IntRange(1, 254), required=True,
               help="The vehicle's system id.")
-@click.option("--connect", metavar="URL",
+@click.option("--connect", type=LINK_URL,
               help="pymavlink connection string (default: tcp:127.0.0.1:5760 + 10*(sysid-1)).")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="The .waypoints file to write.")

@@ -34,31 +34,59 @@ class LinkError(FtlboError):
     """A link cannot be opened, or a requested vehicle is not on any link."""
 
 
+MAX_SYSID = 254  # 255 is the ground station's
+
+
 def parse_sysids(text: str) -> list[int]:
     """``"1..3"`` -> ``[1, 2, 3]``; ``"1,2,5"`` -> ``[1, 2, 5]``; ``"4"`` -> ``[4]``.
 
-    Ids are MAVLink system ids 1..254 (255 is the ground station's), without repeats.
+    Ids are MAVLink system ids 1..254 (255 is the ground station's), without repeats; each
+    number is range-checked before a range is expanded.
     """
     text = text.strip()
     ids: list[int] = []
+
+    def checked(number: str) -> int:
+        value = int(number)
+        if not 1 <= value <= MAX_SYSID:
+            raise BadInput(f"--sysid {text}: system ids are 1..{MAX_SYSID}, got {value}")
+        return value
+
     for part in text.split(","):
         part = part.strip()
-        m = re.fullmatch(r"(\d+)\s*\.\.\s*(\d+)", part)
+        m = re.fullmatch(r"(\d{1,12})\s*\.\.\s*(\d{1,12})", part)
         if m:
-            lo, hi = int(m.group(1)), int(m.group(2))
+            lo, hi = checked(m.group(1)), checked(m.group(2))
             if hi < lo:
                 raise BadInput(f"--sysid {text}: range {part} runs backwards")
             ids.extend(range(lo, hi + 1))
-        elif part.isdigit():
-            ids.append(int(part))
+        elif re.fullmatch(r"\d{1,12}", part):
+            ids.append(checked(part))
         else:
             raise BadInput(f"--sysid {text}: expected a range like 1..3 or a list like 1,2,5")
-    bad = [i for i in ids if not 1 <= i <= 254]
-    if bad:
-        raise BadInput(f"--sysid {text}: system ids are 1..254, got {bad[0]}")
     if len(set(ids)) != len(ids):
         raise BadInput(f"--sysid {text}: an id is repeated")
     return ids
+
+
+_NETWORK_URL = re.compile(r"(tcp|tcpin|udp|udpin|udpout|udpbcast|wsserver|ws):(.*):([^:]*)")
+
+
+def check_url(url: str, *, option: str = "--connect") -> str:
+    """A pymavlink connection string whose port (``tcp:HOST:PORT``, ``udpin:...``, ...) is
+    a number 0..65535 (1..65535 where it is connected to); :class:`BadInput` otherwise.
+    Serial ports and files pass unchanged."""
+    m = _NETWORK_URL.fullmatch(url.strip())
+    if not m:
+        return url
+    kind, host, port = m.groups()
+    listens = kind in ("tcpin", "udpin", "udp", "wsserver")
+    if not host:
+        raise BadInput(f"{option} {url}: no host; expected {kind}:HOST:PORT")
+    if not port.isdigit() or not (0 if listens else 1) <= int(port) <= 65535:
+        raise BadInput(f"{option} {url}: port {port!r} is not a port number "
+                       f"({0 if listens else 1}..65535)")
+    return url
 
 
 def default_urls(count: int) -> list[str]:

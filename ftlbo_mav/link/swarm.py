@@ -109,6 +109,19 @@ def upload_and_verify(channel, items: Sequence[MissionItem], *, timing: Timing,
                      own=(channel.own_sysid, channel.own_compid), timing=timing,
                      progress=progress, srtt=channel.srtt)
     try:
+        return _upload_and_verify(channel, items, machine, timing=timing, progress=progress,
+                                  report=report)
+    except OSError as exc:  # the link itself broke (closed, reset): nothing more can be sent
+        sent = max(machine.highest + 1, 0)
+        return False, (f"the link failed ({exc.strerror or exc}) after {sent} of {len(items)} "
+                       "items were sent: the vehicle holds its old mission or part of this "
+                       "one; check it with `ftlbo-mav download --sysid "
+                       f"{channel.sysid}` before flying")
+
+
+def _upload_and_verify(channel, items, machine, *, timing, progress, report):
+    """:func:`upload_and_verify` over a link that holds: protocol failures are answered."""
+    try:
         run_transfer(machine, channel)
     except MissionTransferError as exc:
         if machine.highest < 0 and exc.result is not None:

@@ -6,6 +6,7 @@ Coordinates stay in float degrees here; the 1e-7 integer encoding belongs to the
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -31,6 +32,37 @@ COMMAND_NAMES = {
     CMD_NAV_TAKEOFF: "TAKEOFF",
     CMD_DO_CHANGE_SPEED: "DO_CHANGE_SPEED",
 }
+
+
+# What MISSION_ITEM_INT can carry (common.xml): seq and command uint16, frame uint8,
+# current and autocontinue 0/1 (uint8 flags), params and z float32; and what means
+# something for a copter: an altitude within 100 km of home.
+MAX_ITEMS = 65_535
+"""MISSION_COUNT's ``count`` is a uint16."""
+UINT16_MAX, UINT8_MAX = 65_535, 255
+FLOAT32_MAX = 3.4028234663852886e38
+MAX_ALT_M = 100_000.0
+
+
+def item_problem(item: MissionItem) -> str | None:
+    """Why ``item`` cannot go to a vehicle as it is (a field that does not fit its
+    MAVLink width, a number that is not finite), or ``None``. Pure; the readers of mission
+    files call it for every item they read."""
+    for name, value, hi in (("seq", item.seq, UINT16_MAX), ("command", item.command, UINT16_MAX),
+                            ("frame", item.frame, UINT8_MAX), ("current", item.current, 1),
+                            ("autocontinue", item.autocontinue, 1)):
+        if not 0 <= value <= hi:
+            return f"{name} {value} is outside 0..{hi} (MAVLink's field)"
+    for name in ("param1", "param2", "param3", "param4"):
+        value = getattr(item, name)
+        if not (math.isfinite(value) and abs(value) <= FLOAT32_MAX):
+            return f"{name} {value:g} is not a finite 32-bit float"
+    if not (math.isfinite(item.lat_deg) and -90 <= item.lat_deg <= 90
+            and math.isfinite(item.lon_deg) and -180 <= item.lon_deg <= 180):
+        return "latitude/longitude out of range"
+    if not (math.isfinite(item.alt_m) and abs(item.alt_m) <= MAX_ALT_M):
+        return f"altitude {item.alt_m:g} m is not within +-{MAX_ALT_M:g} m"
+    return None
 
 
 @dataclass(frozen=True)

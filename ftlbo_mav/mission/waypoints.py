@@ -15,7 +15,7 @@ from pathlib import Path
 
 from ..errors import MissionFileError
 from .files import read_mission_text, write_atomic
-from .items import MissionItem
+from .items import MAX_ITEMS, MissionItem, item_problem
 
 HEADER = "QGC WPL 110"
 
@@ -53,6 +53,9 @@ def parse_waypoints(text: str, *, source: str = "<waypoints>") -> list[MissionIt
         raise MissionFileError(f"{source}: line 1: expected a 'QGC WPL 110' header")
     if lines[0].split()[-1] != "110":
         raise MissionFileError(f"{source}: line 1: only version 110 is supported")
+    if len(lines) - 1 > MAX_ITEMS:
+        raise MissionFileError(f"{source}: {len(lines) - 1} items; a mission holds at most "
+                               f"{MAX_ITEMS} (MAVLink's 16-bit count)")
     items = []
     for lineno, line in enumerate(lines[1:], start=2):
         fields = line.split()
@@ -69,24 +72,24 @@ def parse_waypoints(text: str, *, source: str = "<waypoints>") -> list[MissionIt
             raise MissionFileError(
                 f"{source}: line {lineno}: item number {seq}, expected {len(items)}"
             )
-        if not (-90 <= lat <= 90 and -180 <= lon <= 180):
-            raise MissionFileError(f"{source}: line {lineno}: latitude/longitude out of range")
-        items.append(
-            MissionItem(
-                seq=seq,
-                command=command,
-                frame=frame,
-                lat_deg=lat,
-                lon_deg=lon,
-                alt_m=alt,
-                param1=p1,
-                param2=p2,
-                param3=p3,
-                param4=p4,
-                current=current,
-                autocontinue=autocontinue,
-            )
+        item = MissionItem(
+            seq=seq,
+            command=command,
+            frame=frame,
+            lat_deg=lat,
+            lon_deg=lon,
+            alt_m=alt,
+            param1=p1,
+            param2=p2,
+            param3=p3,
+            param4=p4,
+            current=current,
+            autocontinue=autocontinue,
         )
+        problem = item_problem(item)
+        if problem is not None:
+            raise MissionFileError(f"{source}: line {lineno}: {problem}")
+        items.append(item)
     if not items:
         raise MissionFileError(f"{source}: no mission items")
     return items

@@ -10,16 +10,11 @@ import click
 
 from ..ardupilot.storage import SITL_MISSION_CAPACITY
 from ..cli_errors import user_errors
+from ..cli_types import HOST_PORT, PORT, FiniteFloat
 from ..errors import FtlboError
 from ..link.endpoints import BadInput
 from ..link.signing import load_key
-
-
-def _endpoint(text: str) -> tuple[str, int]:
-    host, _, port = text.rpartition(":")
-    if not host or not port.isdigit():
-        raise BadInput(f"--udp-out {text}: expected HOST:PORT, e.g. 127.0.0.1:14550")
-    return host, int(port)
+from .server import MAX_TIME_SCALE
 
 
 @click.command()
@@ -27,48 +22,51 @@ def _endpoint(text: str) -> tuple[str, int]:
               help="Number of vehicles (default: the scenario's UAVs, else 3).")
 @click.option("--scenario", type=click.Path(dir_okay=False),
               help="Put the homes at each UAV's start position.")
-@click.option("--base-port", type=click.IntRange(0, 65535), default=5760, show_default=True,
+@click.option("--base-port", type=PORT, default=5760, show_default=True,
               help="Vehicle i listens on TCP base-port + 10*i (0: any free ports).")
-@click.option("--udp-out", metavar="HOST:PORT",
+@click.option("--udp-out", type=HOST_PORT,
               help="Also send every vehicle's traffic to one UDP address (a shared link: "
                    "connect with udpin:HOST:PORT).")
-@click.option("--loss", type=click.FloatRange(0, 1), default=0.0, help="Packet loss each way.")
-@click.option("--loss-up", type=click.FloatRange(0, 1), default=None,
+@click.option("--loss", type=FiniteFloat(0, 1), default=0.0, help="Packet loss each way.")
+@click.option("--loss-up", type=FiniteFloat(0, 1), default=None,
               help="Loss of packets to the vehicles (overrides --loss).")
-@click.option("--loss-down", type=click.FloatRange(0, 1), default=None,
+@click.option("--loss-down", type=FiniteFloat(0, 1), default=None,
               help="Loss of packets from the vehicles (overrides --loss).")
-@click.option("--duplicate", type=click.FloatRange(0, 1), default=0.0,
+@click.option("--duplicate", type=FiniteFloat(0, 1), default=0.0,
               help="Fraction of packets duplicated.")
-@click.option("--reorder", type=click.FloatRange(0, 1), default=0.0,
+@click.option("--reorder", type=FiniteFloat(0, 1), default=0.0,
               help="Fraction of packets held back behind later ones.")
-@click.option("--latency-ms", type=click.FloatRange(min=0), default=0.0, help="One-way delay.")
-@click.option("--boot-delay", type=click.FloatRange(min=0), default=0.0,
+@click.option("--latency-ms", type=FiniteFloat(0, 60_000), default=0.0, help="One-way delay.")
+@click.option("--boot-delay", type=FiniteFloat(0, 86_400), default=0.0,
               help="Seconds after start during which uploads get NO_SPACE (like ArduPilot).")
-@click.option("--capacity", type=click.IntRange(min=0), default=SITL_MISSION_CAPACITY,
+@click.option("--capacity", type=click.IntRange(0, 65535), default=SITL_MISSION_CAPACITY,
               show_default=True,
               help="Mission items a vehicle can hold.")
-@click.option("--silent", "silent", multiple=True, type=int, metavar="SYSID",
+@click.option("--silent", "silent", multiple=True, type=click.IntRange(1, 254), metavar="SYSID",
               help="This vehicle says nothing at all (repeatable).")
-@click.option("--mute", "mute", multiple=True, type=int, metavar="SYSID",
+@click.option("--mute", "mute", multiple=True, type=click.IntRange(1, 254), metavar="SYSID",
               help="This vehicle sends HEARTBEATs but ignores the mission protocol.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="Vehicles require MAVLink 2 signing with this key.")
-@click.option("--seed", type=int, default=0, help="Seed of the fault decisions.")
-@click.option("--arm-delay", type=click.FloatRange(min=0), default=None,
+@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0,
+              help="Seed of the fault decisions.")
+@click.option("--arm-delay", type=FiniteFloat(0, 86_400), default=None,
               help="Seconds after start before arming is allowed (the EKF's position "
                    "estimate; ArduCopter SITL: about 42 s). Default: --boot-delay.")
-@click.option("--speed", type=click.FloatRange(min=0.2), default=10.0, show_default=True,
+@click.option("--speed", type=FiniteFloat(0.2, 100), default=10.0, show_default=True,
               help="WPNAV_SPEED, m/s: the horizontal speed limit between waypoints "
                    "(ArduCopter's default; short legs stay slower, as on ArduCopter).")
-@click.option("--boot-scale", type=click.FloatRange(min=0), default=None,
+@click.option("--boot-scale", type=FiniteFloat(0, 1000), default=None,
               help="Boot as ArduCopter 4.5.6 SITL was recorded to (ready 2.2 s, home 19.8 s, "
                    "armable 42.1 s), every time multiplied by this (e.g. 0.1). Overrides "
                    "--boot-delay and --arm-delay.")
 @click.option("--vary", is_flag=True,
               help="Make each vehicle differ a little, as a real fleet does (a start "
                    "latency of up to 0.3 s, WPNAV_JERK within 5%), seeded by --seed.")
-@click.option("--time-scale", type=click.FloatRange(min=0.01), default=1.0, show_default=True,
-              help="Run the vehicles' clock this many times faster than real time.")
+@click.option("--time-scale", type=FiniteFloat(0.01, MAX_TIME_SCALE), default=1.0,
+              show_default=True,
+              help="Run the vehicles' clock this many times faster than real time (at most "
+                   f"{MAX_TIME_SCALE:g}: the emulator steps every 20 ms of its time).")
 @user_errors
 def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
         latency_ms, boot_delay, capacity, silent, mute, signing_key, seed, arm_delay, speed,
@@ -90,6 +88,9 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
     else:
         homes = default_homes(count or 3)
     n = len(homes)
+    for option, ids in (("--silent", silent), ("--mute", mute)):
+        if any(s > n for s in ids):
+            raise BadInput(f"{option} {max(ids)}: the vehicles are system ids 1..{n}")
     link = {"loss_up": loss if loss_up is None else loss_up,
             "loss_down": loss if loss_down is None else loss_down,
             "duplicate": duplicate, "reorder": reorder, "latency_s": latency_ms / 1000.0}
@@ -101,7 +102,7 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
                                                           boot_no_space_s=boot_delay))
     key = load_key(signing_key) if signing_key else None
     simulator = Simulator(homes=homes, base_port=base_port,
-                          udp_out=_endpoint(udp_out) if udp_out else None, faults=faults,
+                          udp_out=udp_out, faults=faults,
                           options=options, signing_key=key, seed=seed, time_scale=time_scale,
                           vary=vary)
 

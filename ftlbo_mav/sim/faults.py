@@ -25,6 +25,9 @@ class Faults:
     ``duplicate`` / ``reorder``: each way. ``latency_s``: added one-way delay.
     ``silent``: the vehicle sends nothing and answers nothing (switched off, wrong link).
     ``mute``: it sends HEARTBEATs but stops answering the mission protocol.
+    ``close_after_items``: after this many mission items received (MISSION_ITEM_INT) the
+    vehicle drops its TCP client, as a radio out of range or a crashed SITL does: the
+    link closes mid-upload; ``None``: never.
     """
 
     loss_up: float = 0.0
@@ -34,6 +37,7 @@ class Faults:
     latency_s: float = 0.0
     silent: bool = False
     mute: bool = False
+    close_after_items: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("loss_up", "loss_down", "duplicate", "reorder"):
@@ -42,6 +46,8 @@ class Faults:
                 raise ValueError(f"{name} must be within 0..1, got {p}")
         if self.latency_s < 0:
             raise ValueError(f"latency_s must be >= 0, got {self.latency_s}")
+        if self.close_after_items is not None and self.close_after_items < 0:
+            raise ValueError(f"close_after_items must be >= 0, got {self.close_after_items}")
 
 
 class FaultyPipe:

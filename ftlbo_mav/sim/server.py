@@ -26,6 +26,10 @@ from .physics import varied
 from .vehicle import Vehicle, VehicleOptions
 
 TICK_S = 0.02
+MAX_TIME_SCALE = 100.0
+"""The fastest the vehicles' clock may run: every tick steps each vehicle's flight in
+20 ms steps (sim/autopilot.py), so 100x is 100 steps per vehicle and tick; far faster
+and a tick never ends, and nothing (not even SIGTERM) is handled."""
 # replies to a request, which a muted vehicle (Faults.mute) does not send
 _ANSWERS = frozenset({"MISSION_REQUEST", "MISSION_ACK", "MISSION_COUNT", "MISSION_ITEM",
                       "MISSION_ITEM_INT", "COMMAND_ACK"})
@@ -40,8 +44,9 @@ class _Attachment:
     """One client of one vehicle: its own parser (stream state, signature check) and writer."""
 
     def __init__(self, write: Callable[[bytes], None], *, sysid: int, key: bytes | None,
-                 link: Hashable):
+                 link: Hashable, close: Callable[[], None] | None = None):
         self.write = write
+        self.close = close  # drops the client (a TCP one), for Faults.close_after_items
         self.link = link  # the vehicle's serial port: its stream rates outlive a client
         self.parser = mavlink2.MAVLink(None, srcSystem=sysid, srcComponent=1)
         self.parser.robust_parsing = True  # bad CRC or signature -> BAD_DATA, not an exception
@@ -71,9 +76,12 @@ class VehicleRunner:
             self.packer.signing.sign_outgoing = True
             self.packer.signing.timestamp = _signing_timestamp()
         self.attachments: list[_Attachment] = []
+        self.items_received = 0  # MISSION_ITEM_INTs, for Faults.close_after_items
 
-    def attach(self, write: Callable[[bytes], None], link: Hashable = "SERIAL0") -> _Attachment:
-        att = _Attachment(write, sysid=self.vehicle.sysid, key=self.key, link=link)
+    def attach(self, write: Callable[[bytes], None], link: Hashable = "SERIAL0", *,
+               close: Callable[[], None] | None = None) -> _Attachment:
+        att = _Attachment(write, sysid=self.vehicle.sysid, key=self.key, link=link,
+                          close=close)
         self.vehicle.link(link, self.clock())
         self.attachments.append(att)
         return att
@@ -106,6 +114,13 @@ class VehicleRunner:
     def _handle(self, att: _Attachment, msg) -> None:
         if att not in self.attachments or self.faults.mute:
             return
+        limit = self.faults.close_after_items
+        if limit is not None and msg.get_type() == "MISSION_ITEM_INT":
+            self.items_received += 1
+            if self.items_received > limit and att.close is not None:
+                self.detach(att)
+                att.close()  # the link drops mid-upload
+                return
         self._send(att, self.vehicle.handle(msg, self.clock(), att.link))
 
     def _send(self, att: _Attachment, msgs: list) -> None:
@@ -176,8 +191,9 @@ class Simulator:
                  signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1,
                  time_scale: float = 1.0, vary: bool = False):
         n = len(homes)
-        if time_scale <= 0:
-            raise ValueError("time_scale must be positive")
+        if not 0 < time_scale <= MAX_TIME_SCALE:
+            raise ValueError(f"time_scale must be within (0, {MAX_TIME_SCALE:g}], "
+                             f"got {time_scale}")
         self.time_scale = time_scale
         if n < 1:
             raise ValueError("at least one vehicle")
@@ -273,7 +289,7 @@ class Simulator:
                      reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         try:
             async with one_at_a_time:  # the next client is served after this one leaves
-                att = runner.attach(writer.write)
+                att = runner.attach(writer.write, close=writer.close)
                 try:
                     while data := await reader.read(4096):
                         runner.feed(att, data)
