@@ -23,7 +23,30 @@ from .scenario import AUTO, load_scenario
 from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINTS, MIN_STUDENTS
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    """The command group; a bad option value or usage, like every other bad input, ends in
+    one line (``error: ...``) and exit code 2, rather than click's usage block."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
+             **extra):
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode, **extra)
+        try:
+            rv = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.UsageError as exc:
+            where = exc.ctx.command_path if exc.ctx is not None else "ftlbo-mav"
+            click.echo(f"error: {exc.format_message()} (see {where} --help)", err=True)
+            sys.exit(2)
+        except click.ClickException as exc:
+            exc.show()
+            sys.exit(exc.exit_code)
+        except click.Abort:
+            click.echo("Aborted!", err=True)
+            sys.exit(1)
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="ftlbo-mav")
 def main() -> None:
     """Plan formation flights for a small UAV swarm and get them onto ArduPilot vehicles."""

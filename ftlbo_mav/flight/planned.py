@@ -80,11 +80,10 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
         raise PlanFolderError(f"{doc_path}: not a plan.json written by ftlbo-mav ({exc})") from None
     missions = []
     try:
-        paths = check_plan_folder(folder, doc, source=doc_path)
-        for path in paths:
-            items = tuple(read_waypoints(path))
+        for file in check_plan_folder(folder, doc, source=doc_path):
+            items = tuple(read_waypoints(file))
             if not any(it.command == CMD_NAV_TAKEOFF for it in items):
-                raise PlanFolderError(f"{path}: no NAV_TAKEOFF item; `fly` takes off with it")
+                raise PlanFolderError(f"{file}: no NAV_TAKEOFF item; `fly` takes off with it")
             missions.append(items)
     except MissionFileError as exc:
         raise PlanFolderError(str(exc)) from None

@@ -47,7 +47,7 @@ class Table:
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.error(key, f"must be an integer, got {_kind(value)}")
         if (lo is not None and value < lo) or (hi is not None and value > hi):
-            raise self.error(key, f"must be within {_range(lo, hi)}, got {value}")
+            raise self.error(key, f"must be {_range(lo, hi)}, got {value}")
         return value
 
     def string(self, key: str, default: Any = ..., *, choices=None) -> str:
@@ -112,11 +112,15 @@ def checked_number(value: Any, error, *, lo=None, hi=None, lo_open=False,
 
 def _range(lo, hi, lo_open: bool = False, unit: str = "") -> str:
     u = f" {unit}" if unit else ""
+
+    def num(v) -> str:
+        return str(v) if isinstance(v, int) else f"{v:g}"
+
     if lo is not None and hi is not None:
-        return f"within {'(' if lo_open else '['}{lo:g}, {hi:g}]{u}"
+        return f"within {'(' if lo_open else '['}{num(lo)}, {num(hi)}]{u}"
     if lo is not None:
-        return f"{'>' if lo_open else '>='} {lo:g}{u}"
-    return f"<= {hi:g}{u}"
+        return f"{'>' if lo_open else '>='} {num(lo)}{u}"
+    return f"<= {num(hi)}{u}"
 
 
 def _said(lo, hi, lo_open: bool, unit: str) -> str:

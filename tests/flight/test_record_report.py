@@ -8,6 +8,7 @@ from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import PlanFolderError, load_planned_flight
 from ftlbo_mav.flight.record import FlightRecord, Sample
 from ftlbo_mav.flight.report import leg_range, render_report_png, summarize
+from ftlbo_mav.mission.files import digest
 
 
 @pytest.fixture(scope="module")
@@ -84,6 +85,11 @@ def test_folder_errors(tmp_path, plan_dir):
         kept = [line for line in lines if "\t22\t" not in line]  # drop the takeoff
         kept = [kept[0]] + [f"{i}\t" + line.split("\t", 1)[1] for i, line in enumerate(kept[1:])]
         (tmp_path / f"{name}.waypoints").write_text("\n".join(kept) + "\n")
+    with pytest.raises(PlanFolderError, match="SHA-256 differs"):  # not the plan's files
+        load_planned_flight(tmp_path)
+    for u in doc["uavs"]:  # as if plan.json had been written with them
+        u["mission_sha256"] = digest((tmp_path / u["mission_file"]).read_text())
+    (tmp_path / "plan.json").write_text(json.dumps(doc))
     with pytest.raises(PlanFolderError, match="no NAV_TAKEOFF"):
         load_planned_flight(tmp_path)
 
