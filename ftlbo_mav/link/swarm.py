@@ -178,7 +178,7 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
             with link.channel(a.sysid) as channel:
                 ok, msg = upload_and_verify(channel, a.items, progress=progress,
                                             timing=timing_for(link.heartbeats[a.sysid], timing))
-            if not ok and link.closed_by_peer:
+            if not ok and link.closed_by_peer and "closed by the other end" not in msg:
                 msg += f" ({link.url} was closed by the other end)"
             emit(ProgressEvent(a.name, a.sysid, "verified" if ok else "failed",
                                len(a.items), len(a.items), msg))

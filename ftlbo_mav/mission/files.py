@@ -60,11 +60,11 @@ def _remove_created(created: list[Path]) -> None:
 def write_atomic(path: str | Path, data: str | bytes) -> Path:
     """Write ``data`` to ``path`` so that readers see the old file or the new one, never half."""
     path = Path(path)
-    if path.is_dir():
-        raise OutputError(f"{path}: is a folder, not a file; nothing was written")
     created: list[Path] = []
     tmp = None
     try:
+        if path.is_dir():
+            raise OutputError(f"{path}: is a folder, not a file; nothing was written")
         created = _make_parents(path.parent)
         mode = "wb" if isinstance(data, bytes) else "w"
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:100]}.", suffix=".tmp", dir=path.parent)
@@ -114,9 +114,9 @@ class OutputFolder:
 
     def __enter__(self) -> OutputFolder:
         t = self.target
-        if t.exists() and not t.is_dir():
-            raise OutputError(f"{t}: is a file, not a folder; nothing was written")
         try:
+            if t.exists() and not t.is_dir():
+                raise OutputError(f"{t}: is a file, not a folder; nothing was written")
             self._created = _make_parents(t.parent)
             self._tmp = Path(tempfile.mkdtemp(prefix=f".{t.name[:100]}.", suffix=".tmp",
                                               dir=t.parent))

@@ -177,3 +177,21 @@ def test_nothing_goes_to_ids_not_asked_for(tmp_path):
         stored = fleet.missions()
     assert code == 0, out
     assert len(stored[0]) == 15 and stored[1] == [] and len(stored[2]) == 15
+
+
+@pytest.mark.parametrize("after", [0, 5])
+def test_a_link_that_closes_mid_upload_fails_that_vehicle_and_the_others_go_on(tmp_path,
+                                                                                after):
+    """Issue 12: the vehicle whose link drops gets a FAILED line with the cause and what it
+    now holds; the others are verified; the summary is printed; exit 1; no traceback."""
+    write_missions(tmp_path, 3)
+    faults = [Faults(), Faults(close_after_items=after), Faults()]
+    with vehicles(3, faults=faults) as fleet:
+        code, out = run("upload", tmp_path, "--sysid", "1..3", "--timeout", "0.3",
+                        "--retries", "2", *connect(fleet.urls))
+    assert code == 1, out
+    failed = [line for line in out.splitlines() if line.startswith("uav2 -> sysid 2: FAILED:")]
+    assert len(failed) == 1, out
+    assert "closed by the other end" in failed[0] or "the link failed" in failed[0]
+    assert "hold" in failed[0]  # what the vehicle may now hold, and how to check it
+    assert len(verified_lines(out)) == 2 and "2/3 vehicles verified" in out
