@@ -78,3 +78,37 @@ def test_the_recorder_writes_a_recording_the_storage_tests_read(tmp_path):
         sent, back = record.wire_from_json(it["sent"]), record.wire_from_json(it["read_back"])
         assert storage.stored(sent).params == back.params or any(
             math.isnan(a) for a in back.params)
+
+
+@pytest.mark.parametrize("args", [["--count", "0"], ["--count", "x"], ["--count", "300"],
+                                  ["--speedup", "nan"], ["--speedup", "-1"],
+                                  ["--binary", "/nonexistent/arducopter"],
+                                  ["--scenario", "/nonexistent.toml", "--binary", sys.executable]])
+def test_bad_input_exits_2_in_one_line_before_anything_starts(args):
+    """Issue 12: `python -m sitl` exits 2 for bad input (1 is for a SITL that failed)."""
+    import subprocess
+
+    proc = subprocess.run([sys.executable, "-m", "sitl", *args], cwd=ROOT, capture_output=True,
+                          text=True, timeout=60, env={"PATH": "/usr/bin:/bin"})
+    assert proc.returncode == 2, proc.stderr
+    assert "Traceback" not in proc.stderr and "ready" not in proc.stdout
+    assert len(proc.stderr.strip().splitlines()[-1:]) == 1
+
+
+def test_a_sitl_that_has_died_is_named_never_ready(tmp_path):
+    """Issue 12: the launcher does not call a swarm ready when a process has exited."""
+    import subprocess
+
+    from ftlbo_mav.link.endpoints import LinkError
+
+    swarm = SitlSwarm(binary=sys.executable, homes=default_homes(2), workdir=tmp_path)
+    swarm.processes = [subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"]),
+                       subprocess.Popen([sys.executable, "-c", "raise SystemExit(3)"])]
+    swarm.processes[1].wait()
+    procs = list(swarm.processes)
+    try:
+        with pytest.raises(LinkError, match=r"instance 1 \(sysid 2\) exited with code 3"):
+            swarm.check_running()
+    finally:
+        swarm.__exit__(None, None, None)
+    assert all(p.poll() is not None for p in procs)  # every process stopped by __exit__
