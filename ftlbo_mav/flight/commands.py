@@ -18,7 +18,7 @@ from ..cli_types import LINK_URL, PORT, SYSIDS, FiniteFloat
 from ..link.commands import _timing, _urls, timing_options
 from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
-from ..mission.files import write_atomic
+from ..mission.files import OutputFolder, check_writable
 from .control import DEFAULT_CONTROL_PORT, ControlServer, request_abort
 from .fly import Fleet, FlyOptions, abort, fly, make_keeper
 from .keeper import KeeperOptions
@@ -85,11 +85,12 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                              "off_reason": keeper.off_reason,
                              "planned_speed_m_s": keeper.planned_speed_m_s,
                              "vehicles": keeper.log.as_dict(planned.names)}
-    write_atomic(out_dir / "flight.csv", monitor.record.to_csv())
-    write_atomic(out_dir / "summary.json", json.dumps(summary, indent=2) + "\n")
+    files = {"flight.csv": monitor.record.to_csv(),
+             "summary.json": json.dumps(summary, indent=2) + "\n"}
     if len(times):
-        write_atomic(out_dir / "report.png",
-                     render_report_png(planned, times, positions, seqs, summary))
+        files["report.png"] = render_report_png(planned, times, positions, seqs, summary)
+    with OutputFolder(out_dir, replaces=[r"report\.png"]) as out:  # all three, or none
+        out.write_all(files)
     return summary
 
 
@@ -159,6 +160,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
                          keeper=KeeperOptions(enabled=use_keeper))
     keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
+    check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
                on_position=monitor) as fleet, _forwarding(forward, fleet), \
             _control(control_port, fleet):
@@ -209,6 +211,8 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
     names, sysids, urls = _fleet_args(planned, sysid_text, connect)
     key = load_key(signing_key) if signing_key else None
     watch = Monitor(planned)
+    if planned is not None:
+        check_writable(log_dir or plan_dir / "monitor")
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
                on_position=watch, position_hz=rate) as fleet, _forwarding(forward, fleet):
         watch.vehicles = fleet.vehicles

@@ -190,6 +190,15 @@ class OutputFolder:
         self._created = []
 
 
+def check_writable(target: str | Path) -> None:
+    """:class:`OutputError` now when an :class:`OutputFolder` could not be written to
+    ``target`` later (before a flight whose record would otherwise be lost); nothing is
+    left behind."""
+    out = OutputFolder(target)
+    out.__enter__()
+    out._discard()
+
+
 def digest(text: str | bytes) -> str:
     """The SHA-256 of a file's content (text as UTF-8): how plan.json names the mission
     files it was written with."""
