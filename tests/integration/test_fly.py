@@ -106,6 +106,7 @@ def test_fly_refuses_before_arming_when_a_mission_differs(plan_dir, tmp_path):
     wrong = tmp_path / "wrong"
     shutil.copytree(plan_dir, wrong)
     shutil.copy(plan_dir / "uav3.waypoints", wrong / "uav2.waypoints")
+    (wrong / "plan.json").unlink()  # upload refuses a plan folder with another's file in it
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
         _upload(wrong, fleet.urls)  # vehicle 2 now holds uav3's mission
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
