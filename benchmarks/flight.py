@@ -7,13 +7,14 @@ ARDUPILOT_SITL is set) three ways, each on freshly started vehicles:
   their takeoff altitude, set each vehicle's current item and switch it to AUTO, one
   after the other, without waiting for confirmations (the fastest a hand-written script
   goes);
-- fly: ``flight.fly.fly`` as ``ftlbo-mav fly`` runs it (settled takeoff, AUTO from the
-  first real leg for all in one burst);
-- fly --keeper: the same with the (experimental) formation keeper.
+- fly --no-keeper: ``flight.fly.fly`` without its formation keeper (settled takeoff,
+  AUTO from the first real leg for all in one burst);
+- fly: ``flight.fly.fly`` as ``ftlbo-mav fly`` runs it, with the formation keeper.
 
-Prints formation error (RMS and worst, waypoint legs) and smallest separation per
-strategy and writes ``flight-benchmark.json``. Stops (exit 1) if any upload fails to
-verify. Run: ``python benchmarks/flight.py``; on SITL set ``ARDUPILOT_SITL`` (and
+Prints formation error (RMS and worst, waypoint legs), seconds on the legs, smallest
+separation and clearance and the landing error per strategy and writes
+``flight-benchmark.json``. Stops (exit 1) if any upload fails to verify. Run:
+``python benchmarks/flight.py``; on SITL set ``ARDUPILOT_SITL`` (and
 ``ARDUPILOT_SITL_DEFAULTS`` to ArduPilot's copter.parm).
 """
 
@@ -51,6 +52,7 @@ from ftlbo_mav.scenario import load_scenario
 from ftlbo_mav.sim.homes import scenario_homes
 
 EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
+STRATEGIES = ("naive", "fly --no-keeper", "fly")
 
 
 def naive_start(planned, vehicles) -> None:
@@ -102,14 +104,14 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
             while not finished(planned, fleet.vehicles) and time.monotonic() < deadline:
                 time.sleep(0.1)
         else:
-            options = FlyOptions(keeper=KeeperOptions(enabled=strategy == "fly --keeper"))
+            options = FlyOptions(keeper=KeeperOptions(enabled=strategy == "fly"))
             keeper = make_keeper(planned, options.keeper)
             fly(planned, fleet.vehicles, options=options, timing=Timing(),
                 say=lambda _t: None, tick=lambda: None, keeper=keeper)
     times, positions, seqs = monitor.record.grid([1, 2, 3], planned.frame)
     summary = summarize(planned, times, positions, seqs)
     if keeper is not None:
-        summary["keeper"] = {"active": keeper.off_reason is None,
+        summary["keeper"] = {"active": keeper.active, "link_gaps": keeper.log.link_gaps,
                              "off_reason": keeper.off_reason,
                              "vehicles": keeper.log.as_dict(planned.names)}
     return summary
@@ -126,7 +128,7 @@ def main() -> int:
                              "start latency up to 0.3 s, WPNAV_JERK within 5%%; seeded by the "
                              "run number)")
     parser.add_argument("--only", action="append", default=[],
-                        choices=["naive", "fly", "fly --keeper"],
+                        choices=STRATEGIES,
                         help="fly only this way (repeatable; default all three)")
     parser.add_argument("--set", dest="params", action="append", default=[],
                         metavar="SYSID:NAME=VALUE",
@@ -140,7 +142,7 @@ def main() -> int:
     scenario = load_scenario(args.scenario)
     homes = scenario_homes(scenario)
     binary = os.environ.get("ARDUPILOT_SITL")
-    rows = {k: [] for k in ("naive", "fly", "fly --keeper") if not args.only or k in args.only}
+    rows = {k: [] for k in STRATEGIES if not args.only or k in args.only}
     with tempfile.TemporaryDirectory() as tmp:
         plan_dir = Path(tmp) / "plan"
         shipped = args.scenario.with_suffix("")
@@ -173,18 +175,19 @@ def main() -> int:
                     set_params(vehicles.urls, args.params)
                     summary = fly_once(plan_dir, vehicles.urls, strategy)
                 rows[strategy].append(summary)
-                print(f"run {run} {strategy:>14}: formation error "
+                print(f"run {run} {strategy:>15}: formation error "
                       f"{summary['formation_error_rms_legs_m']:.3f} m RMS, "
-                      f"{summary['formation_error_max_legs_m']:.3f} m worst, clearance "
+                      f"{summary['formation_error_max_legs_m']:.3f} m worst, legs "
+                      f"{summary['leg_seconds']:.1f} s, clearance "
                       f"{summary['min_clearance_m']:.2f} m, landing error "
                       f"{max(summary['final_distance_to_goal_m']):.2f} m", flush=True)
     print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "
           f"speedup {args.speedup:g}, {args.runs} runs each"
           + (f"; parameters set: {', '.join(args.params)}" if args.params else "")
           + ("; per-vehicle variation (--vary)" if args.vary else ""))
-    print("| flight | formation error RMS (median) | worst (max) | smallest separation on "
-          "legs | smallest clearance | landing error (max) |")
-    print("|---|---|---|---|---|---|")
+    print("| flight | formation error RMS (median) | worst (max) | legs (median) | smallest "
+          "separation on legs | smallest clearance | landing error (max) |")
+    print("|---|---|---|---|---|---|---|")
     result = {}
     for strategy, summaries in rows.items():
         rms = sorted(s["formation_error_rms_legs_m"] for s in summaries)
@@ -192,10 +195,13 @@ def main() -> int:
         sep = min(s["min_separation_legs_m"] for s in summaries)
         clear = min(s["min_clearance_m"] for s in summaries)
         land = max(max(s["final_distance_to_goal_m"]) for s in summaries)
+        legs = sorted(s["leg_seconds"] for s in summaries)[len(summaries) // 2]
         result[strategy] = {"rms_median_m": rms[len(rms) // 2], "worst_m": worst,
                             "min_separation_legs_m": sep, "min_clearance_m": clear,
-                            "landing_error_m": land, "runs": summaries}
-        print(f"| {strategy} | {rms[len(rms) // 2]:.3f} m | {worst:.3f} m | {sep:.2f} m | "
+                            "landing_error_m": land, "leg_seconds_median": legs,
+                            "runs": summaries}
+        print(f"| {strategy} | {rms[len(rms) // 2]:.3f} m | {worst:.3f} m | {legs:.1f} s | "
+              f"{sep:.2f} m | "
               f"{clear:.2f} m | {land:.2f} m |")
     Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
     print(f"wrote {args.out}")

@@ -16,7 +16,10 @@ from .conftest import SMALL
 def test_example_loads_with_the_papers_settings(example_path):
     s = load_scenario(example_path)
     assert s.uav_count == 3
-    assert s.planner.students == 100 and s.planner.waypoints == 10
+    # the paper's class size and iterations; waypoints "auto" and a cruise speed are for
+    # ArduCopter's S-curve (docs/flight.md)
+    assert s.planner.students == 100 and s.planner.waypoints == "auto"
+    assert s.mission.speed_m_s == 5.0
     assert s.planner.iterations == 150
     assert (s.min_altitude_m, s.max_altitude_m) == (2.0, 7.0)
     assert len(s.obstacles) >= 6 and len({c.radius_m for c in s.obstacles}) > 1

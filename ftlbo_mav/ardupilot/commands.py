@@ -54,6 +54,9 @@ DISARM_DELAY_S = 10.0       # DISARM_DELAY default (ArduCopter/motors.cpp auto_d
 ARMING_MOTORS = (R.MAV_SEVERITY_INFO, "Arming motors")        # AP_Arming::arm
 DISARMING_MOTORS = (R.MAV_SEVERITY_INFO, "Disarming motors")  # AP_Arming::disarm
 MISSING_TAKEOFF = (R.MAV_SEVERITY_CRITICAL, "Auto: Missing Takeoff Cmd")  # ModeAuto::init
+# ArduCopter/GCS_Mavlink.cpp handle_command_pause_continue, when the mode will not
+FAILED_TO_PAUSE = (R.MAV_SEVERITY_INFO, "Failed to pause")
+FAILED_TO_RESUME = (R.MAV_SEVERITY_INFO, "Failed to resume")
 READY = (R.MAV_SEVERITY_INFO, "ArduPilot Ready")
 FLIGHT_PLAN_RECEIVED = (R.MAV_SEVERITY_INFO, "Flight plan received")  # AP_Mission complete
 LAND_COMPLETE = (R.MAV_SEVERITY_INFO, "Land complete")

@@ -24,6 +24,27 @@ REAL32, INT8, INT16, INT32 = (R.MAV_PARAM_TYPE_REAL32, R.MAV_PARAM_TYPE_INT8,
 PARAM_COUNT = 1390
 
 
+def sqrt_controller(error: float, p: float, second_ord_lim: float, dt: float) -> float:
+    """AP_Math/control.cpp sqrt_controller: a rate that closes ``error``: proportional
+    near zero, then the square root of the distance (a constant deceleration
+    ``second_ord_lim``), never overshooting in ``dt``."""
+    if second_ord_lim <= 0:
+        rate = error * p
+    elif p == 0:
+        rate = math.copysign(math.sqrt(2 * second_ord_lim * abs(error)), error)
+    else:
+        linear = second_ord_lim / (p * p)
+        if abs(error) > linear:
+            rate = math.copysign(math.sqrt(2 * second_ord_lim * (abs(error) - linear / 2)),
+                                 error)
+        else:
+            rate = error * p
+    if dt > 0:
+        rate = max(-abs(error) / dt, min(rate, abs(error) / dt))
+    return rate
+
+
+
 @dataclass(frozen=True)
 class ParamDefault:
     value: float   # in the parameter's own units (cm, cm/s, cdeg, ...)
@@ -115,6 +136,35 @@ class Navigation:
         if self.atc_accel_rp_max > 0:
             snap = min(snap, self.atc_accel_rp_max * GRAVITY_M_S2)
         return jerk, snap * 0.5
+
+    def track_clock_step(self, offset_vel: float, offset_accel: float, target: float,
+                         dt: float) -> tuple[float, float]:
+        """One step of AC_WPNav::advance_wp_target_along_track's speed offset
+        (``_offset_vel``, ``_offset_accel``): update_vel_accel, then shape_vel_accel towards
+        ``target`` (the desired speed; 0 while paused) within WPNAV_ACCEL and PSC_JERK_XY
+        (AP_Math/control.cpp). The track's clock runs at offset_vel / desired speed."""
+        offset_vel += offset_accel * dt
+        jerk, accel = self.psc_jerk_xy, self.wp_accel
+        want = sqrt_controller(target - offset_vel, jerk / accel, jerk, dt)
+        want = max(-accel, min(accel, want))
+        offset_accel += max(-jerk * dt, min(jerk * dt, want - offset_accel))
+        return offset_vel, offset_accel
+
+    def pause_cost_s(self, pause_s: float, speed_m_s: float, dt: float = 0.01) -> float:
+        """Seconds of its track a copter loses to MAV_CMD_DO_PAUSE_CONTINUE: paused for
+        ``pause_s``, then continued (ModeAuto::pause / resume -> AC_WPNav set_pause /
+        set_resume), until its track's clock is back to full pace, with its navigation
+        set to ``speed_m_s`` (the clock's pace is the speed offset over that speed). A
+        copter flying along its track at ``v`` ends ``v`` times that many metres behind
+        one that was not paused."""
+        vel, acc, lost, t = speed_m_s, 0.0, 0.0, 0.0
+        while t < pause_s + 30.0:
+            vel, acc = self.track_clock_step(vel, acc, 0.0 if t < pause_s else speed_m_s, dt)
+            lost += (1.0 - vel / speed_m_s) * dt
+            t += dt
+            if t >= pause_s and abs(speed_m_s - vel) < 1e-4 and abs(acc) < 1e-4:
+                break
+        return lost
 
     def land_descent_speed(self) -> float:
         """Mode::land_run_vertical_control: the fastest descent while landing (m/s,

@@ -83,7 +83,7 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
     if keeper is not None:
         summary["keeper"] = {"enabled": keeper.options.enabled,
                              "off_reason": keeper.off_reason,
-                             "planned_speed_m_s": keeper.planned_speed_m_s,
+                             "link_gaps": keeper.log.link_gaps,
                              "vehicles": keeper.log.as_dict(planned.names)}
     files = {"flight.csv": monitor.record.to_csv(),
              "summary.json": json.dumps(summary, indent=2) + "\n"}
@@ -108,11 +108,12 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
     if keeper and keeper["off_reason"]:
         click.echo(f"formation keeper off: {keeper['off_reason']}")
     elif keeper and keeper["enabled"]:
-        nudged = {n: v for n, v in keeper["vehicles"].items() if v["speed_commands"]}
+        waited = {n: v for n, v in keeper["vehicles"].items() if v["pauses"]}
         click.echo("formation keeper: " + ("; ".join(
-            f"{n} slowed {v['seconds_slowed']:.1f} s (down to {v['slowest_speed_m_s']} m/s, "
-            f"{v['speed_commands']} commands)" for n, v in nudged.items())
-            if nudged else "no vehicle needed slowing"))
+            f"{n} waited {v['pauses']}x ({v['seconds_paused']:.1f} s paused, largest lead "
+            f"{v['largest_lead_m']:+.2f} m)" for n, v in waited.items())
+            if waited else "no vehicle needed to wait") + (
+            f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else ""))
     click.echo(f"flight log, summary and report in {out_dir}/")
 
 
@@ -128,10 +129,9 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @click.option("--control-port", type=PORT, default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="127.0.0.1 port where `ftlbo-mav abort` reaches this flight (0: none).")
-@click.option("--keeper/--no-keeper", "use_keeper", default=False, show_default=True,
-              help="Trim leaders' speeds in flight to hold the formation (experimental: on "
-                   "ArduCopter SITL it has not yet helped, and made fast flights worse; "
-                   "see docs/flight.md).")
+@click.option("--keeper/--no-keeper", "use_keeper", default=True, show_default=True,
+              help="Hold the formation in flight: leaders wait (short pauses), laggards "
+                   "catch up (a faster next leg); see docs/flight.md.")
 @click.option("--arm-budget", type=FiniteFloat(0, 86_400), default=60.0, show_default=True,
               help="Seconds to keep retrying a refused arm (EKF still converging).")
 @click.option("--preflight-timeout", type=FiniteFloat(0, 86_400),

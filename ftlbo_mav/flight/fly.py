@@ -15,7 +15,7 @@ The steps, each with a timeout and a clear error naming the vehicle:
    vehicle is switched to AUTO in one burst of messages, and only afterwards are the
    switches confirmed, so that the formation leaves as one.
 5. Watch until every vehicle has landed (disarmed) or ended its mission, the formation
-   keeper (:mod:`.keeper`) trimming the leaders' speeds on the legs.
+   keeper (:mod:`.keeper`) pausing leaders briefly on the legs (on by default).
 """
 
 from __future__ import annotations
@@ -211,28 +211,39 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options:
 
 
 def first_leg(mission, frame: LocalFrame, *, hold_m: float = 0.5) -> tuple[int, list]:
-    """``(seq, speed items)``: where AUTO starts, and the DO_CHANGE_SPEED items it skips.
+    """``(seq, speed items)``: where AUTO starts, and the DO_CHANGE_SPEED items it skips
+    (to be sent as commands once AUTO runs).
 
     After the takeoff each vehicle already hovers at its start point, which is also the
     mission's first waypoint. Starting AUTO there makes ArduCopter fly a zero-length leg
     first, whose jerk-limited S-curve lasts about a second and differs from copter to
     copter with its residual altitude error (on SITL the higher copter began the real legs
     0.4 s late: 0.44 m RMS formation error; starting at the first real leg: 0.09 m). So AUTO
-    starts at the first waypoint that is not the start point; DO_CHANGE_SPEED items in
-    between are sent as commands instead, so the missions' cruise speed still holds.
+    starts after the start point: at the DO_CHANGE_SPEED that follows it (as ``plan``
+    writes missions), which ArduCopter runs as the mission resumes, before the first leg
+    (AP_Mission::set_current_cmd loads it with the next navigation command, and
+    AP_Mission::resume starts both), else at the first real leg.
+
+    A DO_CHANGE_SPEED *before* the start point (missions of other tools) is skipped with
+    it and returned: a speed sent before AUTO is lost (ModeAuto::init clears
+    desired_speed_override and AC_WPNav::wp_and_spline_init goes back to WPNAV_SPEED), so
+    it must be sent after the switch.
     """
     seq, _alt = takeoff_item(mission)
     home = mission[0]
     takeoff = next(it for it in mission if it.seq == seq)
-    speeds = []
+    speeds, passed_start = [], False
     for it in mission[seq + 1:]:
         if it.command == CMD_DO_CHANGE_SPEED:
+            if passed_start:
+                return it.seq, speeds
             speeds.append(it)
             continue
         at_start = (it.command == CMD_NAV_WAYPOINT and it.param1 == 0
                     and _ground_distance(frame, it, home) <= hold_m
                     and abs(it.alt_m - takeoff.alt_m) <= hold_m)
-        if at_start and it.seq + 1 < len(mission):
+        if at_start and not passed_start and it.seq + 1 < len(mission):
+            passed_start = True
             continue
         return it.seq, speeds
     return seq + 1, []
@@ -249,20 +260,21 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) ->
     one burst. Returns the monotonic time of the burst."""
     starts = [first_leg(m, planned.frame) for m in planned.missions]
 
-    def prepare(pair) -> None:
-        v, (seq, speeds) = pair
-        for it in speeds:
-            v.command(R.MAV_CMD_DO_CHANGE_SPEED, it.param1, it.param2, it.param3,
-                      step="cruise speed")
-        v.set_current(seq)
-
-    _concurrently(prepare, list(zip(vehicles, starts)))
+    _concurrently(lambda pair: pair[0].set_current(pair[1][0]), list(zip(vehicles, starts)))
     if aborted(vehicles):
         raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     t = time.monotonic()
     for v in vehicles:
         v.send_mode("AUTO")
     _concurrently(lambda v: v.set_mode("AUTO"), vehicles)
+
+    def cruise(pair) -> None:  # skipped speeds: only AUTO keeps them (first_leg)
+        v, (_seq, speeds) = pair
+        for it in speeds:
+            v.command(R.MAV_CMD_DO_CHANGE_SPEED, it.param1, it.param2, it.param3,
+                      step="cruise speed")
+
+    _concurrently(cruise, list(zip(vehicles, starts)))
     return t
 
 
@@ -315,9 +327,9 @@ def make_keeper(planned: PlannedFlight, options: KeeperOptions) -> FormationKeep
 
 
 def cruise_speed(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> float | None:
-    """The speed the vehicles fly their legs at when nobody slows them: the missions'
+    """The speed the vehicles' waypoint navigation is set to on the legs: the missions'
     DO_CHANGE_SPEED, else every vehicle's WPNAV_SPEED (read from it; None when a vehicle
-    does not answer or they differ: the keeper cannot give a speed back it does not know)."""
+    does not answer or they differ: how long a pause should last depends on it)."""
     speed = planned_speed(planned.missions)
     if speed is not None:
         return speed
@@ -329,14 +341,15 @@ def cruise_speed(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> f
 
 def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
                    keeper: FormationKeeper) -> bool:
-    """One step of the formation keeper; False once the legs are over (speeds released)."""
+    """One step of the formation keeper; False once the legs are over (every pause
+    continued)."""
     st = [v.status for v in vehicles]
     last_leg = [m[-1].seq - 1 if m[-1].command != CMD_NAV_LOITER_UNLIM else m[-1].seq
                 for m in planned.missions]
     if any(s.seq > last for s, last in zip(st, last_leg)) or any(
             s.mode != "AUTO" for s in st):
-        for i, speed in keeper.release().items():
-            vehicles[i].send_speed(speed)
+        for i, pause in keeper.release().items():
+            vehicles[i].send_pause(pause)
         return False
     if any(s.lat_deg is None for s in st):
         return True
@@ -350,11 +363,14 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
                             if s.clock_offset_s is not None else s.position_t)] for s in st])
     positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)
     speeds = np.array([s.ground_speed_m_s for s in st])
-    # the keeper's periods run on the vehicles' clock (time_boot_ms), which an emulator
-    # with a time scale runs faster than ours
-    vehicle_now = max(s.position_boot_s for s in st)
-    for i, speed in keeper.update(positions, speeds, vehicle_now).items():
-        vehicles[i].send_speed(speed)
+    # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
+    # with a time scale runs faster than ours), carried on between reports (10 Hz) for
+    # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
+    # last report on our clock
+    arrived = np.array([now - s.position_t for s in st])
+    vehicle_now = max(s.position_boot_s + min(a, 0.1) for s, a in zip(st, arrived))
+    for i, pause in keeper.update(positions, speeds, vehicle_now, ages_s=arrived).items():
+        vehicles[i].send_pause(pause)
     return True
 
 
@@ -405,9 +421,9 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s)
     if keeper is None and options.keeper.enabled:
         keeper = make_keeper(planned, options.keeper)
-    if keeper is not None and keeper.options.enabled and keeper.planned_speed_m_s is None:
-        keeper.planned_speed_m_s = cruise_speed(planned, vehicles)
-        if keeper.planned_speed_m_s is None:
+    if keeper is not None and keeper.options.enabled and keeper.cruise_speed_m_s is None:
+        keeper.cruise_speed_m_s = cruise_speed(planned, vehicles)
+        if keeper.cruise_speed_m_s is None:
             keeper.off_reason = ("the vehicles' cruise speed is unknown (no DO_CHANGE_SPEED "
                                  "in the missions, WPNAV_SPEED unanswered or not the same "
                                  "on every vehicle)")

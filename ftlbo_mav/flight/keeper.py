@@ -1,75 +1,107 @@
-"""Keep the formation while flying: leaders wait, laggards catch up.
+"""Keep the formation while flying: leaders wait, so that laggards catch up.
 
 Every UAV's planned path is the centroid's path shifted by its offset (the paper's eq. 4),
 so all paths have the same length and shape: the formation holds exactly when every UAV
 is the same distance along its own path. The keeper measures that distance (*progress*)
-from each vehicle's reported position and, a few times a second, slows the ones ahead of
-the group with MAV_CMD_DO_CHANGE_SPEED while they lead; a vehicle that no longer leads
-gets its planned speed back. ArduCopter applies a new speed at once in AUTO
-(ArduCopter/GCS_Mavlink.cpp handle_MAV_CMD_DO_CHANGE_SPEED -> ModeAuto::set_speed_xy ->
-AC_WPNav::set_speed_xy, which rescales the S-curve in flight).
+from each vehicle's reported position twenty times a second, and a vehicle ahead of the
+group waits: MAV_CMD_DO_PAUSE_CONTINUE, a pause just long enough to lose its lead, then
+continue. ArduCopter does not stop dead: a paused AC_WPNav shapes the pace of its
+track's clock to zero within WPNAV_ACCEL and PSC_JERK_XY and a continue shapes it back
+(libraries/AC_WPNav/AC_WPNav.cpp advance_wp_target_along_track, ``_offset_vel``;
+ArduCopter/mode_auto.cpp ModeAuto::pause / resume), so the copter slows along its own
+path and speeds up again: on SITL a 0.6 s pause at 5 m/s cost that copter 1.8 m against
+the others, its speed dipping to 3.4 m/s and back within 2 s
+(:meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s` models it: 1.9 m).
 
-The keeper only nudges: each vehicle flies its own uploaded mission, and a leader is
-never asked to fly slower than ``min_fraction`` of its own speed.
-If the link drops, a vehicle keeps the last speed it was given and still flies its whole
-mission; ArduCopter has no speed command that expires by itself.
+Why not MAV_CMD_DO_CHANGE_SPEED: ArduCopter re-plans the S-curve of a leg that has not
+started to a new speed, but the leg being flown only in ways that do not apply here
+(libraries/AP_Math/SCurve.cpp set_speed_max: not once cruising unless 12 s of the leg
+remain, not on a jerk-limited ramp). On SITL a speed set 4 s into the example's first
+leg changed nothing on that leg and held from the leg after: a correction a leg late,
+and one that stays after its reason has gone.
 
-:class:`FormationKeeper` is pure: positions and speeds in, speed commands out.
+The keeper only nudges: each vehicle flies its own uploaded mission at its own speed.
+A pause lasts at most ``max_pause_s`` and every continue is sent twice more; when a
+vehicle's reports stop, the keeper stands aside and keeps sending continue. A copter
+whose link is lost for good within a pause (a window of ``max_pause_s``) holds its
+position in AUTO, paused, until the link is back or its own failsafe acts.
+
+:class:`FormationKeeper` is pure: positions and speeds in, pauses and continues out.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
-# ArduCopter's WPNAV_SPEED default (AC_WPNav.h WPNAV_WP_SPEED, 1000 cm/s); copter.parm keeps it
-ARDUCOPTER_WPNAV_SPEED_M_S = 10.0
+from ..ardupilot.navigation import Navigation
 
 
 @dataclass(frozen=True)
 class KeeperOptions:
-    """When a vehicle flying at least ``min_speed_m_s`` leads the group by more than
-    ``engage_m``, its speed is capped just under its own so that it gives the lead back
-    over ``horizon_s`` seconds, never below ``min_fraction`` of its own speed; below
-    ``release_m`` it gets its planned speed back.
-    Speeds are reconsidered every ``period_s`` and a new command goes out only when it
-    differs by ``min_step_m_s``, or every ``refresh_s`` while a vehicle is slowed (a lost
-    command is not final).
+    """Every ``period_s`` (on the vehicles' clock) each vehicle's lead over the group's
+    mean progress is measured. A vehicle more than ``engage_m`` ahead is paused for as
+    long as makes it lose that lead (ArduCopter's pause and continue, modelled in
+    :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s`; at most
+    ``max_pause_s``), then left ``rest_s`` to regain its pace before it is measured for
+    another. Nothing happens while the group flies slower than ``min_speed_m_s``
+    (starting, stopping). Reports older than ``stale_s`` make the keeper stand aside
+    (continue for everyone).
 
-    The gentleness is measured, not a taste: ArduCopter answers a new speed through its
-    jerk-limited S-curve (WPNAV_JERK 1 m/s^3: about 1.5 s to lose 0.6 m/s). On SITL a
-    keeper that acted on 5 cm of lead within a quarter of a second overshot into 1.1 m
-    RMS formation error where no keeper gave 0.06 m, and one that capped leaders at the
-    group's speed (low in corners) made 0.87 m of a flight that flew 0.04 m without it."""
+    The numbers are measured, not a taste: docs/flight.md."""
 
-    enabled: bool = False  # off by default until it helps on ArduPilot: docs/flight.md
-    engage_m: float = 0.25
-    release_m: float = 0.08
-    horizon_s: float = 3.0
-    min_fraction: float = 0.85
-    min_speed_m_s: float = 1.0
-    steady_m_s2: float = 0.3  # engage only while no vehicle speeds up or slows faster
-    period_s: float = 0.5
-    min_step_m_s: float = 0.15
-    refresh_s: float = 2.0
+    enabled: bool = True
+    engage_m: float = 0.1
+    max_pause_s: float = 0.8
+    rest_s: float = 2.0
+    min_speed_m_s: float = 0.5
+    period_s: float = 0.05
+    stale_s: float = 1.0
+    navigation: Navigation = Navigation()  # ArduCopter's defaults (copter.parm keeps them)
+
+    def __post_init__(self) -> None:
+        for name in ("engage_m", "max_pause_s", "rest_s", "min_speed_m_s", "period_s",
+                     "stale_s"):
+            value = getattr(self, name)
+            if not np.isfinite(value) or value < 0:
+                raise ValueError(f"keeper {name} must be a finite number >= 0, got {value!r}")
+
+    def pause_for(self, lead_m: float, speed_m_s: float, cruise_m_s: float) -> float:
+        """Seconds to pause a copter flying at ``speed_m_s`` (its navigation set to
+        ``cruise_m_s``) so that it loses ``lead_m``: the shortest pause that does, at most
+        ``max_pause_s``, in 10 ms steps."""
+        costs = _pause_costs(self.navigation, round(cruise_m_s, 1), self.max_pause_s)
+        k = int(np.searchsorted(costs, lead_m / max(speed_m_s, 0.1)))
+        return round(min(k, len(costs) - 1) * 0.01, 2)
+
+
+@lru_cache(maxsize=64)
+def _pause_costs(nav: Navigation, cruise_m_s: float, max_pause_s: float) -> np.ndarray:
+    """Seconds of track lost to pauses of 0, 0.01, ... ``max_pause_s`` seconds."""
+    steps = int(round(max_pause_s / 0.01)) + 1
+    return np.maximum.accumulate([nav.pause_cost_s(k * 0.01, cruise_m_s)
+                                  for k in range(steps)])
 
 
 @dataclass
 class KeeperLog:
-    """What the keeper did, per vehicle: commands sent, slowest speed asked, seconds
-    spent slowed, and the largest lead it saw."""
+    """What the keeper did, per vehicle: pauses and their seconds, and the largest lead
+    it saw (metres, + ahead); and how often it stood aside for a link gap."""
 
-    commands: list[int]
-    slowest_m_s: list[float | None]
-    slowed_s: list[float]
+    pauses: list[int]
+    paused_s: list[float]
     max_lead_m: list[float]
+    link_gaps: int = 0
+
+    @classmethod
+    def empty(cls, n: int) -> KeeperLog:
+        return cls([0] * n, [0.0] * n, [0.0] * n)
 
     def as_dict(self, names) -> dict:
-        return {n: {"speed_commands": c, "slowest_speed_m_s": s, "seconds_slowed": round(t, 2),
-                    "largest_lead_m": round(m, 3)}
-                for n, c, s, t, m in zip(names, self.commands, self.slowest_m_s, self.slowed_s,
-                                         self.max_lead_m)}
+        return {n: {"pauses": p, "seconds_paused": round(t, 2), "largest_lead_m": round(m, 3)}
+                for n, p, t, m in zip(names, self.pauses, self.paused_s, self.max_lead_m)}
 
 
 def _segments(path: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -98,32 +130,38 @@ def progress_along(path: np.ndarray, point: np.ndarray, *, start_segment: int = 
 @dataclass
 class FormationKeeper:
     """``paths``: ``(N, P, 3)`` metres ENU, each UAV's planned points from its start to its
-    goal; ``planned_speed_m_s``: the speed each flies when not slowed (its mission's
-    DO_CHANGE_SPEED, else the vehicles' WPNAV_SPEED; None until known, and the keeper
-    stays silent)."""
+    goal; ``cruise_speed_m_s``: the speed their waypoint navigation is set to (the
+    missions' DO_CHANGE_SPEED, else WPNAV_SPEED; None until known, and the keeper stays
+    silent): a pause slows the track's clock from it."""
 
     paths: np.ndarray
-    planned_speed_m_s: float | None = ARDUCOPTER_WPNAV_SPEED_M_S
+    cruise_speed_m_s: float | None = None
     options: KeeperOptions = KeeperOptions()
     off_reason: str | None = None  # why this flight flies without it, if it does
     _segment: list[int] = field(default_factory=list)
-    _sent: list[float | None] = field(default_factory=list)
-    _sent_t: list[float] = field(default_factory=list)
+    _paused_at: list[float | None] = field(default_factory=list)
+    _resume_at: list[float] = field(default_factory=list)
+    _rest_until: list[float] = field(default_factory=list)
+    _resend: list[int] = field(default_factory=list)  # continues still to repeat
+    _resumed_at: list[float] = field(default_factory=list)
     _last_t: float | None = None
-    _last_speeds: np.ndarray | None = None
+    _standing_aside: bool = False
     log: KeeperLog | None = None
 
     def __post_init__(self) -> None:
         n = len(self.paths)
         self._segment = [0] * n
-        self._sent = [None] * n
-        self._sent_t = [0.0] * n
-        self.log = KeeperLog([0] * n, [None] * n, [0.0] * n, [0.0] * n)
+        self._paused_at = [None] * n
+        self._resume_at = [0.0] * n
+        self._rest_until = [-np.inf] * n
+        self._resend = [0] * n
+        self._resumed_at = [-np.inf] * n
+        self.log = KeeperLog.empty(n)
 
     @property
     def active(self) -> bool:
         return (self.options.enabled and self.off_reason is None
-                and self.planned_speed_m_s is not None)
+                and self.cruise_speed_m_s is not None)
 
     def progress(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` metres along each UAV's own path, from ``positions`` ``(N, 3)``."""
@@ -132,12 +170,14 @@ class FormationKeeper:
             out[i], self._segment[i] = progress_along(path, p, start_segment=self._segment[i])
         return out
 
-    def update(self, positions: np.ndarray, speeds_m_s: np.ndarray,
-               now: float) -> dict[int, float]:
-        """The speed commands to send now: ``{uav index: m/s}`` (empty most of the time).
+    def update(self, positions: np.ndarray, speeds_m_s: np.ndarray, now: float,
+               ages_s: np.ndarray | None = None) -> dict[int, bool]:
+        """What to send now, ``{uav index: True to pause, False to continue}`` (empty most
+        of the time).
 
         ``positions`` ``(N, 3)`` metres ENU, ``speeds_m_s`` ``(N,)`` ground speeds, ``now``
-        seconds (any clock)."""
+        seconds (any clock, the same for all), ``ages_s`` ``(N,)`` how old each vehicle's
+        report is (None: fresh)."""
         if not self.active:
             return {}
         o, log = self.options, self.log
@@ -145,51 +185,51 @@ class FormationKeeper:
         if self._last_t is not None and dt < o.period_s:
             return {}
         self._last_t = now
+        if ages_s is not None and float(np.max(ages_s)) > o.stale_s:
+            if not self._standing_aside:
+                log.link_gaps += 1
+            self._standing_aside = True
+            out = self.release(now)
+            for i, resumed in enumerate(self._resumed_at):  # a lost continue is not final
+                if i not in out and now - resumed < 10.0:
+                    out[i] = False
+            return out
+        self._standing_aside = False
         s = self.progress(positions)
         lead = s - s.mean()
-        speeds_m_s = np.asarray(speeds_m_s, float)
-        # a cap set while the group accelerates out of a corner freezes the leader at that
-        # speed while the others go on accelerating (SITL: 0.04 -> 0.88 m RMS on long legs)
-        steady = (self._last_speeds is not None and dt > 0 and float(
-            np.max(np.abs(speeds_m_s - self._last_speeds))) / dt <= o.steady_m_s2)
-        self._last_speeds = speeds_m_s
-        out = {}
-        for i, e in enumerate(lead):
-            log.max_lead_m[i] = max(log.max_lead_m[i], float(abs(e)))
-            last = self._sent[i]
-            slowed = last is not None and last != self.planned_speed_m_s
-            if (slowed and e < o.release_m) or (not slowed and e <= o.engage_m):
-                if slowed:
-                    out[i] = self.planned_speed_m_s  # the lead is given back
-                    self._sent[i], self._sent_t[i] = out[i], now
-                    log.commands[i] += 1
-                continue
-            own = float(speeds_m_s[i])
-            if not slowed and (own < o.min_speed_m_s or not steady):
-                continue  # starting, turning or stopping: not the moment to nudge
-            log.slowed_s[i] += dt if slowed else 0.0
-            give_back = max(e - o.release_m, 0.0) / o.horizon_s
-            # a cap just under its own speed: ArduCopter re-plans the S-curve below it, and
-            # a cap far below (a corner's low group speed) made SITL copters brake hard
-            base = max(own, o.min_speed_m_s)
-            want = max(base - give_back, o.min_fraction * base, 0.5)
-            want = round(min(want, self.planned_speed_m_s), 2)
-            if not slowed or abs(want - last) >= o.min_step_m_s or \
-                    now - self._sent_t[i] >= o.refresh_s:
-                out[i] = want if not slowed or abs(want - last) >= o.min_step_m_s else last
-                self._sent[i], self._sent_t[i] = out[i], now
-                log.commands[i] += 1
-                log.slowest_m_s[i] = min(log.slowest_m_s[i] or out[i], out[i])
+        group_speed = float(np.mean(speeds_m_s))
+        flying = group_speed >= o.min_speed_m_s
+        out: dict[int, bool] = {}
+        for i in range(len(s)):
+            log.max_lead_m[i] = max(log.max_lead_m[i], float(lead[i]), key=abs)
+            if self._paused_at[i] is not None:
+                if now >= self._resume_at[i] or not flying:
+                    log.paused_s[i] += now - self._paused_at[i]
+                    self._paused_at[i], self._resumed_at[i] = None, now
+                    self._resend[i] = 2
+                    out[i] = False
+            elif self._resend[i] > 0:
+                self._resend[i] -= 1
+                out[i] = False
+            elif flying and lead[i] > o.engage_m and now >= self._rest_until[i]:
+                d = o.pause_for(float(lead[i]), group_speed, self.cruise_speed_m_s)
+                if d > 0:
+                    self._paused_at[i], self._resume_at[i] = now, now + d
+                    self._rest_until[i] = now + d + o.rest_s
+                    log.pauses[i] += 1
+                    out[i] = True
         return out
 
-    def release(self) -> dict[int, float]:
-        """Planned speed back for every vehicle that was slowed (the legs are over)."""
+    def release(self, now: float = 0.0) -> dict[int, bool]:
+        """Continue for every vehicle paused (the legs are over, or the reports stopped)."""
         out = {}
-        for i, last in enumerate(self._sent):
-            if last is not None and last != self.planned_speed_m_s:
-                out[i] = self.planned_speed_m_s
-                self._sent[i] = self.planned_speed_m_s
-                self.log.commands[i] += 1
+        for i in range(len(self.paths)):
+            if self._paused_at[i] is not None or self._resend[i] > 0:
+                if self._paused_at[i] is not None:
+                    self.log.paused_s[i] += max(now - self._paused_at[i], 0.0)
+                    self._paused_at[i], self._resumed_at[i] = None, now
+                self._resend[i] = 0
+                out[i] = False
         return out
 
 

@@ -102,9 +102,10 @@ def build_mission(
     relative to home.
 
     Items, in order: 0 home (frame 0, current=1, as Mission Planner writes it),
-    NAV_TAKEOFF to ``takeoff_alt_m``, DO_CHANGE_SPEED when ``speed_m_s`` is given, one
-    NAV_WAYPOINT per path point, then NAV_LAND at the goal, RTL, or NAV_LOITER_UNLIM at the
-    goal for ``end_action`` "land", "rtl" or "loiter".
+    NAV_TAKEOFF to ``takeoff_alt_m``, one NAV_WAYPOINT per path point (with a
+    DO_CHANGE_SPEED after the first, the start point, when ``speed_m_s`` is given), then
+    NAV_LAND at the goal, RTL, or NAV_LOITER_UNLIM at the goal for ``end_action`` "land",
+    "rtl" or "loiter".
     """
     if len(path) < 2:
         raise ValueError("a path needs at least a start and a goal")
@@ -115,13 +116,16 @@ def build_mission(
         # writes them as 0 (ArduPilot wiki, "Mission Commands": NAV_TAKEOFF).
         dict(command=CMD_NAV_TAKEOFF, alt_m=takeoff_alt_m),
     ]
-    if speed_m_s is not None:
-        # param1 = 1: ground speed; param2: the speed; param3 = -1: throttle unchanged.
-        items.append(dict(command=CMD_DO_CHANGE_SPEED, param1=1.0, param2=speed_m_s, param3=-1.0))
     items += [
         dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt)
         for lat, lon, alt in path
     ]
+    if speed_m_s is not None:
+        # After the start point, before the first leg: a mission started there (fly's
+        # synchronized start) runs it as it begins, and ModeAuto::init would forget a
+        # speed given before AUTO. param1 = 1: ground speed; param3 = -1: throttle unchanged.
+        items.insert(3, dict(command=CMD_DO_CHANGE_SPEED, param1=1.0, param2=speed_m_s,
+                             param3=-1.0))
     lat_f, lon_f, alt_f = path[-1]
     if end_action == "land":
         items.append(dict(command=CMD_NAV_LAND, lat_deg=lat_f, lon_deg=lon_f, alt_m=0.0))

@@ -48,6 +48,8 @@ from ..ardupilot.commands import (
     ARMING_MOTORS,
     DISARM_DELAY_S,
     DISARMING_MOTORS,
+    FAILED_TO_PAUSE,
+    FAILED_TO_RESUME,
     FORCE_DISARM_MAGIC,
     INSTANT_BOOT,
     MISSING_TAKEOFF,
@@ -226,6 +228,8 @@ class Autopilot:
 
     def set_mode(self, mode: int, now: float) -> bool:
         """Switch mode; False when ArduCopter would refuse (see :meth:`mode_refusal`)."""
+        if mode == self.mode:
+            return True  # Copter::set_mode: already in the desired mode, nothing happens
         refusal = self.mode_refusal(mode, now)
         if refusal is not None:
             self._pending += [_text(t) for t in refusal]
@@ -307,6 +311,14 @@ class Autopilot:
         self._start_takeoff(alt_m, self.time if now is None else now)
         return True
 
+    def current_nav_index(self) -> int:
+        """AP_Mission::get_current_nav_index: set_current_cmd on a DO item loads it with
+        the navigation item after it, which is the one reported."""
+        seq = self.current
+        while 0 < seq < len(self.mission) and self.mission[seq].command >= NAV_LAST:
+            seq += 1
+        return seq if seq < len(self.mission) else self.current
+
     def set_current(self, seq: int) -> bool:
         if not 0 <= seq < len(self.mission):
             return False
@@ -355,6 +367,8 @@ class Autopilot:
             result = R.MAV_RESULT_ACCEPTED if self.set_mode(RTL, now) else result
         elif cmd == R.MAV_CMD_NAV_LAND:
             result = R.MAV_RESULT_ACCEPTED if self.set_mode(LAND, now) else result
+        elif cmd == R.MAV_CMD_DO_PAUSE_CONTINUE:
+            result = self._pause_continue(int(p[0]))
         elif cmd == R.MAV_CMD_DO_CHANGE_SPEED:
             if p[1] > 0:  # GCS_MAVLINK handle_MAV_CMD_DO_CHANGE_SPEED -> set_speed_xy
                 self.change_speed(float(p[1]))
@@ -393,6 +407,23 @@ class Autopilot:
             self.speed_m_s = speed_m_s
         if self.nav is not None:
             self.nav.set_speed_xy(speed_m_s)
+
+    def _pause_continue(self, what: int) -> int:
+        """GCS_MAVLINK_Copter::handle_command_pause_continue: 0 pauses, 1 resumes, only in
+        AUTO flying to a waypoint it has not reached (ModeAuto::pause / resume; other
+        modes refuse, "Failed to pause" / "Failed to resume")."""
+        if what not in (0, 1):
+            return R.MAV_RESULT_DENIED
+        flying_wp = (self.mode == AUTO and self._phase == "wp" and self.nav is not None)
+        if what == 0 and flying_wp and not self.nav.reached:
+            self.nav.set_pause(True)
+            return R.MAV_RESULT_ACCEPTED
+        if what == 1 and self.mode == AUTO:
+            if self.nav is not None:
+                self.nav.set_pause(False)
+            return R.MAV_RESULT_ACCEPTED
+        self._pending.append(_text(FAILED_TO_PAUSE if what == 0 else FAILED_TO_RESUME))
+        return R.MAV_RESULT_FAILED
 
     def goto(self, target: np.ndarray) -> bool:
         """GUIDED: fly to ``target`` (ENU metres) with AC_WPNav (ModeGuided::set_destination)."""

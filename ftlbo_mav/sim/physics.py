@@ -30,6 +30,7 @@ from ..ardupilot.navigation import (
     TAKEOFF_DELAY_S,
     TOUCHDOWN_TO_DISARM_S,
     Navigation,
+    sqrt_controller,
 )
 from .scurve import SCurve
 
@@ -81,25 +82,6 @@ def varied(limits: FlightLimits, rng: np.random.Generator, *, latency_s: float =
 
 
 # -- AP_Math/control.cpp, one axis
-def sqrt_controller(error: float, p: float, second_ord_lim: float, dt: float) -> float:
-    """A rate that closes ``error``: proportional near zero, then the square root of the
-    distance (a constant deceleration ``second_ord_lim``), never overshooting in ``dt``."""
-    if second_ord_lim <= 0:
-        rate = error * p
-    elif p == 0:
-        rate = math.copysign(math.sqrt(2 * second_ord_lim * abs(error)), error)
-    else:
-        linear = second_ord_lim / (p * p)
-        if abs(error) > linear:
-            rate = math.copysign(math.sqrt(2 * second_ord_lim * (abs(error) - linear / 2)),
-                                 error)
-        else:
-            rate = error * p
-    if dt > 0:
-        rate = max(-abs(error) / dt, min(rate, abs(error) / dt))
-    return rate
-
-
 def stopping_distance(speed: float, p: float, accel: float) -> float:
     """AC_PosControl's stopping_distance (control.cpp): how far a controller with gain
     ``p`` and acceleration ``accel`` moves before it stops from ``speed``."""
@@ -153,7 +135,9 @@ class WaypointNav:
     terrain). ``init`` is wp_and_spline_init, ``set_destination`` / ``set_destination_next``
     are set_wp_destination / set_wp_destination_next, ``set_speed_xy`` is set_speed_xy
     and ``advance`` is advance_wp_target_along_track. The target runs at the S-curve's own
-    pace (its time scalers stay 1: the emulated copter is always on its target)."""
+    pace scaled by the speed offset (``_offset_vel`` / ``_wp_desired_speed_xy_cms``, which
+    a pause shapes towards 0 and a resume back to 1, jerk-limited); the tracking scaler
+    stays 1 (the emulated copter is always on its target)."""
 
     def __init__(self, nav: Navigation, stopping_point: np.ndarray,
                  speed_m_s: float | None = None) -> None:
@@ -167,6 +151,8 @@ class WaypointNav:
         self.follows_param = not (speed_m_s and speed_m_s > 0)
         wanted = speed_m_s if speed_m_s and speed_m_s > 0 else max(nav.wp_speed, WP_SPEED_MIN)
         self.desired_speed = max(wanted, WP_SPEED_MIN)
+        # _offset_vel / _offset_accel: the S-curve's time runs at offset_vel / desired_speed
+        self.offset_vel, self.offset_accel, self.paused = self.desired_speed, 0.0, False
         self.speed_up, self.speed_down = nav.wp_speed_up, nav.wp_speed_dn
         self.jerk, self.snap = nav.scurve_jerk_snap()
         self.prev, self.this, self.next = SCurve(), SCurve(), SCurve()
@@ -223,6 +209,7 @@ class WaypointNav:
         and the next (SCurve::set_speed_max); below 20 cm/s ignored."""
         if speed_m_s < WP_SPEED_MIN or self.desired_speed <= 0:
             return
+        self.offset_vel = speed_m_s * self.offset_vel / self.desired_speed  # same time scale
         self.desired_speed = speed_m_s
         self.this.set_speed_max(speed_m_s, self.speed_up, self.speed_down)
         self.next.set_speed_max(speed_m_s, self.speed_up, self.speed_down)
@@ -233,10 +220,26 @@ class WaypointNav:
         if self.follows_param:
             self.set_speed_xy(speed_m_s)
 
+    def set_pause(self, paused: bool) -> None:
+        """AC_WPNav::set_pause / set_resume: the track's time is shaped to a stop (or back
+        to its pace) in advance; the copter brakes along its path, it does not leave it."""
+        self.paused = paused
+
+    def _time_scale(self, dt: float) -> float:
+        """advance_wp_target_along_track's vel_scaler_dt (Navigation.track_clock_step)."""
+        self.offset_vel, self.offset_accel = self.nav.track_clock_step(
+            self.offset_vel, self.offset_accel, 0.0 if self.paused else self.desired_speed, dt)
+        return self.offset_vel / self.desired_speed
+
     def advance(self, dt: float, position: np.ndarray) -> None:
+        scale = self._time_scale(dt)
         done, pos, vel, acc = self.this.advance_target_along_track(
-            self.prev, self.next, self.radius, self.nav.corner_accel(), self.fast, dt,
-            self.origin)
+            self.prev, self.next, self.radius, self.nav.corner_accel(), self.fast,
+            dt * scale, self.origin)
+        speed = float(np.linalg.norm(vel))
+        offset = vel / speed * self.offset_accel * speed / self.desired_speed if speed > 0 \
+            else np.zeros(3)
+        vel, acc = vel * scale, acc * scale * scale + offset
         self.target, self.target_vel, self.target_accel = pos, vel, acc
         if not self.reached and done:
             if self.fast or float(np.linalg.norm(position - self.destination)) <= self.radius:

@@ -346,12 +346,14 @@ class Vehicle:
                 R.MAVLink_gps_global_origin_message(ilat, ilon, ialt, usec)]
 
     def mission_current(self):
-        """MISSION_CURRENT (GCS_Common.cpp send_mission_current): seq, total (the last
-        index), mission_state and mission_mode (1 in AUTO)."""
+        """MISSION_CURRENT (GCS_Common.cpp send_mission_current): seq (the current
+        *navigation* item, AP_Mission::get_current_nav_index: a DO item made current is
+        shown as the navigation item after it), total (the last index), mission_state and
+        mission_mode (1 in AUTO)."""
         ap = self.autopilot
         total = max(len(self.missions.items) - 1, 0)
         state = ap.mission_state()
-        return R.MAVLink_mission_current_message(ap.current, total, state,
+        return R.MAVLink_mission_current_message(ap.current_nav_index(), total, state,
                                                  1 if ap.mode == CopterMode.AUTO else 0)
 
     def message(self, msgid: int, now: float):

@@ -71,7 +71,9 @@ def test_end_actions_and_speed():
     loiter = build_mission(home=(1, 2), takeoff_alt_m=4, path=path, end_action="loiter")
     assert loiter[-1].command == CMD_NAV_LOITER_UNLIM and loiter[-1].alt_m == 4.0
     fast = build_mission(home=(1, 2), takeoff_alt_m=4, path=path, speed_m_s=3.0)
-    assert fast[2].command == CMD_DO_CHANGE_SPEED and fast[2].param2 == 3.0
+    # after the start point, where fly's synchronized AUTO start begins (first_leg)
+    assert [it.command for it in fast[1:5]] == [22, 16, CMD_DO_CHANGE_SPEED, 16]
+    assert fast[3].param2 == 3.0 and [it.seq for it in fast] == list(range(len(fast)))
     with pytest.raises(ValueError):
         build_mission(home=(1, 2), takeoff_alt_m=4, path=path, end_action="crash")
 

@@ -46,8 +46,8 @@ def test_sim_stops_on_a_signal_at_any_time_scale(scale, sig):
 def test_a_plan_stops_on_a_signal_and_writes_nothing(sig, tmp_path):
     out = tmp_path / "out"
     proc = subprocess.Popen([*CLI, "plan", str(ROOT / "missions" / "nha-trang-orchard.toml"),
-                             "-o", str(out), "--algorithm", "ftlbo", "--students", "2000",
-                             "--iterations", "100000", "-q"], cwd=ROOT,
+                             "-o", str(out), "--algorithm", "ftlbo", "--waypoints", "10",
+                             "--students", "2000", "--iterations", "100000", "-q"], cwd=ROOT,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         time.sleep(3.0)  # planning: minutes of work at these sizes
