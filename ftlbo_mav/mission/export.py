@@ -19,7 +19,9 @@ from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
 from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
+from .fence import UavFence, plan_fences
 from .files import write_atomic
+from .params_file import FENCE_PARAMS_FILE, render_params
 from .geodetic import GeodeticPlan, geodetic_view
 from .gis import render_geojson, render_kml
 from .items import UavMission, build_mission  # UavMission re-exported: it lived here
@@ -87,7 +89,8 @@ def _leg_document(leg: Leg, first: int) -> dict:
 
 
 def plan_document(
-    plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None
+    plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None,
+    fences: list[UavFence] | None = None,
 ) -> dict:
     """The ``plan.json`` content. ``written``: whether the mission files were written.
 
@@ -141,10 +144,32 @@ def plan_document(
                 "offset": list(m.offset),
                 "waypoints": _points(path),
                 "mission_file": f"{m.name}.waypoints" if written else None,
+                **_fence_document(m.name, fences, n, written),
             }
-            for m, path in zip(missions, view.uav_paths)
+            for n, (m, path) in enumerate(zip(missions, view.uav_paths))
         ],
+        "fence": None if not fences else {
+            "params": dict(fences[0].params),
+            "params_file": FENCE_PARAMS_FILE if written else None,
+            "exclusion_radii_m": list(fences[0].exclusion_radii_m),
+        },
     }
+
+
+def _fence_document(name: str, fences: list[UavFence] | None, n: int, written: bool) -> dict:
+    if not fences:
+        return {}
+    f = fences[n]
+    return {
+        "fence_file": f"{name}.fence" if written else None,
+        "rally_file": f"{name}.rally" if written and f.rally else None,
+        "rally": [{"lat": round(r.lat_deg, 8), "lon": round(r.lon_deg, 8), "alt": r.alt_m}
+                  for r in f.rally],
+        "fence_notes": list(f.notes),
+    }
+
+
+
 
 
 def write_plan(
@@ -153,6 +178,7 @@ def write_plan(
     *,
     allow_infeasible: bool = False,
     formats: tuple[str, ...] = (),
+    fence: bool = True,
 ) -> list[Path]:
     """Write ``plan.json`` and, when feasible (or allowed), ``uavN.waypoints`` per UAV.
 
@@ -160,7 +186,9 @@ def write_plan(
     QGroundControl ``uavN.plan`` next to each ``uavN.waypoints``. Returns the paths
     written. An infeasible plan gets its ``plan.json`` (with the violations), GeoJSON and
     KML, to be looked at, but no mission files (``.waypoints``, ``.plan``) unless
-    ``allow_infeasible``.
+    ``allow_infeasible``. With ``fence`` (the default) each UAV also gets ``uavN.fence``
+    and ``uavN.rally`` (``QGC WPL 110``, :mod:`.fence`), the folder ``fence.parm`` (the
+    fence parameters), and the ``.plan`` its ``geoFence`` and ``rallyPoints``.
     """
     unknown = sorted(set(formats) - set(FORMATS))
     if unknown:
@@ -169,20 +197,33 @@ def write_plan(
     view = geodetic_view(plan)  # the one conversion to degrees every writer takes
     missions = plan_missions(plan, geodetic=view)
     write_missions = plan.feasible or allow_infeasible
+    fences = plan_fences(plan) if fence else []
     written = []
     if write_missions:
-        for m in missions:
+        for n, m in enumerate(missions):
+            uav_fence = fences[n] if fences else None
             written.append(write_atomic(out_dir / f"{m.name}.waypoints", render_waypoints(m.items)))
+            if uav_fence is not None:
+                written.append(write_atomic(out_dir / f"{m.name}.fence",
+                                            render_waypoints(uav_fence.fence)))
+                if uav_fence.rally:
+                    written.append(write_atomic(out_dir / f"{m.name}.rally",
+                                                render_waypoints(uav_fence.rally)))
             if "plan" in formats:
-                text = render_plan(m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s)
+                text = render_plan(m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s,
+                                   fence=uav_fence)
                 written.append(write_atomic(out_dir / f"{m.name}.plan", text))
+        if fences:
+            written.append(write_atomic(out_dir / FENCE_PARAMS_FILE,
+                                        render_params(fences[0].params)))
     if "geojson" in formats:
-        text = render_geojson(plan, missions, geodetic=view)
+        text = render_geojson(plan, missions, geodetic=view, fences=fences)
         written.append(write_atomic(out_dir / "plan.geojson", text))
     if "kml" in formats:
-        text = render_kml(plan, missions, geodetic=view)
+        text = render_kml(plan, missions, geodetic=view, fences=fences)
         written.append(write_atomic(out_dir / "plan.kml", text))
-    doc = plan_document(plan, missions, written=write_missions, geodetic=view)
+    doc = plan_document(plan, missions, written=write_missions, geodetic=view,
+                        fences=fences)
     written.append(write_atomic(out_dir / "plan.json", json.dumps(doc, indent=2) + "\n"))
     return written
 
