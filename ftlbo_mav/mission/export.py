@@ -148,12 +148,11 @@ def plan_document(
             }
             for n, (m, path) in enumerate(zip(missions, view.uav_paths))
         ],
-        "fence": None if not fences else {
-            "params": dict(fences[0].params),
-            "params_file": FENCE_PARAMS_FILE if written else None,
-            "exclusion_radii_m": list(fences[0].exclusion_radii_m),
-        },
-    }
+    } | ({} if not fences else {"fence": {
+        "params": dict(fences[0].params),
+        "params_file": FENCE_PARAMS_FILE if written else None,
+        "exclusion_radii_m": list(fences[0].exclusion_radii_m),
+    }})
 
 
 def _fence_document(name: str, fences: list[UavFence] | None, n: int, written: bool) -> dict:
