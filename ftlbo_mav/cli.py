@@ -83,10 +83,12 @@ WAYPOINTS = WaypointCount()
                    "(QGroundControl), comma-separated, or all.")
 @click.option("--plot", "make_plots", is_flag=True,
               help="Also draw the plan: PNG figures in the output folder.")
+@click.option("--no-fence", "no_fence", is_flag=True,
+              help="Write no geofence and rally point (uavN.fence, uavN.rally, fence.parm).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
 @user_errors
 def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, allow_infeasible,
-         formats, make_plots, quiet):
+         formats, make_plots, no_fence, quiet):
     """Plan SCENARIO (TOML) and write one Mission Planner mission per UAV."""
     scn = load_scenario(scenario)
     settings = scn.planner
@@ -116,7 +118,8 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
                                notice=tell, on_leg=on_leg)
     for line in said:
         click.echo(line, err=True)
-    paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible, formats=formats)
+    paths = write_plan(result, out_dir, allow_infeasible=allow_infeasible, formats=formats,
+                       fence=not no_fence)
     if make_plots:
         from .plots import write_figures  # matplotlib only when asked: a faster start
 
