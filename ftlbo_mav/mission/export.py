@@ -21,10 +21,10 @@ from ..planning.problem import problem_from_scenario
 from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
 from .fence import UavFence, plan_fences
 from .files import write_atomic
-from .params_file import FENCE_PARAMS_FILE, render_params
 from .geodetic import GeodeticPlan, geodetic_view
 from .gis import render_geojson, render_kml
 from .items import UavMission, build_mission  # UavMission re-exported: it lived here
+from .params_file import FENCE_PARAMS_FILE, render_params
 from .qgc_plan import render_plan
 from .waypoints import render_waypoints
 

@@ -18,18 +18,17 @@ import json
 import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
-
 from typing import TYPE_CHECKING
 
 from ..errors import MissionFileError
 from .files import read_mission_text, write_atomic
 from .items import (
+    CMD_FENCE_CIRCLE_EXCLUSION,
+    CMD_FENCE_POLYGON_VERTEX_INCLUSION,
     CMD_NAV_LAND,
     CMD_NAV_LOITER_UNLIM,
     CMD_NAV_TAKEOFF,
     CMD_NAV_WAYPOINT,
-    CMD_FENCE_CIRCLE_EXCLUSION,
-    CMD_FENCE_POLYGON_VERTEX_INCLUSION,
     FRAME_GLOBAL,
     MissionItem,
 )
