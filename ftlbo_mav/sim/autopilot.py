@@ -64,8 +64,14 @@ from ..ardupilot.commands import (
     set_mode_base_ok,
 )
 from ..ardupilot.modes import CopterMode, mode_name
+from ..ardupilot.navigation import (
+    BRAKE_DECEL_MAX_M_S2,
+    BRAKE_RAMP_S,
+    BRAKE_TIME_CONSTANT_S,
+    REAL32,
+    param_value,
+)
 from ..ardupilot.navigation import DEFAULTS as NAV_DEFAULTS
-from ..ardupilot.navigation import REAL32, param_value
 from ..mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_NAV_LAND,
@@ -79,7 +85,6 @@ from .fence import FenceGuard
 from .physics import FlightLimits, VerticalShaper, WaypointNav, landing_rate
 
 PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS}
-BRAKE_DECEL_M_S2 = 7.5  # ArduCopter/config.h BRAKE_MODE_DECEL_RATE 750 cm/s/s (mode_brake.cpp)
 FENCE_CHECK_S = 1.0 / ap_fence.FENCE_CHECK_HZ
 
 STABILIZE, AUTO, GUIDED, LOITER, RTL, LAND, BRAKE = (
@@ -170,6 +175,7 @@ class Autopilot:
         self._do_done: list[int] = []  # DO commands started, reached at the next update
         self._phase_before_item = ""
         self.fence = FenceGuard(self.tangent.to_en)  # AC_Fence + AP_Rally
+        self._brake_since = 0.0  # when the current mode began (BRAKE's deceleration ramp)
 
     # -- what the vehicle knows about itself
     @property
@@ -242,6 +248,7 @@ class Autopilot:
             self._pending += [_text(t) for t in refusal]
             return False
         self.mode = mode
+        self._brake_since = self.time
         self._phase = "hold"
         self.nav = None
         self._wait_until = None
@@ -411,6 +418,8 @@ class Autopilot:
         """GUIDED: fly to ``target`` (ENU metres) with AC_WPNav (ModeGuided::set_destination)."""
         if self.mode != GUIDED or not self.armed or self.landed:
             return False
+        if not self.fence.destination_ok(np.asarray(target, float), self.params):
+            return False  # ModeGuided::set_destination: outside the fence, refused
         self._takeoff_at = self._enter = None
         self._start_nav()
         self.nav.set_destination(np.asarray(target, float))
@@ -628,7 +637,13 @@ class Autopilot:
         if speed < 1e-3:
             self.velocity[:] = 0.0
             return False
-        accel = BRAKE_DECEL_M_S2 if self.mode == BRAKE else self.nav_params().wp_accel
+        if self.mode == BRAKE:  # as measured on SITL (ardupilot.navigation BRAKE_*)
+            ramp = min(1.0, (self.time - self._brake_since) / BRAKE_RAMP_S)
+            accel = min(BRAKE_DECEL_MAX_M_S2, speed / BRAKE_TIME_CONSTANT_S) * ramp
+            if speed < 0.02:
+                accel = speed / dt
+        else:
+            accel = self.nav_params().wp_accel
         cut = min(speed, accel * dt)
         new = self.velocity * (1.0 - cut / speed)
         self.position = self.position + (self.velocity + new) / 2 * dt

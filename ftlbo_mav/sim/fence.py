@@ -9,6 +9,9 @@ and switches to the FENCE_ACTION's mode (brake, RTL, land; landed: disarm). Rule
 numbers are :mod:`ftlbo_mav.ardupilot.fence`. Not emulated: the altitude fence's 20 m
 backup after a breach, manual recovery, exclusion polygons, inclusion circles, the
 FENCE_RADIUS circle (FENCE_TYPE bit 2), FENCE_ALT_MIN, and the pre-arm fence checks.
+:meth:`FenceGuard.destination_ok` is the check GUIDED makes of every target: ArduCopter
+refuses a destination outside the fence, so a copter sent *into* a tree's exclusion
+circle does not move at all; one sent past the tree breaches on the way and brakes.
 
 :meth:`FenceGuard.return_target` is AP_Rally::calc_best_rally_or_home_location (the nearer
 of home and the nearest rally point, RALLY_INCL_HOME 1, within RALLY_LIMIT_KM 0.3) and
@@ -60,6 +63,16 @@ class FenceGuard:
         new = now & ~self.breached
         self.breached = now
         return new
+
+    def destination_ok(self, target: np.ndarray, params: Mapping[str, float]) -> bool:
+        """AC_Fence::check_destination_within_fence, which ModeGuided::set_destination
+        asks before it accepts a target: not above FENCE_ALT_MAX, not outside the
+        inclusion polygon or inside an exclusion circle (fence enabled)."""
+        if not self.enabled(params):
+            return True
+        return ap.breaches(self.geometry, east_north=target[:2], alt_m=float(target[2]),
+                           fence_type=int(params.get("FENCE_TYPE", 7)),
+                           alt_max_m=float(params.get("FENCE_ALT_MAX", 100.0))) == 0
 
     def breach_distance(self, position: np.ndarray, params: Mapping[str, float]) -> float:
         """AC_Fence::get_breach_distance, for the give-up rule: how far above the
