@@ -76,7 +76,7 @@ class ProgressBoard:
     def __call__(self, e: ProgressEvent) -> None:
         if e.step.split()[-1] in ("upload", "read-back") and e.total:
             bar = "#" * int(20 * e.done / e.total)
-            text = f"{e.step:15s} [{bar:20s}] {e.done}/{e.total}"
+            text = f"{e.step:9s} [{bar:20s}] {e.done}/{e.total}"
         elif e.step in ("verified", "failed"):
             text = "verified" if e.step == "verified" else "FAILED"
         else:

@@ -212,6 +212,18 @@ class Autopilot:
         """The stored fence and rally points (WireItems, read-back form) changed."""
         self.fence.load(fence, rally)
 
+    def fence_status(self) -> tuple[bool, bool, bool]:
+        """SYS_STATUS's GEOFENCE bits: (present, enabled, failed) as AC_Fence::
+        sys_status_present (a fence type that needs nothing stored, or a stored
+        polygon), sys_status_enabled (FENCE_ENABLE and an action) and sys_status_failed
+        (breached)."""
+        kind = int(self.params["FENCE_TYPE"])
+        present = bool(kind & (ap_fence.TYPE_ALT_MAX | ap_fence.TYPE_CIRCLE)) or bool(
+            kind & ap_fence.TYPE_POLYGON and not self.fence.geometry.empty)
+        enabled = present and self.fence.enabled(self.params) and int(
+            self.params["FENCE_ACTION"]) != ap_fence.ACTION_REPORT_ONLY
+        return present, enabled, present and self.fence.breached != 0
+
     def set_mission(self, items: list[MissionItem]) -> None:
         self.mission = list(items)
         self.current = min(self.current, max(len(self.mission) - 1, 0))

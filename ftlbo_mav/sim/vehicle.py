@@ -408,7 +408,13 @@ class Vehicle:
                        | R.MAV_SYS_STATUS_SENSOR_GPS | R.MAV_SYS_STATUS_PREARM_CHECK)
             # passing pre-arm checks is the PREARM_CHECK health bit (send_sys_status)
             health = sensors if self.ready(now) else sensors & ~R.MAV_SYS_STATUS_PREARM_CHECK
-            return R.MAVLink_sys_status_message(sensors, sensors, health, 0, 12600, -1, 100,
+            present, enabled = sensors, sensors
+            fence = self.autopilot.fence_status()  # AC_Fence::sys_status_present/_enabled/_failed
+            if fence[0]:
+                present |= R.MAV_SYS_STATUS_GEOFENCE
+                enabled |= R.MAV_SYS_STATUS_GEOFENCE if fence[1] else 0
+                health |= 0 if fence[2] else R.MAV_SYS_STATUS_GEOFENCE
+            return R.MAVLink_sys_status_message(present, enabled, health, 0, 12600, -1, 100,
                                                 0, 0, 0, 0, 0, 0)
         if msgid == R.MAVLINK_MSG_ID_GPS_RAW_INT:
             lat, lon = (round(s.lat_deg * 1e7), round(s.lon_deg * 1e7)) if fix else (0, 0)
