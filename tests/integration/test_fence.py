@@ -225,8 +225,24 @@ def test_the_planned_flight_never_triggers_the_fence(fenced):
         assert code == 0, out
     assert "all vehicles finished their missions" in out
     with open(fenced / "flight" / "flight.csv", newline="") as f:
-        modes = {row["mode"] for row in csv.DictReader(f) if row["armed"] in ("1", "True")}
+        rows = [row for row in csv.DictReader(f) if row["armed"] in ("1", "True")]
+    modes = {row["mode"] for row in rows}
     assert modes <= {"GUIDED", "AUTO"}, modes  # never BRAKE (FENCE_ACTION), RTL or LAND
+    # how far the flown tracks stayed from the fence (outside the circles, inside the
+    # polygon, below FENCE_ALT_MAX), all three UAVs, every recorded position
+    fence = read_fence_set(fenced, "uav1")
+    en = SCENARIO.frame.to_enu(lat_deg=[float(r["lat_deg"]) for r in rows],
+                               lon_deg=[float(r["lon_deg"]) for r in rows]).reshape(-1, 3)
+    alt = np.array([float(r["alt_m"]) for r in rows])
+    circles = [(_en(c.lat_deg, c.lon_deg), c.param1) for c in fence.fence[4:]]
+    outside = min(float(np.min(np.linalg.norm(en[:, :2] - c, axis=1))) - r for c, r in circles)
+    ring = np.array([_en(v.lat_deg, v.lon_deg) for v in fence.fence[:4]])
+    inside = float(np.min(np.minimum(en[:, :2] - ring.min(axis=0), ring.max(axis=0) - en[:, :2])))
+    headroom = fence.params["FENCE_ALT_MAX"] - float(alt.max())
+    print(f"\n[{BACKEND}] planned flight: closest {outside:.2f} m outside an exclusion circle, "
+          f"{inside:.2f} m inside the polygon, {headroom:.2f} m below FENCE_ALT_MAX "
+          f"(FENCE_MARGIN {fence.params['FENCE_MARGIN']:g} m)")
+    assert outside >= fence.params["FENCE_MARGIN"] and inside > 0 and headroom > 0
 
 
 def test_fly_refuses_before_arming_a_vehicle_without_its_fence(fenced):
