@@ -41,8 +41,9 @@ from dataclasses import dataclass
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from .modes import CopterMode
 from .navigation import INT8, REAL32, ParamDefault
-from .storage import WireItem, c_int, f32, u8
+from .storage import WireItem, c_int, check, f32, stored, u8
 
 MISSION_TYPE_MISSION = R.MAV_MISSION_TYPE_MISSION
 MISSION_TYPE_FENCE = R.MAV_MISSION_TYPE_FENCE
@@ -185,8 +186,6 @@ def stored_rally_item(item: WireItem) -> WireItem:
 
 def check_item(item: WireItem, mission_type: int) -> int:
     """Acceptance of one item of any mission type (the mission's is storage.check)."""
-    from .storage import check
-
     if mission_type == MISSION_TYPE_FENCE:
         return check_fence_item(item)
     if mission_type == MISSION_TYPE_RALLY:
@@ -196,8 +195,6 @@ def check_item(item: WireItem, mission_type: int) -> int:
 
 def stored_item(item: WireItem, mission_type: int) -> WireItem:
     """What a read-back of ``mission_type`` returns for ``item``."""
-    from .storage import stored
-
     if mission_type == MISSION_TYPE_FENCE:
         return stored_fence_item(item)
     if mission_type == MISSION_TYPE_RALLY:
@@ -228,7 +225,8 @@ FENCE_CHECK_HZ = 25  # ArduCopter/Copter.cpp SCHED_TASK(fence_check, 25, ...)
 FENCE_BREACHED = (R.MAV_SEVERITY_NOTICE, "Fence Breached")  # Copter::fence_check
 
 # Copter modes (ArduCopter/mode.h) the breach actions switch to, in the order tried
-_RTL, _LAND, _BRAKE, _SMART_RTL = 6, 9, 17, 21
+_RTL, _LAND, _BRAKE, _SMART_RTL = (int(m) for m in (CopterMode.RTL, CopterMode.LAND,
+                                                     CopterMode.BRAKE, CopterMode.SMART_RTL))
 _ACTION_MODES = {
     ACTION_RTL_AND_LAND: (_RTL, _LAND), ACTION_ALWAYS_LAND: (_LAND,),
     ACTION_SMART_RTL: (_SMART_RTL, _RTL, _LAND), ACTION_BRAKE: (_BRAKE, _LAND),
