@@ -23,11 +23,12 @@ The fence ArduCopter enforces on board (its storage and breach rules:
 
 And one **rally point** per UAV (where RTL goes when it is nearer than home): the point
 nearest the UAV's goal that is clear of every obstacle (``radius + clearance``), inside
-the area by ``corner_cut_m + margin_m``, and at least ``rally_separation_m`` from every
-other UAV's return lines (the straight lines from each point of its path to its own
-nearest landing place, home or rally point, as RTL flies them) while its own return
-lines keep that distance from the other UAVs' rally points and homes. Its altitude is
-the goal's, in whole metres (AP_Rally keeps an int16 of metres).
+the area by ``corner_cut_m + margin_m``, at least ``rally_separation_m`` from the other
+UAVs' homes and rally points and from their return lines to their rally points (the
+straight lines RTL flies from each point of their paths that is nearer their rally point
+than their home), while its own such lines keep that distance from the other UAVs'
+homes and rally points (:func:`rally_points_enu`). Its altitude is the goal's, in whole
+metres (AP_Rally keeps an int16 of metres).
 """
 
 from __future__ import annotations
