@@ -117,6 +117,37 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
     return summary
 
 
+class UploadFailed(Exception):
+    pass
+
+
+def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None,
+              speedup: float = 1.0, seed: int = 0, vary: bool = False,
+              params=()) -> dict:
+    """One flight of ``plan_dir`` on freshly started vehicles (SITL when ``binary``, else
+    the emulator, ``vary`` and ``seed`` giving each copter its differences) flown the
+    ``strategy`` way; its summary."""
+    planned = load_planned_flight(plan_dir)
+    if binary:
+        from sitl import SitlSwarm
+
+        swarm = SitlSwarm(binary=binary, homes=homes, speedup=speedup)
+    else:
+        from ftlbo_mav.sim.server import Simulator
+
+        swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary)
+    with swarm as vehicles:
+        assignments = [Assignment(n, i + 1, m) for i, (n, m) in
+                       enumerate(zip(planned.names, planned.missions))]
+        results = upload_swarm(assignments, vehicles.urls, timing=Timing())
+        failed = [r for r in results if not r.verified]
+        if failed:
+            raise UploadFailed("; ".join(f"upload failed: {r.name} -> sysid {r.sysid}: "
+                                         f"{r.message}" for r in failed))
+        set_params(vehicles.urls, params)
+        return fly_once(plan_dir, vehicles.urls, strategy)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
@@ -150,30 +181,15 @@ def main() -> int:
             shutil.copytree(shipped, plan_dir)
         else:
             write_plan(plan(scenario), plan_dir)
-        planned = load_planned_flight(plan_dir)
         for run in range(args.runs):
             for strategy in rows:
-                if binary:
-                    from sitl import SitlSwarm
-
-                    swarm = SitlSwarm(binary=binary, homes=homes, speedup=args.speedup)
-                else:
-                    from ftlbo_mav.sim.server import Simulator
-
-                    swarm = Simulator(homes=homes, base_port=0, time_scale=args.speedup,
-                                      seed=run, vary=args.vary)
-                with swarm as vehicles:
-                    assignments = [Assignment(n, i + 1, m) for i, (n, m) in
-                                   enumerate(zip(planned.names, planned.missions))]
-                    results = upload_swarm(assignments, vehicles.urls, timing=Timing())
-                    failed = [r for r in results if not r.verified]
-                    if failed:  # flying a vehicle without its mission measures nothing
-                        for r in failed:
-                            print(f"upload failed: {r.name} -> sysid {r.sysid}: {r.message}",
-                                  file=sys.stderr)
-                        return 1
-                    set_params(vehicles.urls, args.params)
-                    summary = fly_once(plan_dir, vehicles.urls, strategy)
+                try:
+                    summary = fly_fresh(plan_dir, homes, strategy, binary=binary,
+                                        speedup=args.speedup, seed=run, vary=args.vary,
+                                        params=args.params)
+                except UploadFailed as exc:  # flying without its mission measures nothing
+                    print(exc, file=sys.stderr)
+                    return 1
                 rows[strategy].append(summary)
                 print(f"run {run} {strategy:>15}: formation error "
                       f"{summary['formation_error_rms_legs_m']:.3f} m RMS, "

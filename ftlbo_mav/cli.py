@@ -123,10 +123,12 @@ STUDENTS = click.IntRange(MIN_STUDENTS, MAX_STUDENTS)
                    "(QGroundControl), comma-separated, or all.")
 @click.option("--plot", "make_plots", is_flag=True,
               help="Also draw the plan: PNG figures in the output folder.")
+@click.option("--no-fence", "no_fence", is_flag=True,
+              help="Write no geofence and rally point (uavN.fence, uavN.rally, fence.parm).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
 @user_errors
 def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, allow_infeasible,
-         formats, make_plots, quiet):
+         formats, make_plots, no_fence, quiet):
     """Plan SCENARIO (TOML) and write one Mission Planner mission per UAV."""
     scn = load_scenario(scenario)
     if scn.dropped_obstacles:
@@ -137,7 +139,8 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
     with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json") as out:
         result = _plan_with_progress(scn, seed=seed, iterations=iterations, students=students,
                                      waypoints=waypoints, algorithm=algorithm, quiet=quiet)
-        files = plan_files(result, allow_infeasible=allow_infeasible, formats=formats)
+        files = plan_files(result, allow_infeasible=allow_infeasible, formats=formats,
+                           fence=not no_fence)
         if make_plots:
             from .plots import figure_files  # matplotlib only when asked: a faster start
 

@@ -30,7 +30,8 @@ def test_formats_all_and_plot_write_everything_next_to_the_waypoints(small_path,
     result = _plan(small_path, out, "--formats", "all", "--plot")
     assert result.exit_code == 0, result.output
     names = {p.name for p in out.iterdir()}
-    assert names == ({f"{u}.waypoints" for u in UAVS} | {f"{u}.plan" for u in UAVS}
+    fence = {f"{u}.{ext}" for u in UAVS for ext in ("fence", "rally")} | {"fence.parm"}
+    assert names == ({f"{u}.waypoints" for u in UAVS} | {f"{u}.plan" for u in UAVS} | fence
                      | {"plan.json", "plan.geojson", "plan.kml"} | set(FIGURES))
     for name in names:
         assert f"wrote {out / name}" in result.stdout
@@ -54,7 +55,11 @@ def test_formats_subset_and_default(small_path, tmp_path):
     assert not list(out.glob("*.plan")) and not list(out.glob("*.png"))
     plain = tmp_path / "plain"
     assert _plan(small_path, plain).exit_code == 0
-    assert sorted(p.suffix for p in plain.iterdir()) == [".json"] + [".waypoints"] * 3
+    assert sorted(p.suffix for p in plain.iterdir()) == sorted(
+        [".json", ".parm"] + [".waypoints", ".fence", ".rally"] * 3)
+    bare = tmp_path / "bare"
+    assert _plan(small_path, bare, "--no-fence").exit_code == 0
+    assert sorted(p.suffix for p in bare.iterdir()) == [".json"] + [".waypoints"] * 3
 
 
 def test_unknown_format_is_a_usage_error(small_path, tmp_path):

@@ -39,6 +39,7 @@ from ..link.endpoints import (
     open_links,
     readiness_problems,
 )
+from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
 from ..link.transfer import Timing
 from ..mission.items import (
@@ -140,19 +141,25 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission."""
 
     def mission_problem(pair) -> str | None:
-        vehicle, expected = pair
+        vehicle, expected, fence = pair
         try:
             with vehicle.link.channel(vehicle.sysid) as channel:
                 onboard = download_mission(channel, timing=timing)
+                fence_diff = ([] if fence is None
+                              else fence_differences(channel, fence, timing=timing))
         except FtlboError as exc:
-            return f"cannot read its mission back: {exc}"
+            return f"cannot read its mission or fence back: {exc}"
         diff = mission_differences(expected, onboard)
         if diff:
             return (f"holds a different mission than {vehicle.name}.waypoints "
                     f"({diff[0]}); run `ftlbo-mav upload` first")
+        if fence_diff:  # the fence, rally points and FENCE_* of uavN.fence/.rally, fence.parm
+            return (f"holds a different fence than {vehicle.name}.fence "
+                    f"({fence_diff[0]}); run `ftlbo-mav upload` first")
         return None
 
-    missions = _concurrently(mission_problem, list(zip(vehicles, planned.missions)))
+    fences = planned.fences or (None,) * len(planned.missions)
+    missions = _concurrently(mission_problem, list(zip(vehicles, planned.missions, fences)))
     deadline = time.monotonic() + ready_timeout_s
     while time.monotonic() < deadline and not all(is_ready(v.link, v.sysid) for v in vehicles):
         time.sleep(0.1)

@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
 from ..mission.export import check_plan_folder, read_plan_json
+from ..mission.fence_files import FenceSet, read_fence_set
 from ..mission.items import CMD_NAV_TAKEOFF, MissionItem
 from ..mission.waypoints import read_waypoints
 
@@ -26,7 +27,8 @@ class PlannedFlight:
 
     ``offsets``: ``(N, 3)`` metres ENU; ``paths``: ``(N, P, 3)`` each UAV's planned
     points (start .. goal) in ``frame``; ``centres`` ``(K, 2)`` and ``radii`` ``(K,)``
-    the obstacles (their own radii, without clearance).
+    the obstacles (their own radii, without clearance); ``fences``: each UAV's fence,
+    rally points and fence parameters (None: it has no ``uavN.fence``).
     """
 
     folder: Path
@@ -38,6 +40,7 @@ class PlannedFlight:
     centres: np.ndarray
     radii: np.ndarray
     clearance_m: float
+    fences: tuple[FenceSet | None, ...] = ()
 
     @property
     def count(self) -> int:
@@ -85,7 +88,8 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
             if not any(it.command == CMD_NAV_TAKEOFF for it in items):
                 raise PlanFolderError(f"{file}: no NAV_TAKEOFF item; `fly` takes off with it")
             missions.append(items)
+        fences = tuple(read_fence_set(folder, name) for name in names)
     except MissionFileError as exc:
         raise PlanFolderError(str(exc)) from None
     return PlannedFlight(folder, names, offsets, paths, tuple(missions), frame, centres, radii,
-                         clearance)
+                         clearance, fences)

@@ -12,11 +12,16 @@ from collections.abc import Sequence
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..ardupilot import fence as ap_fence
 from ..ardupilot import storage
 from ..ardupilot.storage import WireItem
 from ..mission.items import MissionItem
 
 MISSION_TYPE_MISSION = 0
+MISSION_TYPE_FENCE = 1
+MISSION_TYPE_RALLY = 2
+MISSION_TYPE_NAMES = {MISSION_TYPE_MISSION: "mission", MISSION_TYPE_FENCE: "fence",
+                      MISSION_TYPE_RALLY: "rally"}
 
 # Altitudes: ArduPilot truncates ``z * 100.0f`` (float32) to whole centimetres, so 0.53 m
 # is kept as 52 cm (0.53f * 100.0f = 52.999996); a read-back stored once more can lose
@@ -46,13 +51,14 @@ def from_wire(w: WireItem) -> MissionItem:
                        autocontinue=w.autocontinue)
 
 
-def encode_item(item: MissionItem, *, target_system: int, target_component: int):
+def encode_item(item: MissionItem, *, target_system: int, target_component: int,
+                mission_type: int = MISSION_TYPE_MISSION):
     """One item as a MISSION_ITEM_INT message (frames as in the file)."""
     w = to_wire(item)
     return mavlink2.MAVLink_mission_item_int_message(
         target_system, target_component, w.seq, w.frame, w.command, w.current,
         w.autocontinue, w.param1, w.param2, w.param3, w.param4, w.x, w.y, w.z,
-        MISSION_TYPE_MISSION,
+        mission_type,
     )
 
 
@@ -68,24 +74,26 @@ def decode_item(msg) -> MissionItem:
     )
 
 
-def kept(item: MissionItem) -> WireItem:
-    """What an ArduCopter keeps of ``item`` (:func:`ftlbo_mav.ardupilot.storage.stored`);
-    an item it would refuse stays as sent (the upload itself reports the refusal)."""
+def kept(item: MissionItem, mission_type: int = MISSION_TYPE_MISSION) -> WireItem:
+    """What an ArduCopter keeps of ``item`` (:func:`ftlbo_mav.ardupilot.storage.stored`;
+    fence and rally items: :func:`ftlbo_mav.ardupilot.fence.stored_item`); an item it
+    would refuse stays as sent (the upload itself reports the refusal)."""
     w = to_wire(item)
-    if storage.check(w) != mavlink2.MAV_MISSION_ACCEPTED:
+    if ap_fence.check_item(w, mission_type) != mavlink2.MAV_MISSION_ACCEPTED:
         return w
-    return storage.stored(w)
+    return ap_fence.stored_item(w, mission_type)
 
 
 def _same(a: float, b: float) -> bool:
     return (math.isnan(a) and math.isnan(b)) or a == b
 
 
-def item_differences(expected: MissionItem, actual: MissionItem) -> list[str]:
+def item_differences(expected: MissionItem, actual: MissionItem,
+                     mission_type: int = MISSION_TYPE_MISSION) -> list[str]:
     """What differs between two items once both are in the form an ArduCopter keeps
-    (:mod:`ftlbo_mav.ardupilot.storage`): a read-back from ArduPilot and one from a
-    vehicle that stores items as sent compare alike."""
-    want, got = kept(expected), kept(actual)
+    (:mod:`ftlbo_mav.ardupilot.storage`, :mod:`ftlbo_mav.ardupilot.fence`): a read-back
+    from ArduPilot and one from a vehicle that stores items as sent compare alike."""
+    want, got = kept(expected, mission_type), kept(actual, mission_type)
     out = []
     if got.command != want.command:
         return [f"command {got.command}, expected {want.command}"]
@@ -102,19 +110,21 @@ def item_differences(expected: MissionItem, actual: MissionItem) -> list[str]:
     return out
 
 
-def mission_differences(expected: Sequence[MissionItem],
-                        actual: Sequence[MissionItem]) -> list[str]:
+def mission_differences(expected: Sequence[MissionItem], actual: Sequence[MissionItem], *,
+                        mission_type: int = MISSION_TYPE_MISSION) -> list[str]:
     """Why ``actual`` (read back) is not ``expected``; empty when they match.
 
-    Item 0 is not compared: ArduPilot answers a read-back with its own home as item 0
-    (MissionItemProtocol_Waypoints::get_item reads slot 0 = AP::ahrs().get_home()).
-    A mission that came back shorter or longer never matches.
+    In a mission, item 0 is not compared: ArduPilot answers a read-back with its own
+    home as item 0 (MissionItemProtocol_Waypoints::get_item reads slot 0 =
+    AP::ahrs().get_home()); fence and rally items are all compared. A list that came
+    back shorter or longer never matches.
     """
     problems = []
     if len(actual) != len(expected):
         problems.append(f"read back {len(actual)} items, sent {len(expected)}")
-    for want, got in zip(expected[1:], actual[1:]):
-        diff = item_differences(want, got)
+    first = 1 if mission_type == MISSION_TYPE_MISSION else 0
+    for want, got in zip(expected[first:], actual[first:]):
+        diff = item_differences(want, got, mission_type)
         if diff:
             problems.append(f"item {want.seq}: " + "; ".join(diff))
     return problems

@@ -17,6 +17,7 @@ from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, SYSIDS, FiniteFloat
 from ..errors import MissionFileError
 from ..mission.export import check_plan_folder, read_plan_json
+from ..mission.fence_files import read_fence_set, write_fence_set
 from ..mission.waypoints import read_waypoints, write_waypoints
 from .codec import storage_warnings
 from .endpoints import (
@@ -28,6 +29,7 @@ from .endpoints import (
     open_links,
     parse_sysids,
 )
+from .geofence import download_fence_set
 from .mission_protocol import Timing, download_mission
 from .signing import load_key
 from .swarm import Assignment, ProgressEvent, upload_swarm
@@ -80,7 +82,7 @@ class ProgressBoard:
             self.stream.write("\n".join(self.lines[s] for s in self.order) + "\n")
 
     def __call__(self, e: ProgressEvent) -> None:
-        if e.step in ("upload", "read-back") and e.total:
+        if e.step.split()[-1] in ("upload", "read-back") and e.total:
             bar = "#" * int(20 * e.done / e.total)
             text = f"{e.step:9s} [{bar:20s}] {e.done}/{e.total}"
         elif e.step in ("verified", "failed"):
@@ -133,13 +135,17 @@ def timing_options(func):
               help="Mission items the vehicles hold (ArduCopter SITL: 650): longer missions "
                    "are refused before anything is sent. Without it the vehicle's own "
                    "NO_SPACE answer refuses them, also before any item is sent.")
+@click.option("--no-fence", "no_fence", is_flag=True,
+              help="Send only the missions: no fence, rally points or fence parameters.")
 @timing_options
 @user_errors
-def upload(mission_dir, sysid_text, connect, capacity, timeout, retries, ready_timeout,
-           discover_timeout, signing_key):
+def upload(mission_dir, sysid_text, connect, capacity, no_fence, timeout, retries,
+           ready_timeout, discover_timeout, signing_key):
     """Upload MISSION_DIR/uavN.waypoints to the vehicles, read each back and verify it.
 
-    Exits 0 only when every vehicle's mission read back equal to its file.
+    With uavN.fence (and uavN.rally, fence.parm) beside it, each vehicle also gets its
+    fence, rally points and fence parameters, each read back and verified. Exits 0 only
+    when every vehicle holds exactly what its files say.
     """
     sysids = parse_sysids(sysid_text)
     files = mission_files(mission_dir)
@@ -148,6 +154,7 @@ def upload(mission_dir, sysid_text, connect, capacity, timeout, retries, ready_t
                        f"--sysid {sysid_text} names {len(sysids)} vehicles")
     try:  # every file is read before any vehicle is touched
         missions = [tuple(read_waypoints(f)) for f in files]
+        fences = [None if no_fence else read_fence_set(mission_dir, f.stem) for f in files]
     except MissionFileError as exc:
         raise BadInput(f"{exc}; no vehicle was contacted") from None
     if capacity is not None:
@@ -157,7 +164,11 @@ def upload(mission_dir, sysid_text, connect, capacity, timeout, retries, ready_t
                                f"{capacity}; no vehicle was contacted")
     key = load_key(signing_key) if signing_key else None
     urls = _urls(connect) or default_urls_for(sysids)
-    assignments = [Assignment(f.stem, s, m) for f, s, m in zip(files, sysids, missions)]
+    assignments = [Assignment(f.stem, s, m, fence)
+                   for f, s, m, fence in zip(files, sysids, missions, fences)]
+    if not no_fence and all(fence is None for fence in fences):
+        click.echo(f"note: {mission_dir} has no uavN.fence files: missions only (plan "
+                   "writes them; --no-fence says so on purpose)", err=True)
     for a in assignments:  # what ArduCopter will not keep, said before anything is sent
         for line in storage_warnings(a.items):
             click.echo(f"note: {a.name}: {line} (ArduCopter keeps only this; the "
@@ -182,11 +193,14 @@ def upload(mission_dir, sysid_text, connect, capacity, timeout, retries, ready_t
               help="pymavlink connection string (default: tcp:127.0.0.1:5760 + 10*(sysid-1)).")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="The .waypoints file to write.")
+@click.option("--no-fence", "no_fence", is_flag=True,
+              help="Only the mission: no .fence, .rally and .parm beside it.")
 @timing_options
 @user_errors
-def download(sysid, connect, output, timeout, retries, ready_timeout, discover_timeout,
-             signing_key):
-    """Save the mission a vehicle holds as a Mission Planner .waypoints file."""
+def download(sysid, connect, output, no_fence, timeout, retries, ready_timeout,
+             discover_timeout, signing_key):
+    """Save the mission a vehicle holds as a Mission Planner .waypoints file, and its
+    fence, rally points and fence parameters beside it (.fence, .rally, .parm)."""
     key = load_key(signing_key) if signing_key else None
     url = connect or default_urls_for([sysid])[0]
     links = open_links([url], signing_key=key, connect_timeout_s=discover_timeout)
@@ -194,10 +208,17 @@ def download(sysid, connect, output, timeout, retries, ready_timeout, discover_t
         found, missing = discover(links, [sysid], timeout_s=discover_timeout)
         if missing:
             raise LinkError(describe_missing(sysid, links, discover_timeout))
+        timing = _timing(timeout, retries, ready_timeout)
         with found[sysid].channel(sysid) as channel:
-            items = download_mission(channel, timing=_timing(timeout, retries, ready_timeout))
+            items = download_mission(channel, timing=timing)
+            fence_set = None if no_fence else download_fence_set(channel, timing=timing)
     finally:
         for link in links:
             link.close()
     write_waypoints(output, items)
     click.echo(f"wrote {output} ({len(items)} items; item 0 is the vehicle's home)")
+    if fence_set is not None:
+        for path in write_fence_set(output, fence_set):
+            click.echo(f"wrote {path}")
+        click.echo(f"fence: {fence_set.describe()}; "
+                   + ", ".join(f"{k} {v:g}" for k, v in fence_set.params.items()))

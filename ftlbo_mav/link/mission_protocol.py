@@ -85,7 +85,7 @@ class Upload(_Transfer):
         self.count_sends += 1
         self.deadline = now + self._resend_s()
         return [R.MAVLink_mission_count_message(self.sysid, self.compid, self.n,
-                                                MISSION_TYPE_MISSION)]
+                                                self.mission_type)]
 
     def _item(self, seq: int, now: float) -> list:
         self.sent_at.setdefault(seq, now)
@@ -93,7 +93,7 @@ class Upload(_Transfer):
         if seq == self.n - 1:
             self.last_sent = True
         return [encode_item(self.items[seq], target_system=self.sysid,
-                            target_component=self.compid)]
+                            target_component=self.compid, mission_type=self.mission_type)]
 
     def start(self, now: float) -> list:
         self.started_at = self.last_progress = now
@@ -214,14 +214,14 @@ class Download(_Transfer):
         self.deadline = now + self._resend_s()
         if self.count is None:
             return [R.MAVLink_mission_request_list_message(self.sysid, self.compid,
-                                                           MISSION_TYPE_MISSION)]
+                                                           self.mission_type)]
         return [R.MAVLink_mission_request_int_message(self.sysid, self.compid, len(self.items),
-                                                      MISSION_TYPE_MISSION)]
+                                                      self.mission_type)]
 
     def _finish(self) -> list:
         self.finished = True
         return [R.MAVLink_mission_ack_message(self.sysid, self.compid, R.MAV_MISSION_ACCEPTED,
-                                              MISSION_TYPE_MISSION)]
+                                              self.mission_type)]
 
     def _progressed(self, now: float) -> list:
         if not self.resent:  # Karn's rule
@@ -282,7 +282,7 @@ class Clear(_Transfer):
 
     def _send(self, now: float) -> list:
         self.deadline = now + self.timing.timeout_s
-        return [R.MAVLink_mission_clear_all_message(self.sysid, self.compid, MISSION_TYPE_MISSION)]
+        return [R.MAVLink_mission_clear_all_message(self.sysid, self.compid, self.mission_type)]
 
     def start(self, now: float) -> list:
         self.last_progress = now
@@ -304,29 +304,38 @@ class Clear(_Transfer):
         return self._send(now)
 
 
-def _kw(channel, timing: Timing | None, progress: Progress | None, compid: int) -> dict:
+def _kw(channel, timing: Timing | None, progress: Progress | None, compid: int,
+        mission_type: int = MISSION_TYPE_MISSION) -> dict:
     return {"sysid": channel.sysid, "compid": compid,
             "own": (channel.own_sysid, channel.own_compid), "timing": timing or Timing(),
-            "progress": progress, "srtt": getattr(channel, "srtt", None)}
+            "progress": progress, "srtt": getattr(channel, "srtt", None),
+            "mission_type": mission_type}
 
 
 def upload_mission(channel, items: Sequence[MissionItem], *, timing: Timing | None = None,
-                   progress: Progress | None = None, compid: int = 1) -> bool:
+                   progress: Progress | None = None, compid: int = 1,
+                   mission_type: int = MISSION_TYPE_MISSION) -> bool:
     """Upload ``items`` to the vehicle on ``channel``; True when the vehicle ACKed ACCEPTED.
 
-    False means the upload ended without that ACK (it was lost): verify by read-back.
+    ``mission_type``: MAV_MISSION_TYPE_MISSION (0), _FENCE (1) or _RALLY (2). False means
+    the upload ended without that ACK (it was lost): verify by read-back.
     Raises :class:`MissionTransferError` when the vehicle refused or stopped answering.
     """
-    machine = run_transfer(Upload(items, **_kw(channel, timing, progress, compid)), channel)
+    machine = run_transfer(Upload(items, **_kw(channel, timing, progress, compid, mission_type)),
+                           channel)
     return machine.acknowledged
 
 
 def download_mission(channel, *, timing: Timing | None = None, progress: Progress | None = None,
-                     compid: int = 1) -> list[MissionItem]:
-    """Read the vehicle's mission back (item 0 is what the vehicle says is home)."""
-    return run_transfer(Download(**_kw(channel, timing, progress, compid)), channel).items
+                     compid: int = 1, mission_type: int = MISSION_TYPE_MISSION
+                     ) -> list[MissionItem]:
+    """Read the vehicle's mission (item 0 is what the vehicle says is home), fence or
+    rally points back."""
+    machine = Download(**_kw(channel, timing, progress, compid, mission_type))
+    return run_transfer(machine, channel).items
 
 
-def clear_mission(channel, *, timing: Timing | None = None, compid: int = 1) -> None:
+def clear_mission(channel, *, timing: Timing | None = None, compid: int = 1,
+                  mission_type: int = MISSION_TYPE_MISSION) -> None:
     """MISSION_CLEAR_ALL, acknowledged. Confirm with :func:`download_mission`."""
-    run_transfer(Clear(**_kw(channel, timing, None, compid)), channel)
+    run_transfer(Clear(**_kw(channel, timing, None, compid, mission_type)), channel)

@@ -15,9 +15,11 @@ from dataclasses import dataclass, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ..mission.fence_files import FenceSet
 from ..mission.items import MissionItem
 from .codec import mission_differences
 from .endpoints import Heartbeat, describe_missing, discover, open_links
+from .geofence import upload_fence_set
 from .mission_protocol import (
     MissionTransferError,
     Timing,
@@ -30,11 +32,13 @@ from .mission_protocol import (
 
 @dataclass(frozen=True)
 class Assignment:
-    """Which mission goes to which vehicle: ``uav1`` -> system id 1."""
+    """Which mission goes to which vehicle: ``uav1`` -> system id 1; ``fence``: its
+    fence, rally points and fence parameters, sent after the mission (None: none)."""
 
     name: str
     sysid: int
     items: tuple[MissionItem, ...]
+    fence: FenceSet | None = None
 
 
 @dataclass(frozen=True)
@@ -175,9 +179,22 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                 emit(ProgressEvent(a.name, a.sysid, step, done, total))
 
             link = found[a.sysid]
+            own_timing = timing_for(link.heartbeats[a.sysid], timing)
             with link.channel(a.sysid) as channel:
                 ok, msg = upload_and_verify(channel, a.items, progress=progress,
-                                            timing=timing_for(link.heartbeats[a.sysid], timing))
+                                            timing=own_timing)
+                if ok and a.fence is not None:
+                    try:
+                        fence_ok, fence_msg = upload_fence_set(channel, a.fence,
+                                                               timing=own_timing,
+                                                               progress=progress)
+                    except OSError as exc:  # the link broke after the mission verified
+                        fence_ok, fence_msg = False, (
+                            f"the link failed ({exc.strerror or exc}) during the fence: check "
+                            f"it with `ftlbo-mav download --sysid {a.sysid}` before flying")
+                    ok = fence_ok
+                    msg = (f"{msg[:-1]}; {fence_msg})" if fence_ok
+                           else f"mission {msg}, but {fence_msg}")
             if not ok and link.closed_by_peer and "closed by the other end" not in msg:
                 msg += f" ({link.url} was closed by the other end)"
             emit(ProgressEvent(a.name, a.sysid, "verified" if ok else "failed",

@@ -106,8 +106,10 @@ class _Transfer:
     step = "transfer"
 
     def __init__(self, *, sysid: int, compid: int, own: tuple[int, int], timing: Timing,
-                 progress: Progress | None, srtt: float | None = None):
+                 progress: Progress | None, srtt: float | None = None,
+                 mission_type: int = MISSION_TYPE_MISSION):
         self.sysid, self.compid = sysid, compid
+        self.mission_type = mission_type  # MAV_MISSION_TYPE: mission, fence or rally
         self.own_sysid, self.own_compid = own
         self.timing = timing
         self.progress = progress or _quiet
@@ -155,7 +157,8 @@ class _Transfer:
                           "key)?")
 
     def _ours(self, msg) -> bool:
-        return getattr(msg, "mission_type", MISSION_TYPE_MISSION) == MISSION_TYPE_MISSION
+        """A message about this transfer's mission type (STATUSTEXT has none: ours)."""
+        return getattr(msg, "mission_type", self.mission_type) == self.mission_type
 
     def start(self, now: float) -> list:
         raise NotImplementedError

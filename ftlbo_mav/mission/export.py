@@ -21,17 +21,20 @@ from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
 from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
+from .fence import UavFence, plan_fences
 from .files import OutputFolder, digest, read_mission_text
 from .geodetic import GeodeticPlan, geodetic_view
 from .gis import render_geojson, render_kml
 from .items import UavMission, build_mission  # UavMission re-exported: it lived here
+from .params_file import FENCE_PARAMS_FILE, render_params
 from .qgc_plan import render_plan
 from .waypoints import render_waypoints
 
 # Formats written on request next to the .waypoints files (``plan --formats``).
 FORMATS = ("geojson", "kml", "plan")
 
-PLAN_OUTPUTS = (r"uav\d+\.waypoints", r"uav\d+\.plan", r"plan\.json", r"plan\.geojson",
+PLAN_OUTPUTS = (r"uav\d+\.waypoints", r"uav\d+\.plan", r"uav\d+\.fence", r"uav\d+\.rally",
+                r"fence\.parm", r"plan\.json", r"plan\.geojson",
                 r"plan\.kml", r"plan-3d\.png", r"plan-ground\.png", r"plan-vertical\.png",
                 r"convergence\.png")
 """What a plan folder holds of one plan (:func:`write_plan`, ``plan --plot``): a re-plan
@@ -96,7 +99,7 @@ def _leg_document(leg: Leg, first: int) -> dict:
 
 def plan_document(
     plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None,
-    digests: dict[str, str] | None = None,
+    digests: dict[str, str] | None = None, fences: list[UavFence] | None = None,
 ) -> dict:
     """The ``plan.json`` content. ``written``: whether the mission files were written;
     ``digests``: their SHA-256 by UAV name (:func:`~.files.digest` of the text written).
@@ -153,14 +156,33 @@ def plan_document(
                 "waypoints": _points(path),
                 "mission_file": f"{m.name}.waypoints" if written else None,
                 "mission_sha256": (digests or {}).get(m.name) if written else None,
+                **_fence_document(m.name, fences, n, written),
             }
-            for m, path in zip(missions, view.uav_paths)
+            for n, (m, path) in enumerate(zip(missions, view.uav_paths))
         ],
+    } | ({} if not fences else {"fence": {
+        "params": dict(fences[0].params),
+        "params_file": FENCE_PARAMS_FILE if written else None,
+        "exclusion_radii_m": list(fences[0].exclusion_radii_m),
+    }})
+
+
+def _fence_document(name: str, fences: list[UavFence] | None, n: int, written: bool) -> dict:
+    if not fences:
+        return {}
+    f = fences[n]
+    return {
+        "fence_file": f"{name}.fence" if written else None,
+        "rally_file": f"{name}.rally" if written and f.rally else None,
+        "rally": [{"lat": round(r.lat_deg, 8), "lon": round(r.lon_deg, 8), "alt": r.alt_m}
+                  for r in f.rally],
+        "fence_notes": list(f.notes),
     }
 
 
 def plan_files(
-    plan: Plan, *, allow_infeasible: bool = False, formats: tuple[str, ...] = ()
+    plan: Plan, *, allow_infeasible: bool = False, formats: tuple[str, ...] = (),
+    fence: bool = True,
 ) -> dict[str, str]:
     """Every output file of ``plan`` by name, ``plan.json`` last (pure; see :func:`write_plan`)."""
     unknown = sorted(set(formats) - set(FORMATS))
@@ -169,20 +191,29 @@ def plan_files(
     view = geodetic_view(plan)  # the one conversion to degrees every writer takes
     missions = plan_missions(plan, geodetic=view)
     write_missions = plan.feasible or allow_infeasible
+    fences = plan_fences(plan) if fence else []
     files: dict[str, str] = {}
     if write_missions:
-        for m in missions:
+        for n, m in enumerate(missions):
+            uav_fence = fences[n] if fences else None
             files[f"{m.name}.waypoints"] = render_waypoints(m.items)
+            if uav_fence is not None:
+                files[f"{m.name}.fence"] = render_waypoints(uav_fence.fence)
+                if uav_fence.rally:
+                    files[f"{m.name}.rally"] = render_waypoints(uav_fence.rally)
             if "plan" in formats:
                 files[f"{m.name}.plan"] = render_plan(
-                    m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s)
+                    m.items, hover_speed_m_s=plan.scenario.mission.speed_m_s, fence=uav_fence)
+        if fences:
+            files[FENCE_PARAMS_FILE] = render_params(fences[0].params)
     if "geojson" in formats:
-        files["plan.geojson"] = render_geojson(plan, missions, geodetic=view)
+        files["plan.geojson"] = render_geojson(plan, missions, geodetic=view, fences=fences)
     if "kml" in formats:
-        files["plan.kml"] = render_kml(plan, missions, geodetic=view)
+        files["plan.kml"] = render_kml(plan, missions, geodetic=view, fences=fences)
     digests = {m.name: digest(files[f"{m.name}.waypoints"])
                for m in missions if write_missions}
-    doc = plan_document(plan, missions, written=write_missions, geodetic=view, digests=digests)
+    doc = plan_document(plan, missions, written=write_missions, geodetic=view, digests=digests,
+                        fences=fences)
     files["plan.json"] = json.dumps(doc, indent=2) + "\n"
     return files
 
@@ -193,6 +224,7 @@ def write_plan(
     *,
     allow_infeasible: bool = False,
     formats: tuple[str, ...] = (),
+    fence: bool = True,
 ) -> list[Path]:
     """Write ``plan.json`` and, when feasible (or allowed), ``uavN.waypoints`` per UAV.
 
@@ -200,11 +232,14 @@ def write_plan(
     QGroundControl ``uavN.plan`` next to each ``uavN.waypoints``. Returns the paths
     written. An infeasible plan gets its ``plan.json`` (with the violations), GeoJSON and
     KML, to be looked at, but no mission files (``.waypoints``, ``.plan``) unless
-    ``allow_infeasible``. All or nothing: the outputs of an earlier plan in ``out_dir``
+    ``allow_infeasible``. With ``fence`` (the default) each UAV also gets ``uavN.fence``
+    and ``uavN.rally`` (``QGC WPL 110``, :mod:`.fence`), the folder ``fence.parm`` (the
+    fence parameters), and the ``.plan`` its ``geoFence`` and ``rallyPoints``.
+    All or nothing: the outputs of an earlier plan in ``out_dir``
     (:data:`PLAN_OUTPUTS`) that this one does not write are removed; a failure raises
     :class:`~ftlbo_mav.errors.OutputError` with ``out_dir`` untouched.
     """
-    files = plan_files(plan, allow_infeasible=allow_infeasible, formats=formats)
+    files = plan_files(plan, allow_infeasible=allow_infeasible, formats=formats, fence=fence)
     with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json") as out:
         return out.write_all(files)
 

@@ -15,15 +15,25 @@ GeoJSON (input) are :mod:`ftlbo_mav.obstacles`.
 from __future__ import annotations
 
 import json
+import math
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from .geodetic import GeodeticPlan, geodetic_view
-from .items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
+import numpy as np
+
+from .geodetic import CIRCLE_VERTICES, GeodeticPlan, geodetic_view
+from .items import (
+    CMD_FENCE_CIRCLE_EXCLUSION,
+    CMD_FENCE_POLYGON_VERTEX_INCLUSION,
+    CMD_NAV_LAND,
+    CMD_NAV_LOITER_UNLIM,
+    CMD_NAV_WAYPOINT,
+)
 
 if TYPE_CHECKING:  # for annotations only
     from ..planning.planner import Plan
+    from .fence import UavFence
     from .items import UavMission
 
 ALTITUDE_REFERENCE = "metres above home (MAVLink GLOBAL_RELATIVE_ALT)"
@@ -61,8 +71,43 @@ def _feature(geometry: dict, **properties: Any) -> dict:
     return {"type": "Feature", "geometry": geometry, "properties": properties}
 
 
+def _circle_lonlat(lat: float, lon: float, radius_m: float) -> list[tuple[float, float]]:
+    """A closed counter-clockwise ring ``(lat, lon)`` of ``radius_m`` around a point, on a
+    local sphere tangent (metres to degrees at the centre; exact to millimetres here)."""
+    angle = np.linspace(0.0, 2.0 * np.pi, CIRCLE_VERTICES + 1)
+    m_lat = 111_132.954 - 559.822 * math.cos(2 * math.radians(lat))
+    m_lon = 111_412.84 * math.cos(math.radians(lat))
+    ring = [(lat + radius_m * math.sin(a) / m_lat, lon + radius_m * math.cos(a) / m_lon)
+            for a in angle]
+    ring[-1] = ring[0]
+    return ring
+
+
+def fence_shapes(fence: UavFence):
+    """The fence as drawable shapes: ``(kind, ring (lat, lon) closed, properties)`` for the
+    inclusion polygon(s) and exclusion circles, ``(kind, (lat, lon, alt), properties)``
+    for the rally point(s)."""
+    items = list(fence.fence)
+    i = 0
+    while i < len(items):
+        it = items[i]
+        if it.command == CMD_FENCE_POLYGON_VERTEX_INCLUSION:
+            n = int(it.param1)
+            ring = [(v.lat_deg, v.lon_deg) for v in items[i:i + n]]
+            yield "fence_inclusion", ring + ring[:1], {}
+            i += n
+            continue
+        if it.command == CMD_FENCE_CIRCLE_EXCLUSION:
+            yield ("fence_exclusion", _circle_lonlat(it.lat_deg, it.lon_deg, it.param1),
+                   {"radius_m": it.param1, "center": _position(it.lat_deg, it.lon_deg)})
+        i += 1
+    for r in fence.rally:
+        yield "rally_point", (r.lat_deg, r.lon_deg, r.alt_m), {}
+
+
 def geojson_document(
-    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None
+    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None,
+    fences: Sequence[UavFence] = (),
 ) -> dict:
     """The plan as an RFC 7946 FeatureCollection (a plain ``dict``, ready for ``json``).
 
@@ -125,13 +170,24 @@ def geojson_document(
                     altitude_reference=ALTITUDE_REFERENCE,
                 )
             )
+    for fence in fences:
+        for kind, shape, props in fence_shapes(fence):
+            if kind == "rally_point":
+                geometry = {"type": "Point", "coordinates": _position(*shape)}
+                props = {**props, "altitude_reference": ALTITUDE_REFERENCE}
+            else:
+                geometry = {"type": "Polygon",
+                            "coordinates": [[_position(lat, lon) for lat, lon in shape]]}
+            features.append(_feature(geometry, kind=kind, uav=fence.name, **props))
     return {"type": "FeatureCollection", "name": s.name or "ftlbo-mav plan", "features": features}
 
 
 def render_geojson(
-    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None
+    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None,
+    fences: Sequence[UavFence] = (),
 ) -> str:
-    return json.dumps(geojson_document(plan, missions, geodetic=geodetic), indent=1) + "\n"
+    doc = geojson_document(plan, missions, geodetic=geodetic, fences=fences)
+    return json.dumps(doc, indent=1) + "\n"
 
 
 def _kml_colour(hex_rgb: str, alpha: int = 0xFF) -> str:
@@ -193,7 +249,8 @@ def _kml_polygon(
 
 
 def render_kml(
-    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None
+    plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None,
+    fences: Sequence[UavFence] = (),
 ) -> str:
     """The plan as KML 2.2: area and obstacles, the centroid, then one folder per UAV.
 
@@ -240,5 +297,21 @@ def render_kml(
             point = _sub(pm, "Point")
             _sub(point, "altitudeMode", "relativeToGround")
             _sub(point, "coordinates", _kml_coords([(it.lat_deg, it.lon_deg, it.alt_m)]))
+    for fence in fences:
+        folder = _sub(doc, "Folder")
+        _sub(folder, "name", f"{fence.name} fence")
+        for kind, shape, props in fence_shapes(fence):
+            if kind == "rally_point":
+                pm = _sub(folder, "Placemark")
+                _sub(pm, "name", f"{fence.name} rally point")
+                _sub(pm, "styleUrl", f"#{fence.name}")
+                point = _sub(pm, "Point")
+                _sub(point, "altitudeMode", "relativeToGround")
+                _sub(point, "coordinates", _kml_coords([shape]))
+            else:
+                label = ("inclusion" if kind == "fence_inclusion"
+                         else f"exclusion r {props['radius_m']:g} m")
+                _kml_polygon(folder, f"{fence.name} fence {label}", "area",
+                             [(lat, lon, 0.0) for lat, lon in shape], height_m=None)
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

@@ -18,10 +18,13 @@ import json
 import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import MissionFileError
 from .files import read_mission_text, write_atomic
 from .items import (
+    CMD_FENCE_CIRCLE_EXCLUSION,
+    CMD_FENCE_POLYGON_VERTEX_INCLUSION,
     CMD_NAV_LAND,
     CMD_NAV_LOITER_UNLIM,
     CMD_NAV_TAKEOFF,
@@ -29,6 +32,9 @@ from .items import (
     FRAME_GLOBAL,
     MissionItem,
 )
+
+if TYPE_CHECKING:
+    from .fence import UavFence
 
 FIRMWARE_ARDUPILOT = 3  # MAV_AUTOPILOT_ARDUPILOTMEGA
 VEHICLE_QUADROTOR = 2  # MAV_TYPE_QUADROTOR
@@ -39,10 +45,40 @@ DEFAULT_HOVER_SPEED_M_S = 5.0
 _NAV_COMMANDS = {CMD_NAV_WAYPOINT, CMD_NAV_TAKEOFF, CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM}
 
 
+def geofence_document(fence: UavFence | None) -> dict:
+    """QGC's ``geoFence`` (version 2): ``polygons`` ``{inclusion, polygon [[lat, lon]..],
+    version 1}`` and ``circles`` ``{inclusion, circle {center [lat, lon], radius},
+    version 1}``, from the fence items (consecutive polygon vertices make one polygon)."""
+    polygons, circles = [], []
+    items = list(fence.fence) if fence is not None else []
+    i = 0
+    while i < len(items):
+        it = items[i]
+        if it.command == CMD_FENCE_POLYGON_VERTEX_INCLUSION:
+            n = int(it.param1)
+            polygons.append({"inclusion": True, "version": 1,
+                             "polygon": [[v.lat_deg, v.lon_deg] for v in items[i:i + n]]})
+            i += n
+            continue
+        if it.command == CMD_FENCE_CIRCLE_EXCLUSION:
+            circles.append({"inclusion": False, "version": 1,
+                            "circle": {"center": [it.lat_deg, it.lon_deg], "radius": it.param1}})
+        i += 1
+    return {"version": 2, "circles": circles, "polygons": polygons}
+
+
+def rally_document(fence: UavFence | None) -> dict:
+    """QGC's ``rallyPoints`` (version 2): ``points`` ``[lat, lon, alt]``, alt above home."""
+    points = [[r.lat_deg, r.lon_deg, r.alt_m] for r in (fence.rally if fence else ())]
+    return {"version": 2, "points": points}
+
+
 def plan_document(
-    items: Sequence[MissionItem], *, hover_speed_m_s: float | None = None
+    items: Sequence[MissionItem], *, hover_speed_m_s: float | None = None,
+    fence: UavFence | None = None,
 ) -> dict:
-    """Items (item 0 home, as in a ``.waypoints`` file) -> the ``.plan`` JSON object."""
+    """Items (item 0 home, as in a ``.waypoints`` file) -> the ``.plan`` JSON object;
+    ``fence``: the UAV's fence and rally point for ``geoFence`` and ``rallyPoints``."""
     if not items:
         raise ValueError("a mission needs at least its home item")
     home, rest = items[0], items[1:]
@@ -61,8 +97,8 @@ def plan_document(
             "plannedHomePosition": [home.lat_deg, home.lon_deg, home.alt_m],
             "items": [_simple_item(it) for it in rest],
         },
-        "geoFence": {"version": 2, "circles": [], "polygons": []},
-        "rallyPoints": {"version": 2, "points": []},
+        "geoFence": geofence_document(fence),
+        "rallyPoints": rally_document(fence),
     }
 
 
@@ -82,9 +118,10 @@ def _simple_item(it: MissionItem) -> dict:
     return item
 
 
-def render_plan(items: Sequence[MissionItem], *, hover_speed_m_s: float | None = None) -> str:
+def render_plan(items: Sequence[MissionItem], *, hover_speed_m_s: float | None = None,
+                fence: UavFence | None = None) -> str:
     """Items -> ``.plan`` text (JSON, trailing newline)."""
-    doc = plan_document(items, hover_speed_m_s=hover_speed_m_s)
+    doc = plan_document(items, hover_speed_m_s=hover_speed_m_s, fence=fence)
     return json.dumps(doc, indent=2) + "\n"
 
 

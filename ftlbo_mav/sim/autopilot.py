@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ..ardupilot import fence as ap_fence
 from ..ardupilot.commands import (
     ARMABLE_MODES,
     ARMING_MOTORS,
@@ -65,8 +66,14 @@ from ..ardupilot.commands import (
     set_mode_base_ok,
 )
 from ..ardupilot.modes import CopterMode, mode_name
-from ..ardupilot.navigation import DEFAULTS as PARAM_DEFAULTS
-from ..ardupilot.navigation import param_value
+from ..ardupilot.navigation import (
+    BRAKE_DECEL_MAX_M_S2,
+    BRAKE_RAMP_S,
+    BRAKE_TIME_CONSTANT_S,
+    REAL32,
+    param_value,
+)
+from ..ardupilot.navigation import DEFAULTS as NAV_DEFAULTS
 from ..mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_NAV_LAND,
@@ -76,7 +83,11 @@ from ..mission.items import (
     CMD_NAV_WAYPOINT,
     MissionItem,
 )
+from .fence import FenceGuard
 from .physics import FlightLimits, VerticalShaper, WaypointNav, landing_rate
+
+PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS}
+FENCE_CHECK_S = 1.0 / ap_fence.FENCE_CHECK_HZ
 
 STABILIZE, AUTO, GUIDED, LOITER, RTL, LAND, BRAKE = (
     CopterMode.STABILIZE, CopterMode.AUTO, CopterMode.GUIDED, CopterMode.LOITER, CopterMode.RTL,
@@ -165,6 +176,8 @@ class Autopilot:
         self._rtl_home = np.zeros(3)
         self._do_done: list[int] = []  # DO commands started, reached at the next update
         self._phase_before_item = ""
+        self.fence = FenceGuard(self.tangent.to_en)  # AC_Fence + AP_Rally
+        self._brake_since = 0.0  # when the current mode began (BRAKE's deceleration ramp)
 
     # -- what the vehicle knows about itself
     @property
@@ -197,6 +210,22 @@ class Autopilot:
         return R.MISSION_STATE_NOT_STARTED
 
     # -- commands
+    def set_fence(self, fence: list, rally: list) -> None:
+        """The stored fence and rally points (WireItems, read-back form) changed."""
+        self.fence.load(fence, rally)
+
+    def fence_status(self) -> tuple[bool, bool, bool]:
+        """SYS_STATUS's GEOFENCE bits: (present, enabled, failed) as AC_Fence::
+        sys_status_present (a fence type that needs nothing stored, or a stored
+        polygon), sys_status_enabled (FENCE_ENABLE and an action) and sys_status_failed
+        (breached)."""
+        kind = int(self.params["FENCE_TYPE"])
+        present = bool(kind & (ap_fence.TYPE_ALT_MAX | ap_fence.TYPE_CIRCLE)) or bool(
+            kind & ap_fence.TYPE_POLYGON and not self.fence.geometry.empty)
+        enabled = present and self.fence.enabled(self.params) and int(
+            self.params["FENCE_ACTION"]) != ap_fence.ACTION_REPORT_ONLY
+        return present, enabled, present and self.fence.breached != 0
+
     def set_mission(self, items: list[MissionItem]) -> None:
         self.mission = list(items)
         self.current = min(self.current, max(len(self.mission) - 1, 0))
@@ -235,6 +264,7 @@ class Autopilot:
             self._pending += [_text(t) for t in refusal]
             return False
         self.mode = mode
+        self._brake_since = self.time
         self._phase = "hold"
         self.nav = None
         self._wait_until = None
@@ -396,6 +426,8 @@ class Autopilot:
         if name not in self.params or not math.isfinite(value):
             return False
         self.params[name] = param_value(name, value)
+        if PARAM_DEFAULTS[name].type != REAL32:  # AP_Param casts to the integer type
+            self.params[name] = float(int(value))
         if name == "WPNAV_SPEED" and self.nav is not None:
             self.nav.param_speed_changed(self.params[name] / 100.0)
         return True
@@ -429,6 +461,8 @@ class Autopilot:
         """GUIDED: fly to ``target`` (ENU metres) with AC_WPNav (ModeGuided::set_destination)."""
         if self.mode != GUIDED or not self.armed or self.landed:
             return False
+        if not self.fence.destination_ok(np.asarray(target, float), self.params):
+            return False  # ModeGuided::set_destination: outside the fence, refused
         self._takeoff_at = self._enter = None
         self._start_nav()
         self.nav.set_destination(np.asarray(target, float))
@@ -555,12 +589,18 @@ class Autopilot:
 
     def _rtl_enter(self) -> None:
         """ModeRTL::init / build_path / climb_start: from the stopping point climb to the
-        return altitude (RTL_ALT, never lower than now), blended into the return home."""
+        return altitude (RTL_ALT, never lower than now or than the rally point's, but not
+        above FENCE_ALT_MAX - FENCE_MARGIN with the altitude fence on), blended into the
+        return to home or the nearer rally point (compute_return_target)."""
         nav = self.nav_params()
         self.nav = WaypointNav(nav, self.position.copy(),
                                nav.rtl_speed if nav.rtl_speed > 0 else None)
-        alt = max(float(self.position[2]), nav.rtl_alt)
-        self._rtl_home = np.array([0.0, 0.0, alt])
+        target = self.fence.return_target(self.position)
+        alt = max(float(self.position[2]), nav.rtl_alt, float(target[2]))
+        limit = self.fence.rtl_alt_limit(self.params)
+        if limit is not None:
+            alt = min(alt, max(limit, 0.0))
+        self._rtl_home = np.array([target[0], target[1], alt])
         self.nav.set_destination(np.array([self.position[0], self.position[1], alt]))
         self.nav.set_destination_next(self._rtl_home)
         self._phase = "rtl_climb"
@@ -599,9 +639,32 @@ class Autopilot:
             self.time += dt
             self._flush_do(out)
             self._step(dt, out)
+            self._fence_step(out)
             out += self._take_pending()
         self._flush_do(out)
         return out + self._take_pending()
+
+    def _fence_step(self, out: list) -> None:
+        """Copter::fence_check at 25 Hz (ArduCopter/fence.cpp): a new breach while armed
+        announces "Fence Breached" (in the air) and takes FENCE_ACTION's mode, the first
+        of its modes that is accepted (ardupilot.fence.breach_modes); landed: disarm."""
+        if self.time < self.fence.next_check:
+            return
+        self.fence.next_check = self.time + FENCE_CHECK_S
+        new = self.fence.check(position=self.position, params=self.params)
+        if not new or not self.armed:
+            return
+        if not self.landed:
+            out.append(_text(ap_fence.FENCE_BREACHED))
+        modes = ap_fence.breach_modes(int(self.params["FENCE_ACTION"]), landed=self.landed,
+                                      breach_distance_m=self.fence.breach_distance(
+                                          self.position, self.params))
+        if modes == (-1,):
+            self.disarm()
+            return
+        for mode in modes:
+            if mode in FLOWN_MODES and self.set_mode(mode, self.time):
+                break
 
     def _flush_do(self, out: list) -> None:
         """DO commands are reached at the mission's next update (AP_Mission::update)."""
@@ -617,7 +680,14 @@ class Autopilot:
         if speed < 1e-3:
             self.velocity[:] = 0.0
             return False
-        cut = min(speed, self.nav_params().wp_accel * dt)
+        if self.mode == BRAKE:  # as measured on SITL (ardupilot.navigation BRAKE_*)
+            ramp = min(1.0, (self.time - self._brake_since) / BRAKE_RAMP_S)
+            accel = min(BRAKE_DECEL_MAX_M_S2, speed / BRAKE_TIME_CONSTANT_S) * ramp
+            if speed < 0.02:
+                accel = speed / dt
+        else:
+            accel = self.nav_params().wp_accel
+        cut = min(speed, accel * dt)
         new = self.velocity * (1.0 - cut / speed)
         self.position = self.position + (self.velocity + new) / 2 * dt
         self.position[2] = max(self.position[2], 0.0)

@@ -70,8 +70,8 @@ class LoopbackChannel:
 
     def _from_vehicle(self, msgs) -> None:
         for msg in msgs:
-            if not msg.get_type().startswith(("MISSION_", "COMMAND_")):
-                continue  # the channel carries the protocol, not the link's telemetry
+            if not msg.get_type().startswith(("MISSION_", "COMMAND_", "PARAM_")):
+                continue  # the channel carries the protocols, not the link's telemetry
             wire = self._wire(msg, self._veh, self._gcs_parser)
             for delay, m in self.down.route(wire):
                 self._push(self.now + ONE_WAY_S + delay, "gcs", m)

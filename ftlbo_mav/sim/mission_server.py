@@ -9,6 +9,13 @@ message was from another (recorded: mission_protocol.json ``g1``/``g2``). Every 
 copies ArduPilot 4.5 and names the function it copies, in
 libraries/GCS_MAVLink/MissionItemProtocol.cpp unless said otherwise; what is kept of each
 item is :mod:`ftlbo_mav.ardupilot.storage`'s model of AP_Mission.
+
+One server per mission type, as ArduPilot has one MissionItemProtocol each
+(GCS::get_prot_for_mission_type): the mission (MissionItemProtocol_Waypoints), the fence
+(MissionItemProtocol_Fence: items collected during the upload and written at its end,
+after AC_PolyFence_loader::validate_fence) and the rally points
+(MissionItemProtocol_Rally: stored as they come); what each keeps is
+:mod:`ftlbo_mav.ardupilot.fence`.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from ..ardupilot import fence as ap_fence
 from ..ardupilot import storage
 from ..ardupilot.commands import FLIGHT_PLAN_RECEIVED, no_space_text
 from ..ardupilot.storage import SITL_MISSION_CAPACITY, WireItem
@@ -69,12 +77,21 @@ def _text(severity_text: tuple[int, str]):
     return R.MAVLink_statustext_message(severity, text.encode())
 
 
+_TIMEOUT_TEXT = {MISSION: "Mission upload timeout",
+                 R.MAV_MISSION_TYPE_FENCE: "Fence upload timeout",  # MissionItemProtocol_*
+                 R.MAV_MISSION_TYPE_RALLY: "Rally upload timeout"}  # ::timeout
+
+
 class MissionServer:
-    """ArduPilot's MissionItemProtocol_Waypoints for one vehicle."""
+    """ArduPilot's MissionItemProtocol_Waypoints (or _Fence, _Rally with ``mission_type``)
+    for one vehicle."""
 
     def __init__(self, *, sysid: int, home: tuple[float, float, float] | None,
-                 options: MissionServerOptions = MissionServerOptions(), boot_time: float = 0.0):
+                 options: MissionServerOptions = MissionServerOptions(), boot_time: float = 0.0,
+                 mission_type: int = MISSION):
         self.sysid = sysid
+        self.mission_type = mission_type
+        self._new_fence: list[WireItem] = []  # the fence being uploaded
         self.home = home  # lat_deg, lon_deg, alt_m AMSL; None until the vehicle has one
         self.options = options
         self.boot_time = boot_time
@@ -92,14 +109,13 @@ class MissionServer:
         self._incoming: Link = 0
 
     # -- replies
-    @staticmethod
-    def _ack(to: tuple[int, int], result: int, link: Link = SENDER) -> list:
-        return [(link, R.MAVLink_mission_ack_message(to[0], to[1], result, MISSION))]
+    def _ack(self, to: tuple[int, int], result: int, link: Link = SENDER) -> list:
+        return [(link, R.MAVLink_mission_ack_message(to[0], to[1], result, self.mission_type))]
 
     def _request(self) -> list:
         # ArduPilot asks with MISSION_REQUEST, not MISSION_REQUEST_INT (queued_request_send)
         return [(self.link, R.MAVLink_mission_request_message(
-            self.dest[0], self.dest[1], self.request_i, MISSION))]
+            self.dest[0], self.dest[1], self.request_i, self.mission_type))]
 
     def _free(self) -> None:
         self.receiving = False
@@ -107,6 +123,8 @@ class MissionServer:
 
     def max_items(self, now: float) -> int:
         """AP_Mission::num_commands_max: 0 until storage is initialised after boot."""
+        if self.mission_type != MISSION:
+            return self.options.capacity
         return 0 if now - self.boot_time < self.options.boot_no_space_s else self.options.capacity
 
     # -- the protocol
@@ -116,8 +134,8 @@ class MissionServer:
         sender = (msg.get_srcSystem(), msg.get_srcComponent())
         if kind not in _HANDLERS:
             return []
-        if getattr(msg, "mission_type", MISSION) != MISSION:
-            # only the waypoint protocol is emulated (GCS_MAVLINK: no protocol -> UNSUPPORTED)
+        if getattr(msg, "mission_type", MISSION) != self.mission_type:
+            # not this protocol's (GCS_MAVLINK: no protocol for the type -> UNSUPPORTED)
             return self._ack(sender, R.MAV_MISSION_UNSUPPORTED)
         self._incoming = link  # the handlers' (msg, sender, now) signature stays
         return getattr(self, _HANDLERS[kind])(msg, sender, now)
@@ -130,12 +148,12 @@ class MissionServer:
         if msg.count > self.max_items(now):
             return self._ack(sender, R.MAV_MISSION_NO_SPACE) + [
                 (EVERY_LINK, _text(no_space_text(self.max_items(now))))]
-        if msg.count < len(self.items):
-            del self.items[msg.count:]  # truncate(packet)
+        if msg.count < len(self.items) and self.mission_type != ap_fence.MISSION_TYPE_FENCE:
+            del self.items[msg.count:]  # truncate(packet); the fence's truncate does nothing
             self.version += 1
+        self._new_fence = list(self.items[:msg.count])  # allocate_receive_resources
         if msg.count == 0:  # transfer_is_complete
-            return self._ack(sender, R.MAV_MISSION_ACCEPTED) + [
-                (SENDER, _text(FLIGHT_PLAN_RECEIVED))]
+            return self._complete(sender, SENDER)
         self.receiving = True  # init_send_requests
         self.request_i, self.request_last = 0, msg.count - 1
         self.dest, self.link = sender, self._incoming
@@ -157,8 +175,12 @@ class MissionServer:
         if sender != self.dest:
             return out + self._ack(sender, R.MAV_MISSION_DENIED, self.link)
         item = wire_item(msg)
-        if msg.seq > len(self.items):
+        if self.mission_type == ap_fence.MISSION_TYPE_FENCE:
+            result = ap_fence.check_fence_item(item)  # replace_item into the new fence
+        elif msg.seq > len(self.items):
             result = R.MAV_MISSION_ERROR  # beyond the end of the command list
+        elif self.mission_type == ap_fence.MISSION_TYPE_RALLY:
+            result = ap_fence.check_rally_item(item)
         else:
             # MissionItemProtocol_Waypoints::replace_item / append_item: the item is
             # converted (AP_Mission::mavlink_int_to_mission_cmd: storage.check), then
@@ -172,27 +194,49 @@ class MissionServer:
             replies = out + self._ack(sender, result, self.link)
             self._free()
             return replies
-        kept = storage.stored(item)
-        self.version += 1
-        if msg.seq < len(self.items):
-            self.items[msg.seq] = kept
+        kept = ap_fence.stored_item(item, self.mission_type)
+        if self.mission_type == ap_fence.MISSION_TYPE_FENCE:
+            if msg.seq < len(self._new_fence):
+                self._new_fence[msg.seq] = item
+            else:
+                self._new_fence.append(item)
         else:
-            self.items.append(kept)
+            self.version += 1
+            if msg.seq < len(self.items):
+                self.items[msg.seq] = kept
+            else:
+                self.items.append(kept)
         self.timelast_receive = now
         self.request_i += 1
         if self.request_i > self.request_last:  # transfer_is_complete, on the upload's link
-            upload_link = self.link
-            self._free()
-            return out + self._ack(sender, R.MAV_MISSION_ACCEPTED, upload_link) + [
-                (upload_link, _text(FLIGHT_PLAN_RECEIVED))]
+            return out + self._complete(sender, self.link)
         self.timelast_request = now
         return out + self._request()
+
+    def _complete(self, sender, link: Link) -> list:
+        """transfer_is_complete: ``complete()`` (the fence is validated and written now;
+        the mission says "Flight plan received"), the ACK, resources freed."""
+        self._free()
+        texts = []
+        result = R.MAV_MISSION_ACCEPTED
+        if self.mission_type == MISSION:
+            texts = [(link, _text(FLIGHT_PLAN_RECEIVED))]
+        elif self.mission_type == ap_fence.MISSION_TYPE_FENCE:
+            problem = ap_fence.validate_fence(self._new_fence)
+            if problem is None:
+                self.items = [ap_fence.stored_fence_item(it) for it in self._new_fence]
+                self.version += 1
+            else:
+                result = R.MAV_MISSION_ERROR
+                texts = [(EVERY_LINK, _text((R.MAV_SEVERITY_WARNING, problem)))]
+        self._new_fence = []
+        return self._ack(sender, result, link) + texts
 
     def _request_list(self, msg, sender, now) -> list:  # handle_mission_request_list
         if self.receiving:
             return self._ack(sender, R.MAV_MISSION_DENIED)
         return [(SENDER, R.MAVLink_mission_count_message(sender[0], sender[1], len(self.items),
-                                                         MISSION))]
+                                                         self.mission_type))]
 
     def home_item(self) -> WireItem:
         """Item 0 as read back: the live home (AP_Mission::read_cmd_from_storage), or an
@@ -209,11 +253,18 @@ class MissionServer:
         if self.receiving:
             return self._ack(sender, R.MAV_MISSION_DENIED)
         seq = msg.seq
+        if self.mission_type != MISSION and seq >= len(self.items):
+            # MissionItemProtocol_Fence::get_item: beyond the stored items INVALID_SEQUENCE
+            # (the last + 1: ERROR); MissionItemProtocol_Rally::get_item INVALID_SEQUENCE
+            fence_last = self.mission_type == ap_fence.MISSION_TYPE_FENCE and seq == len(self.items)
+            return self._ack(sender, R.MAV_MISSION_ERROR if fence_last
+                             else R.MAV_MISSION_INVALID_SEQUENCE)
         if seq != 0 and seq >= len(self.items):  # MissionItemProtocol_Waypoints::get_item
             return ([(SENDER, R.MAVLink_mission_count_message(sender[0], sender[1],
                                                               len(self.items), MISSION))]
                     + self._ack(sender, R.MAV_MISSION_ERROR))
-        it = self.home_item() if seq == 0 else self.items[seq]
+        it = self.home_item() if seq == 0 and self.mission_type == MISSION else self.items[seq]
+        kind = self.mission_type
         if msg.get_type() == "MISSION_REQUEST":  # answered with a float MISSION_ITEM
             out = []
             if not self._request_warning_sent:
@@ -221,12 +272,12 @@ class MissionServer:
                 out.append((EVERY_LINK, _text((R.MAV_SEVERITY_WARNING,
                                                "got MISSION_REQUEST; use MISSION_REQUEST_INT!"))))
             return out + [(SENDER, R.MAVLink_mission_item_message(
-                sender[0], sender[1], seq, it.frame, it.command, 0, 1,
+                sender[0], sender[1], seq, it.frame, it.command, 0, it.autocontinue,
                 it.param1, it.param2, it.param3, it.param4, it.x * 1e-7, it.y * 1e-7, it.z,
-                MISSION))]
+                kind))]
         return [(SENDER, R.MAVLink_mission_item_int_message(
-            sender[0], sender[1], seq, it.frame, it.command, 0, 1,
-            it.param1, it.param2, it.param3, it.param4, it.x, it.y, it.z, MISSION))]
+            sender[0], sender[1], seq, it.frame, it.command, 0, it.autocontinue,
+            it.param1, it.param2, it.param3, it.param4, it.x, it.y, it.z, kind))]
 
     def _clear(self, msg, sender, now) -> list:  # handle_mission_clear_all
         if self.receiving:
@@ -243,7 +294,9 @@ class MissionServer:
         if now - self.timelast_receive > self.options.upload_timeout_s:
             link = self.link  # MissionItemProtocol_Waypoints::timeout says so first
             self._free()
-            return [(link, _text((R.MAV_SEVERITY_WARNING, "Mission upload timeout")))] + (
+            self._new_fence = []
+            text = _TIMEOUT_TEXT.get(self.mission_type, "Mission upload timeout")
+            return [(link, _text((R.MAV_SEVERITY_WARNING, text)))] + (
                 self._ack(self.dest, R.MAV_MISSION_OPERATION_CANCELLED, link))
         if now - self.timelast_request > self.options.rerequest_s:
             self.timelast_request = now

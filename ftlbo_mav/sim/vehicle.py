@@ -23,6 +23,13 @@ from dataclasses import dataclass, field
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot.commands import INSTANT_BOOT, BootTimeline
+from ..ardupilot.fence import (
+    FENCE_CAPACITY,
+    MISSION_TYPE_FENCE,
+    MISSION_TYPE_MISSION,
+    MISSION_TYPE_RALLY,
+    RALLY_CAPACITY,
+)
 from ..ardupilot.modes import CopterMode, heartbeat_base_mode
 from ..ardupilot.navigation import PARAM_COUNT
 from ..ardupilot.streams import data_stream_messages
@@ -116,6 +123,14 @@ class Vehicle:
                 boot_no_space_s=self.boot.storage_s)
         self.missions = MissionServer(sysid=sysid, home=None, options=mission_options,
                                       boot_time=boot_time)
+        # MissionItemProtocol_Fence and _Rally (GCS::get_prot_for_mission_type)
+        self.fence = MissionServer(sysid=sysid, home=None, boot_time=boot_time,
+                                   mission_type=MISSION_TYPE_FENCE,
+                                   options=MissionServerOptions(capacity=FENCE_CAPACITY))
+        self.rally = MissionServer(sysid=sysid, home=None, boot_time=boot_time,
+                                   mission_type=MISSION_TYPE_RALLY,
+                                   options=MissionServerOptions(capacity=RALLY_CAPACITY))
+        self._fence_version = -1
         self.autopilot = Autopilot(home=(lat, lon), boot_time=boot_time,
                                    options=AutopilotOptions(boot=self.boot, limits=options.limits))
         self.links: dict[Link, LinkState] = {}
@@ -169,11 +184,19 @@ class Vehicle:
             replies = self._command(msg, now, st)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_SET"):
             replies = self._param(msg)
+        elif kind == "SET_POSITION_TARGET_GLOBAL_INT":
+            replies = self._position_target(msg)
         else:
-            replies = self.missions.handle(msg, now, link)
+            replies = self.server_for(msg).handle(msg, now, link)
             self.home_for_missions(now)
         self._sync_state()
         return news + self._route(replies, link)
+
+    def server_for(self, msg) -> MissionServer:
+        """The mission, fence or rally protocol, by the message's ``mission_type``."""
+        kind = getattr(msg, "mission_type", MISSION_TYPE_MISSION)
+        return {MISSION_TYPE_FENCE: self.fence, MISSION_TYPE_RALLY: self.rally}.get(
+            kind, self.missions)
 
     def home_for_missions(self, now: float) -> None:
         self.missions.home = self.home if self.home_set(now) else None
@@ -196,7 +219,8 @@ class Vehicle:
         self._announce(self.autopilot.advance(now), None)
         self._sync_state()
         self.home_for_missions(now)
-        self._route(self.missions.update(now), None)
+        for server in (self.missions, self.fence, self.rally):
+            self._route(server.update(now), None)
         out: dict[Link, list] = {}
         for key, st in self.links.items():
             msgs, st.outbox = st.outbox, []
@@ -221,7 +245,11 @@ class Vehicle:
     # -- flight commands (ArduCopter/GCS_Mavlink.cpp handle_command_long_packet, and
     #    libraries/GCS_MAVLink/GCS_Common.cpp for the commands every vehicle shares)
     def _sync_mission(self) -> None:
-        """Give the autopilot the stored mission whenever an upload or clear changed it."""
+        """Give the autopilot the stored mission (and fence, rally points) whenever an
+        upload or clear changed them."""
+        if self.fence.version + self.rally.version != self._fence_version:
+            self._fence_version = self.fence.version + self.rally.version
+            self.autopilot.set_fence(list(self.fence.items), list(self.rally.items))
         if self.missions.version == self._mission_version:
             return
         self._mission_version = self.missions.version
@@ -320,6 +348,20 @@ class Vehicle:
         return [(to, R.MAVLink_param_value_message(name.encode(), value, kind, PARAM_COUNT,
                                                    0xFFFF))]
 
+    def _position_target(self, msg) -> list:
+        """GUIDED's SET_POSITION_TARGET_GLOBAL_INT with a position (ArduCopter/
+        GCS_Mavlink.cpp handle_message_set_position_target_global_int ->
+        ModeGuided::set_destination), altitude above home (frames 3 / 6): fly there.
+        Ignored outside GUIDED or without a position; never acknowledged."""
+        ignore_position = msg.type_mask & 0b111 == 0b111
+        if ignore_position or msg.coordinate_frame not in (
+                R.MAV_FRAME_GLOBAL_RELATIVE_ALT, R.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT):
+            return []
+        ap = self.autopilot
+        east, north = ap.tangent.to_en(msg.lat_int * 1e-7, msg.lon_int * 1e-7)
+        ap.goto([east, north, float(msg.alt)])
+        return []
+
     @staticmethod
     def _ack(command: int, result: int, to: tuple[int, int]):
         return R.MAVLink_command_ack_message(command, result, 0, 0, to[0], to[1])
@@ -368,7 +410,13 @@ class Vehicle:
                        | R.MAV_SYS_STATUS_SENSOR_GPS | R.MAV_SYS_STATUS_PREARM_CHECK)
             # passing pre-arm checks is the PREARM_CHECK health bit (send_sys_status)
             health = sensors if self.ready(now) else sensors & ~R.MAV_SYS_STATUS_PREARM_CHECK
-            return R.MAVLink_sys_status_message(sensors, sensors, health, 0, 12600, -1, 100,
+            present, enabled = sensors, sensors
+            fence = self.autopilot.fence_status()  # AC_Fence::sys_status_present/_enabled/_failed
+            if fence[0]:
+                present |= R.MAV_SYS_STATUS_GEOFENCE
+                enabled |= R.MAV_SYS_STATUS_GEOFENCE if fence[1] else 0
+                health |= 0 if fence[2] else R.MAV_SYS_STATUS_GEOFENCE
+            return R.MAVLink_sys_status_message(present, enabled, health, 0, 12600, -1, 100,
                                                 0, 0, 0, 0, 0, 0)
         if msgid == R.MAVLINK_MSG_ID_GPS_RAW_INT:
             lat, lon = (round(s.lat_deg * 1e7), round(s.lon_deg * 1e7)) if fix else (0, 0)

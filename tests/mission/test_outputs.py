@@ -30,6 +30,15 @@ EXPECTED = {
 
 
 def test_every_format_is_written_as_before(tmp_path):
-    written = write_plan(read_plan(STORED), tmp_path, formats=FORMATS)
+    written = write_plan(read_plan(STORED), tmp_path, formats=FORMATS, fence=False)
     digests = {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in written}
     assert digests == EXPECTED
+
+
+def test_the_fence_adds_files_and_leaves_the_missions_as_before(tmp_path):
+    written = write_plan(read_plan(STORED), tmp_path, formats=FORMATS)
+    digests = {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in written}
+    for name in ("uav1.waypoints", "uav2.waypoints", "uav3.waypoints"):
+        assert digests[name] == EXPECTED[name]
+    assert {f"uav{k}.{ext}" for k in (1, 2, 3) for ext in ("fence", "rally")} <= set(digests)
+    assert "fence.parm" in digests

@@ -1,0 +1,87 @@
+"""Each UAV's fence and rally point from its plan (ftlbo_mav/mission/fence.py)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ftlbo_mav.mission.export import read_plan
+from ftlbo_mav.mission.fence import FenceSettings, exclusion_radius_m, plan_fences
+from ftlbo_mav.mission.qgc_plan import plan_document
+
+STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"
+PLAN = read_plan(STORED)
+FENCES = plan_fences(PLAN)
+
+
+def _en(items):
+    f = PLAN.scenario.frame
+    return f.to_enu(lat_deg=[i.lat_deg for i in items],
+                    lon_deg=[i.lon_deg for i in items]).reshape(-1, 3)[:, :2]
+
+
+def test_exclusion_radius_leaves_corner_cut_and_margin_of_the_clearance():
+    s = FenceSettings()
+    assert exclusion_radius_m(4.0, clearance_m=1.0, settings=s) == 4.0 + 1.0 - 0.3 - 0.5
+    assert exclusion_radius_m(4.0, clearance_m=0.0, settings=s) == 4.0  # never below the tree
+    assert FENCES[0].exclusion_radii_m == (4.2, 4.7, 3.7, 3.2, 3.7, 3.2, 2.7)
+
+
+def test_every_planned_segment_passes_outside_the_circles_by_more_than_cut_and_margin():
+    s = FenceSettings()
+    circles = [(c, it.param1) for c, it in zip(_en(FENCES[0].fence[4:]), FENCES[0].fence[4:])]
+    for path in PLAN.uav_paths:
+        a, b = path[:-1, :2], path[1:, :2]
+        for centre, radius in circles:
+            ab = b - a
+            t = np.clip(((centre - a) * ab).sum(1) / (ab * ab).sum(1), 0, 1)
+            d = np.linalg.norm(a + t[:, None] * ab - centre, axis=1).min()
+            assert d - radius >= s.corner_cut_m + s.margin_m - 1e-6
+
+
+def test_the_polygon_is_the_area_grown_and_alt_max_is_above_the_band():
+    ring = _en(FENCES[0].fence[:4])
+    paths = np.concatenate([p[:, :2] for p in PLAN.uav_paths])
+    assert np.all(paths > ring.min(axis=0) + 0.8 - 1e-6)
+    assert np.all(paths < ring.max(axis=0) - 0.8 + 1e-6)
+    assert [it.param1 for it in FENCES[0].fence[:4]] == [4.0] * 4
+    assert FENCES[0].params == {"FENCE_ENABLE": 1.0, "FENCE_TYPE": 5.0, "FENCE_ACTION": 4.0,
+                                "FENCE_ALT_MAX": 8.0, "FENCE_MARGIN": 0.5}
+    assert PLAN.uav_paths[:, :, 2].max() <= 8.0 - 0.5 - 0.5
+
+
+def test_rally_points_are_clear_of_obstacles_and_apart():
+    centres, radii = PLAN.scenario.obstacles_enu()
+    centres = np.asarray(centres).reshape(len(radii), -1)[:, :2]
+    points = np.array([_en(f.rally)[0] for f in FENCES])
+    for p in points:
+        assert np.all(np.linalg.norm(centres - p, axis=1) >= np.asarray(radii) + 1.0)
+    gaps = np.linalg.norm(points[:, None] - points[None], axis=2)[np.triu_indices(3, 1)]
+    assert gaps.min() >= FenceSettings().rally_separation_m
+    assert all(f.rally[0].alt_m == int(f.rally[0].alt_m) for f in FENCES)  # whole metres
+
+
+def test_no_clearance_makes_the_circles_the_trees_and_says_so():
+    bare = replace(PLAN, scenario=replace(PLAN.scenario, clearance_m=0.0))
+    fences = plan_fences(bare)
+    assert fences[0].exclusion_radii_m == tuple(float(r) for r in bare.scenario.obstacles_enu()[1])
+    assert "clearance 0 m is less than" in fences[0].notes[0]
+
+
+def test_the_qgc_plan_carries_the_fence_and_the_rally_point():
+    items = [it for it in FENCES[0].fence]
+    from ftlbo_mav.mission.export import plan_missions
+
+    doc = plan_document(plan_missions(PLAN)[0].items, fence=FENCES[0])
+    assert len(doc["geoFence"]["polygons"]) == 1
+    assert doc["geoFence"]["polygons"][0]["inclusion"] is True
+    assert len(doc["geoFence"]["polygons"][0]["polygon"]) == 4
+    circles = doc["geoFence"]["circles"]
+    assert [c["circle"]["radius"] for c in circles] == [it.param1 for it in items[4:]]
+    assert not any(c["inclusion"] for c in circles)
+    (point,) = doc["rallyPoints"]["points"]
+    assert point == [FENCES[0].rally[0].lat_deg, FENCES[0].rally[0].lon_deg, 6.0]
+    json.dumps(doc)
