@@ -137,8 +137,9 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
 
         swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary)
     with swarm as vehicles:
-        assignments = [Assignment(n, i + 1, m) for i, (n, m) in
-                       enumerate(zip(planned.names, planned.missions))]
+        # as `ftlbo-mav upload` sends them: mission, and the fence and rally points if any
+        assignments = [Assignment(n, i + 1, m, f) for i, (n, m, f) in
+                       enumerate(zip(planned.names, planned.missions, planned.fences))]
         results = upload_swarm(assignments, vehicles.urls, timing=Timing())
         failed = [r for r in results if not r.verified]
         if failed:

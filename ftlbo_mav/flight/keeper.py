@@ -42,28 +42,32 @@ from ..ardupilot.navigation import Navigation
 @dataclass(frozen=True)
 class KeeperOptions:
     """Every ``period_s`` (on the vehicles' clock) each vehicle's lead over the group's
-    mean progress is measured. A vehicle more than ``engage_m`` ahead is paused for as
-    long as makes it lose that lead (ArduCopter's pause and continue, modelled in
-    :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s`; at most
-    ``max_pause_s``), then left ``rest_s`` to regain its pace before it is measured for
-    another. Nothing happens while the group flies slower than ``min_speed_m_s``
-    (starting, stopping). Reports older than ``stale_s`` make the keeper stand aside
+    mean progress is measured, in metres and in seconds (metres over the group's speed).
+    A vehicle more than ``engage_m`` ahead, or more than ``engage_s`` ahead and at least
+    ``floor_m`` (while the group speeds up, a lead shows in time before it shows in
+    metres), is paused for as long as makes it lose that lead (ArduCopter's pause and
+    continue, modelled in :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s`;
+    at most ``max_pause_s``), then left ``rest_s`` to regain its pace before it is
+    measured for another. Nothing happens while the group flies slower than
+    ``min_speed_m_s``. Reports older than ``stale_s`` make the keeper stand aside
     (continue for everyone).
 
     The numbers are measured, not a taste: docs/flight.md."""
 
     enabled: bool = True
-    engage_m: float = 0.1
+    engage_m: float = 0.08
+    engage_s: float = 0.08
+    floor_m: float = 0.03  # GLOBAL_POSITION_INT's 1e-7 degrees are 1.1 cm
     max_pause_s: float = 0.8
     rest_s: float = 2.0
-    min_speed_m_s: float = 0.5
+    min_speed_m_s: float = 0.2
     period_s: float = 0.05
     stale_s: float = 1.0
     navigation: Navigation = Navigation()  # ArduCopter's defaults (copter.parm keeps them)
 
     def __post_init__(self) -> None:
-        for name in ("engage_m", "max_pause_s", "rest_s", "min_speed_m_s", "period_s",
-                     "stale_s"):
+        for name in ("engage_m", "engage_s", "floor_m", "max_pause_s", "rest_s",
+                     "min_speed_m_s", "period_s", "stale_s"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0:
                 raise ValueError(f"keeper {name} must be a finite number >= 0, got {value!r}")
@@ -199,6 +203,8 @@ class FormationKeeper:
         lead = s - s.mean()
         group_speed = float(np.mean(speeds_m_s))
         flying = group_speed >= o.min_speed_m_s
+        # a lead in time shows before a lead in metres while the group speeds up
+        lead_s = lead / max(group_speed, o.min_speed_m_s)
         out: dict[int, bool] = {}
         for i in range(len(s)):
             log.max_lead_m[i] = max(log.max_lead_m[i], float(lead[i]), key=abs)
@@ -211,7 +217,8 @@ class FormationKeeper:
             elif self._resend[i] > 0:
                 self._resend[i] -= 1
                 out[i] = False
-            elif flying and lead[i] > o.engage_m and now >= self._rest_until[i]:
+            elif (flying and now >= self._rest_until[i]
+                  and (lead[i] > o.engage_m or (lead[i] > o.floor_m and lead_s[i] > o.engage_s))):
                 d = o.pause_for(float(lead[i]), group_speed, self.cruise_speed_m_s)
                 if d > 0:
                     self._paused_at[i], self._resume_at[i] = now, now + d

@@ -127,6 +127,7 @@ def plan_document(
         "length_ratio": _round(plan.length_ratio, 6),
         "history": [_finite(h) for h in plan.history],
         "clearance": plan.scenario.clearance_m,
+        "corner_allowance": plan.scenario.mission.corner_allowance_m,
         "min_separation": plan.scenario.min_separation_m,
         "area": {
             "corner_a": [sc.corner_a.lat_deg, sc.corner_a.lon_deg],

@@ -117,6 +117,8 @@ class MissionSettings:
 
     end_action: str = "land"
     speed_m_s: float | None = None
+    # metres the planner keeps beyond the clearance, for the corners the autopilot cuts
+    corner_allowance_m: float = 0.0
 
 
 @dataclass(frozen=True)

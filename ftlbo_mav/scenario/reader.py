@@ -335,8 +335,9 @@ def _read_mission(t: Table | None) -> MissionSettings:
     speed = (t.number("speed", None, lo=0.0, hi=MAX_SPEED_M_S, lo_open=True, unit="m/s")
              if t.has("speed") else None)
     t.used.add("speed")
+    allowance = t.number("corner_allowance", 0.0, lo=0.0, hi=10.0, unit="m")
     t.done()
-    return MissionSettings(end_action=end, speed_m_s=speed)
+    return MissionSettings(end_action=end, speed_m_s=speed, corner_allowance_m=allowance)
 
 
 def _check_geometry(s: Scenario) -> None:

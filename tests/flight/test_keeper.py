@@ -78,6 +78,14 @@ def test_a_waited_leader_rests_before_it_is_paused_again():
     assert keeper.update(positions_at([7.6, 7.0, 7.0]), speeds, t + ON.rest_s) == {0: True}
 
 
+def test_while_the_group_speeds_up_a_lead_in_seconds_is_enough():
+    keeper = FormationKeeper(PATHS, CRUISE, options=ON)
+    slow = np.full(3, 0.4)  # 0.06 m ahead at 0.4 m/s: 0.1 s ahead (a late start)
+    assert keeper.update(positions_at([1.09, 1.0, 1.0]), slow, 0.0) == {0: True}
+    tiny = FormationKeeper(PATHS, CRUISE, options=ON)  # below the 1.1 cm quantization x3
+    assert tiny.update(positions_at([1.03, 1.0, 1.0]), np.full(3, 0.2), 0.0) == {}
+
+
 def test_longer_leads_get_longer_pauses_up_to_the_limit():
     pauses = [ON.pause_for(lead, 5.0, CRUISE) for lead in (0.12, 0.3, 0.8, 1.5, 50.0)]
     assert pauses == sorted(pauses) and len(set(pauses)) == 5
@@ -89,7 +97,7 @@ def test_longer_leads_get_longer_pauses_up_to_the_limit():
 def test_small_leads_slow_groups_and_unknown_cruise_speeds_are_left_alone():
     keeper = FormationKeeper(PATHS, CRUISE, options=ON)
     assert keeper.update(positions_at([5.1, 5.0, 5.0]), np.full(3, 5.0), 0.0) == {}
-    assert keeper.update(positions_at([6.0, 5.0, 5.0]), np.full(3, 0.3), 1.0) == {}  # starting
+    assert keeper.update(positions_at([6.0, 5.0, 5.0]), np.full(3, 0.1), 1.0) == {}  # starting
     off = FormationKeeper(PATHS, CRUISE, options=KeeperOptions(enabled=False))
     assert off.update(positions_at([9.0, 1.0, 1.0]), np.full(3, 5.0), 0.0) == {}
     unknown = FormationKeeper(PATHS, None, options=ON)
