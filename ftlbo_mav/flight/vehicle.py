@@ -236,14 +236,6 @@ class FlightVehicle:
                 return self.status.params[name]
         return None
 
-    def send_speed(self, speed_m_s: float) -> None:
-        """MAV_CMD_DO_CHANGE_SPEED (ground speed) without waiting; its COMMAND_ACK lands in
-        ``status.acks``. The formation keeper's nudge, repeated while it matters."""
-        if self.aborted_to is not None:
-            raise FlightAborted(self.name, self.sysid, self.aborted_to)
-        self.send(R.MAVLink_command_long_message(
-            self.sysid, 1, R.MAV_CMD_DO_CHANGE_SPEED, 0, 1, speed_m_s, -1, 0, 0, 0, 0))
-
     def send_pause(self, pause: bool) -> None:
         """MAV_CMD_DO_PAUSE_CONTINUE (param1 0: pause, 1: continue) without waiting; its
         COMMAND_ACK lands in ``status.acks``. The formation keeper's nudge."""

@@ -187,11 +187,13 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
                      [hi[0] + grow, hi[1] + grow], [lo[0] - grow, hi[1] + grow]])
     ring_lla = plan.lla(np.column_stack([ring, np.zeros(len(ring))]))
     centre_lla = plan.lla(centres) if len(centres) else np.zeros((0, 3))
-    excl = tuple(round(exclusion_radius_m(float(r), clearance_m=s.clearance_m,
+    # the planner kept the clearance plus the scenario's corner allowance
+    kept = s.clearance_m + s.mission.corner_allowance_m
+    excl = tuple(round(exclusion_radius_m(float(r), clearance_m=kept,
                                           settings=settings), 2) for r in radii)
     notes: list[str] = []
-    if s.clearance_m < settings.corner_cut_m + settings.margin_m and len(radii):
-        notes.append(f"clearance {s.clearance_m:g} m is less than the corner cut "
+    if kept < settings.corner_cut_m + settings.margin_m and len(radii):
+        notes.append(f"clearance {kept:g} m is less than the corner cut "
                      f"{settings.corner_cut_m:g} m + FENCE_MARGIN {settings.margin_m:g} m: "
                      "the exclusion circles are the obstacles themselves and a flown path "
                      "may come within FENCE_MARGIN of them")
