@@ -129,8 +129,11 @@ def test_a_small_plan_over_a_large_one_leaves_none_of_its_files(small_path, tmp_
     (out / "notes.txt").write_text("mine")  # not a plan output: kept
     result = _plan(small_path, out)
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == [
-        "notes.txt", "plan.json", "uav1.waypoints", "uav2.waypoints", "uav3.waypoints"]
+    left = sorted(p.name for p in out.iterdir() if not p.name.endswith((".fence", ".rally")))
+    assert left == ["fence.parm", "notes.txt", "plan.json", "uav1.waypoints", "uav2.waypoints",
+                    "uav3.waypoints"]
+    assert all(p.name.startswith(("uav1.", "uav2.", "uav3.")) for p in out.iterdir()
+               if p.name.endswith((".fence", ".rally")))
 
 
 def test_an_infeasible_replan_removes_the_earlier_plans_missions(tmp_path):

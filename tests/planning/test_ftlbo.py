@@ -83,7 +83,7 @@ def test_same_seed_same_plan(small_path):
 
 def test_example_plan_is_feasible_and_keeps_the_formation(example_path):
     scenario = load_scenario(example_path)
-    result = plan(scenario, algorithm="ftlbo", iterations=60)  # the paper's FTLBO
+    result = plan(scenario, algorithm="ftlbo", waypoints=10, iterations=60)  # the paper's FTLBO
     assert result.feasible, result.violations
     assert result.evaluations == 100 + 60 * 201
     assert np.isfinite(result.cost.total)

@@ -123,7 +123,7 @@ def test_a_row_of_touching_discs_blocks_and_a_gap_lets_through():
 
 
 def test_example_bound_routes_and_seeds():
-    problem = problem_from_scenario(load_scenario(EXAMPLE))
+    problem = problem_from_scenario(load_scenario(EXAMPLE), waypoints=10)  # the paper's
     routes = shortest_routes(problem, count=4)
     bound = lower_bound(problem, routes[0])
     straight = float(np.linalg.norm(problem.goal - problem.start))
