@@ -10,8 +10,8 @@ The steps, each with a timeout and a clear error naming the vehicle:
 3. Wait until every vehicle is within a tolerance of its altitude *and* has stopped
    climbing: a naive start (switch to AUTO as soon as all are near altitude) lets one
    copter still climbing start late and fly the legs behind the others.
-4. Synchronized start: every vehicle's current item is set to its first real leg, the
-   waypoint after the start point it already hovers at (:func:`first_leg`); then every
+4. Synchronized start: every vehicle's current item is set to where its legs begin,
+   after the start point it already hovers at (:func:`first_leg`); then every
    vehicle is switched to AUTO in one burst of messages, and only afterwards are the
    switches confirmed, so that the formation leaves as one.
 5. Watch until every vehicle has landed (disarmed) or ended its mission, the formation
