@@ -384,7 +384,8 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
 def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_s: float,
           tick: Callable[[], None], keeper: FormationKeeper | None = None) -> bool:
     """Until every vehicle is done; ``tick`` runs a few times a second, the formation
-    keeper (if any) every 50 ms while the legs last. False on timeout."""
+    keeper (if any) every 50 ms while the legs last (10 ms during a pause). False on
+    timeout."""
     deadline = time.monotonic() + timeout_s
     next_tick = 0.0
     while time.monotonic() < deadline:
@@ -397,7 +398,9 @@ def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_
         if time.monotonic() >= next_tick:
             tick()
             next_tick = time.monotonic() + 0.1
-        time.sleep(0.05)
+        # a pause's continue is timed to the hundredth (an emulator's time scale makes a
+        # 50 ms wait tenths of a second of the vehicles' time)
+        time.sleep(0.01 if keeper is not None and keeper.pausing else 0.05)
     return False
 
 

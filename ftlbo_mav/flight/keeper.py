@@ -167,6 +167,11 @@ class FormationKeeper:
         return (self.options.enabled and self.off_reason is None
                 and self.cruise_speed_m_s is not None)
 
+    @property
+    def pausing(self) -> bool:
+        """A pause is under way: its continue is due within ``max_pause_s``."""
+        return any(t is not None for t in self._paused_at)
+
     def progress(self, positions: np.ndarray) -> np.ndarray:
         """``(N,)`` metres along each UAV's own path, from ``positions`` ``(N, 3)``."""
         out = np.empty(len(self.paths))
