@@ -236,9 +236,8 @@ class WaypointNav:
         done, pos, vel, acc = self.this.advance_target_along_track(
             self.prev, self.next, self.radius, self.nav.corner_accel(), self.fast,
             dt * scale, self.origin)
-        speed = float(np.linalg.norm(vel))
-        offset = vel / speed * self.offset_accel * speed / self.desired_speed if speed > 0 \
-            else np.zeros(3)
+        # accel_offset: track direction x _offset_accel x |target_vel| / desired speed
+        offset = vel * (self.offset_accel / self.desired_speed)
         vel, acc = vel * scale, acc * scale * scale + offset
         self.target, self.target_vel, self.target_accel = pos, vel, acc
         if not self.reached and done:
