@@ -15,12 +15,14 @@ import click
 
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, PORT, SYSIDS, FiniteFloat
+from ..errors import FtlboError
 from ..link.commands import _timing, _urls, timing_options
 from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
 from ..mission.files import OutputFolder, check_writable
 from .control import DEFAULT_CONTROL_PORT, ControlServer, request_abort
 from .departures import DepartureWatch
+from .fleet import concurrently
 from .fly import Fleet, FlightLeftPlan, FlyOptions, abort, fly, make_keeper
 from .keeper import KeeperOptions
 from .monitor import LiveView, Monitor
@@ -63,7 +65,8 @@ def _control(port: int, fleet: Fleet):
         wanted = [v for v in fleet.vehicles if sysids is None or v.sysid in sysids]
         held = {v.sysid for v in fleet.vehicles}
         late = set(abort(wanted, mode=mode))
-        results = {v.sysid: "NOT CONFIRMED" if v.name in late else mode for v in wanted}
+        results = {v.sysid: mode if v.name not in late else "NOT CONFIRMED" if v.link_up
+                   else "NOT REACHED (link down)" for v in wanted}
         return results, [s for s in (sysids or []) if s not in held]
 
     return ControlServer(on_abort, port=port)
@@ -285,14 +288,40 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
         sys.exit(1)
 
 
+def _abort_directly(rest, mode: str, key, discover_timeout: float) -> dict[int, str]:
+    """Abort over links of our own, one link at a time for all its vehicles, every link
+    at once: a link that cannot be opened, or a vehicle not heard, is its own line."""
+    by_url: dict[str, list] = {}
+    for n, s, u in rest:
+        by_url.setdefault(u, []).append((n, s))
+
+    def one_link(item) -> dict[int, str]:
+        url, members = item
+        try:
+            with Fleet([n for n, _ in members], [s for _, s in members], [url] * len(members),
+                       signing_key=key, discover_timeout_s=discover_timeout,
+                       position_hz=1.0) as fleet:
+                late = set(abort(fleet.vehicles, mode=mode))
+        except FtlboError as exc:
+            return {s: f"NOT REACHED ({exc})" for _, s in members}
+        return {s: "NOT CONFIRMED" if n in late else mode for n, s in members}
+
+    out: dict[int, str] = {}
+    for part in concurrently(one_link, list(by_url.items())):
+        out.update(part)
+    return out
+
+
 @click.command(name="abort")
 @link_options
 @click.option("--land", is_flag=True, help="LAND where they are instead of RTL.")
 @click.option("--control-port", type=PORT, default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="Reach a running `ftlbo-mav fly` here first (0: open links directly).")
-@click.option("--discover-timeout", type=FiniteFloat(0.1, 86_400), default=5.0,
-              show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
+@click.option("--discover-timeout", type=FiniteFloat(0.1, 86_400), default=1.5,
+              show_default=True,
+              help="Seconds to wait for each vehicle's link and HEARTBEAT (ArduPilot "
+                   "sends one a second); one that does not answer is named, not waited for.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
 @user_errors
@@ -313,11 +342,7 @@ def abort_command(sysid_text, connect, land, control_port, discover_timeout, sig
     rest = [(n, s, u) for n, s, u in zip(names, sysids, urls) if s not in results]
     if rest:
         key = load_key(signing_key) if signing_key else None
-        with Fleet([n for n, _, _ in rest], [s for _, s, _ in rest], [u for _, _, u in rest],
-                   signing_key=key, discover_timeout_s=discover_timeout,
-                   position_hz=1.0) as fleet:
-            late = set(abort(fleet.vehicles, mode=mode))
-        results.update({s: "NOT CONFIRMED" if n in late else mode for n, s, _ in rest})
+        results.update(_abort_directly(rest, mode, key, discover_timeout))
     for s in sysids:
         click.echo(f"sysid {s}: {results[s]}")
     if any(results[s] != mode for s in sysids):

@@ -161,8 +161,8 @@ class FlightWatch:
         for e in events:
             self.say(describe(e, self.vehicles))
             self.on_event(describe(e, self.vehicles))
-        if any(e.departure for e in events):
-            self.stand_keeper_down()
+        if any(e.departure for e in events):  # before the policy pauses the others
+            self.stand_keeper_down(skip={e.index for e in events if e.vehicle_chose})
         self.response.react(events, self.vehicles, self.departures, now)
         if self.response.active:
             self.response.step(self.vehicles, self.departures, now)
@@ -185,13 +185,14 @@ class FlightWatch:
                 else 0.0
             self.departures.legs(i, on, hold_s=max(hold, 0.0))
 
-    def stand_keeper_down(self) -> None:
-        """No more pauses: every pause under way is continued (on vehicles still ours)."""
+    def stand_keeper_down(self, *, skip: set[int] = frozenset()) -> None:
+        """No more pauses: every pause under way is continued, but on a vehicle that
+        chose otherwise (``skip``, or earlier)."""
         if self.keeper is None:
             return
         keeper, self.keeper = self.keeper, None
         for i, pause in keeper.release().items():
-            if i not in self.response.chose:
+            if i not in self.response.chose and i not in skip:
                 try:
                     self.vehicles[i].send_pause(pause)
                 except FlightError:

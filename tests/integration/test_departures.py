@@ -319,5 +319,16 @@ def test_abort_with_a_dead_link_answers_per_vehicle_within_two_seconds(plan_dir)
             t0 = time.monotonic()
             late = abort(flying.vehicles, mode="LAND")
             took = time.monotonic() - t0
-    assert late == ["uav3"]
-    assert took < 2.0
+        assert late == ["uav3"]
+        assert took < 2.0
+        # the command line, on links of its own: a line per vehicle, the dead one named
+        t0 = time.monotonic()
+        result = CliRunner().invoke(main, ["abort", "--sysid", "1..3", "--land",
+                                           "--control-port", "0",
+                                           "--connect", " ".join(fleet.urls)])
+        took = time.monotonic() - t0
+    assert result.exit_code == 1, result.output
+    assert "Traceback" not in result.output
+    assert "sysid 1: LAND" in result.stdout and "sysid 2: LAND" in result.stdout
+    assert "sysid 3: NOT REACHED" in result.stdout
+    assert took < 2.0  # 1.5 s to give up on the dead one, the rest at once
