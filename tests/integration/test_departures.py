@@ -332,3 +332,43 @@ def test_abort_with_a_dead_link_answers_per_vehicle_within_two_seconds(plan_dir)
     assert "sysid 1: LAND" in result.stdout and "sysid 2: LAND" in result.stdout
     assert "sysid 3: NOT REACHED" in result.stdout
     assert took < 2.0  # 1.5 s to give up on the dead one, the rest at once
+
+
+def test_departures_are_seen_within_their_deadlines(plan_dir):
+    """A mode taken over is seen within 1 s of the HEARTBEAT that shows it (ArduPilot
+    sends one a second), a vehicle that dies within 2 s."""
+    from ftlbo_mav.flight.policy import FaultPolicy
+    from ftlbo_mav.flight.watch import FlightWatch
+
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        pilot = SecondPort(fleet.serial1_urls[2], 3)
+        try:
+            with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
+                take_off(planned, flying.vehicles, FlyOptions(), say=lambda _t: None)
+                start_together(planned, flying.vehicles)
+                fw = FlightWatch(planned, flying.vehicles, policy=FaultPolicy.CONTINUE)
+                fw.started = True
+                fw.expect("AUTO")
+
+                def seen_after(kind: str, t0: float) -> float:
+                    while time.monotonic() - t0 < 10.0:
+                        if any(e.kind == kind for e in fw.poll()):
+                            return time.monotonic() - t0
+                        time.sleep(0.05)
+                    return float("inf")
+
+                t0 = time.monotonic()
+                pilot.set_mode("LOITER")
+                mode_s = seen_after("mode", t0)
+                t0 = time.monotonic()
+                fleet.kill(1)
+                lost_s = seen_after("link lost", t0)
+                abort([flying.vehicles[0]], mode="LAND")
+        finally:
+            pilot.set_mode("LAND")
+            pilot.close()
+    print(f"[{BACKEND}] mode seen after {mode_s:.2f} s, link lost after {lost_s:.2f} s")
+    assert mode_s <= 1.0 + 0.2  # one HEARTBEAT period, one watch cycle
+    assert lost_s <= 2.0
