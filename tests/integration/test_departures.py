@@ -118,7 +118,10 @@ def _fly_with(plan_dir: Path, urls, fault, *extra):
     finally:
         thread.join(timeout=300)
     assert not thread.is_alive(), "fly did not end"
-    return holder["result"], holder["end"] - fault_t
+    took = holder["end"] - fault_t
+    print(f"[{BACKEND}] fly ended {took:.1f} s after the fault, exit "
+          f"{holder['result'].exit_code}:\n{holder['result'].stdout}")
+    return holder["result"], took
 
 
 def _in_auto_for(port: SecondPort, seconds: float) -> None:
