@@ -120,9 +120,10 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
         except LeftPlan:
             raise fw.until_ended(tick=tick) from None
         except FlightError as exc:  # a vehicle refused or could not be reached
-            fw.poll()
-            if fw.response.active:
-                raise fw.until_ended(tick=tick) from exc
+            if not aborted(vehicles):  # (a failed takeoff already sent all to LAND)
+                fw.poll()
+                if fw.response.active:
+                    raise fw.until_ended(tick=tick) from exc
             raise
         fw.response.policy = policy
         if not watch(planned, vehicles, timeout_s=options.flight_timeout_s, tick=tick,

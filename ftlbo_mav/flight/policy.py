@@ -65,8 +65,10 @@ class Response:
     def __init__(self, policy: FaultPolicy, names: Sequence[str], sysids: Sequence[int], *,
                  stop_s: float = 3.0, budget_s: float = 50.0, confirm_tries: int = 5,
                  t0: float | None = None,
-                 route_check: Callable[[int], str | None] = lambda _j: None) -> None:
+                 route_check: Callable[[int], str | None] = lambda _j: None,
+                 landing: Callable[[int], bool] = lambda _j: False) -> None:
         self.policy = policy
+        self.landing = landing  # vehicle -> already on its mission's final landing
         self.route_check = route_check  # vehicle -> why RTL from here is not safe, or None
         self.names, self.sysids = list(names), list(sysids)
         self.stop_s, self.budget_s, self.confirm_tries = stop_s, budget_s, confirm_tries
@@ -126,6 +128,9 @@ class Response:
             return
         v = vehicles[j]
         if not v.status.armed:
+            return
+        if self.landing(j) and v.status.mode == "AUTO":
+            self.history.setdefault(j, []).append("already on its final landing: left to land")
             return
         a = self.answers[j] = _Answer(since=now)
         if note:

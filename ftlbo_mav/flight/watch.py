@@ -132,9 +132,15 @@ class FlightWatch:
                                          landing=landing_points(planned))
         self.response = Response(policy, [v.name for v in vehicles],
                                  [v.sysid for v in vehicles], budget_s=budget_s,
-                                 route_check=self.rtl_problem)
+                                 route_check=self.rtl_problem, landing=self.landing)
         self.keeper: FormationKeeper | None = None
         self.started = False
+
+    def landing(self, j: int) -> bool:
+        """Vehicle j flies its mission's final NAV_LAND."""
+        mission, seq = self.planned.missions[j], self.vehicles[j].status.seq
+        return 0 < seq < len(mission) and mission[seq].command == CMD_NAV_LAND and all(
+            it.command != CMD_NAV_WAYPOINT for it in mission[seq + 1:])
 
     def rtl_problem(self, j: int) -> str | None:
         """Why vehicle j's RTL from where it is now would not be safe, or None."""
