@@ -148,6 +148,9 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
                    "not asked for, no progress): the others stop, then RTL to their rally "
                    "points and land (rally), or land where they are (land), or carry on "
                    "(continue). The one that left is never commanded against its choice.")
+@click.option("--lost-wait", type=FiniteFloat(0, 50), default=15.0, show_default=True,
+              help="Seconds a vehicle whose link is lost is waited for (it may fly on and "
+                   "come back) before it is reported gone and the flight ends.")
 @click.option("--keeper/--no-keeper", "use_keeper", default=True, show_default=True,
               help="Hold the formation in flight: leaders wait (short pauses), laggards "
                    "catch up (a faster next leg); see docs/flight.md.")
@@ -161,7 +164,7 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @timing_options
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
-                on_departure, use_keeper, arm_budget, preflight_timeout, flight_timeout,
+                on_departure, lost_wait, use_keeper, arm_budget, preflight_timeout, flight_timeout,
                 timeout, retries, ready_timeout, discover_timeout, signing_key):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
@@ -177,7 +180,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode,
                          keeper=KeeperOptions(enabled=use_keeper),
-                         policy=FaultPolicy(on_departure))
+                         policy=FaultPolicy(on_departure), lost_wait_s=lost_wait)
     keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
     check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end

@@ -41,7 +41,9 @@ __all__ = ["Fleet", "FlightLeftPlan", "FlyOptions", "PreflightError", "abort", "
 class FlyOptions:
     """``policy``: what the others do when one vehicle leaves the plan (:mod:`.policy`);
     ``departure_budget_s``: how long after the first departure the flight watches the
-    answer before it ends (every vehicle landed, or this spent); ``watch``: what counts
+    answer before it ends (every vehicle landed, or this spent); ``lost_wait_s``: how
+    long a vehicle whose link is lost is waited for before it is reported gone (within
+    the budget); ``watch``: what counts
     as a departure (:class:`~ftlbo_mav.flight.departures.WatchOptions`)."""
 
     ready_timeout_s: float = 60.0
@@ -55,6 +57,7 @@ class FlyOptions:
     keeper: KeeperOptions = KeeperOptions()
     policy: FaultPolicy = FaultPolicy.RALLY
     departure_budget_s: float = 50.0
+    lost_wait_s: float = 15.0
     watch: WatchOptions = WatchOptions()
 
 
@@ -108,7 +111,7 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     # are, or rally (they have not left their start points yet)
     policy = options.policy
     fw = FlightWatch(planned, vehicles, say=say, on_event=on_event, options=options.watch,
-                     budget_s=options.departure_budget_s,
+                     budget_s=options.departure_budget_s, lost_wait_s=options.lost_wait_s,
                      policy=FaultPolicy.LAND if policy is FaultPolicy.CONTINUE else policy)
     try:
         try:

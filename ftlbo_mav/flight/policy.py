@@ -63,7 +63,8 @@ class Response:
     ``ended`` once nothing is left to wait for; ``lines`` for the report."""
 
     def __init__(self, policy: FaultPolicy, names: Sequence[str], sysids: Sequence[int], *,
-                 stop_s: float = 3.0, budget_s: float = 50.0, confirm_tries: int = 5,
+                 stop_s: float = 3.0, budget_s: float = 50.0, lost_wait_s: float = 15.0,
+                 confirm_tries: int = 5,
                  t0: float | None = None,
                  route_check: Callable[[int], str | None] = lambda _j: None,
                  landing: Callable[[int], bool] = lambda _j: False) -> None:
@@ -72,6 +73,8 @@ class Response:
         self.route_check = route_check  # vehicle -> why RTL from here is not safe, or None
         self.names, self.sysids = list(names), list(sysids)
         self.stop_s, self.budget_s, self.confirm_tries = stop_s, budget_s, confirm_tries
+        self.lost_wait_s = lost_wait_s  # how long a lost link is waited for
+        self.lost_at: dict[int, float] = {}
         self.t0 = time.monotonic() if t0 is None else t0
         self.first_t: float | None = None
         self.left: dict[int, list[Event]] = {}  # vehicle -> its departures
@@ -104,6 +107,7 @@ class Response:
             self.left.setdefault(e.index, []).append(e)
             if e.kind == LINK_LOST:
                 self.lost.add(e.index)
+                self.lost_at[e.index] = e.t
             if e.vehicle_chose:
                 self.chose.add(e.index)
                 gone = self.answers.pop(e.index, None)  # its own choice now stands
@@ -185,13 +189,15 @@ class Response:
 
     def ended(self, vehicles: Sequence[FlightVehicle], now: float) -> bool:
         """Every vehicle the flight answers for has landed, or the budget is spent. Not
-        waited for: one that left by its own choice (its pilot or failsafe flies it now)
-        and one whose link is down (gone, unless it is back before the others land)."""
+        waited for: one that left by its own choice (its pilot or failsafe flies it now);
+        one whose link is down is waited for ``lost_wait_s`` after it was lost (it may
+        still fly its mission and come back), then reported gone."""
         if not self.active:
             return False
         if now - self.first_t >= self.budget_s:
             return True
-        return all(not v.status.armed or j in self.lost or j in self.chose
+        return all(not v.status.armed or j in self.chose
+                   or (j in self.lost and now - self.lost_at[j] >= self.lost_wait_s)
                    for j, v in enumerate(vehicles))
 
     # -- the report

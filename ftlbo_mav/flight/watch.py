@@ -124,6 +124,7 @@ class FlightWatch:
     def __init__(self, planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                  policy: FaultPolicy = FaultPolicy.RALLY,
                  options: WatchOptions = DEFAULT_WATCH, budget_s: float = 50.0,
+                 lost_wait_s: float = 15.0,
                  say: Callable[[str], None] = lambda _t: None,
                  on_event: Callable[[str], None] = lambda _t: None) -> None:
         self.planned, self.vehicles, self.say = planned, list(vehicles), say
@@ -132,6 +133,7 @@ class FlightWatch:
                                          landing=landing_points(planned))
         self.response = Response(policy, [v.name for v in vehicles],
                                  [v.sysid for v in vehicles], budget_s=budget_s,
+                                 lost_wait_s=lost_wait_s,
                                  route_check=self.rtl_problem, landing=self.landing)
         self.keeper: FormationKeeper | None = None
         self.started = False

@@ -95,7 +95,8 @@ def test_a_lost_vehicle_is_answered_once_its_link_is_back():
     assert [v.sent for v in vs] == [["pause"], [], ["pause"]]
     assert r.ended(vs, 4.0) is False
     vs[0].status.armed = vs[2].status.armed = False
-    assert r.ended(vs, 4.0)  # the lost one is not waited for
+    assert not r.ended(vs, 4.0)  # the lost one is waited for a while
+    assert r.ended(vs, 18.0)  # 15 s after its loss: gone
     vs[1].link_up = True
     r.react([Event(1, LINK_BACK, "heard from again", 6.0)], vs, watch, 6.0)
     assert vs[1].sent == ["pause"]

@@ -144,7 +144,7 @@ def test_a_vehicle_lost_mid_leg_stops_the_others_and_the_flight_ends(plan_dir):
             return time.monotonic()
 
         try:
-            result, took = _fly_with(plan_dir, fleet.urls, fault)
+            result, took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
             # uav1 (the others too) answered: RTL to its rally point, landed there
             answered = watcher.wait(lambda p: p.mode in ("RTL", "LAND") or not p.armed, 10.0)
         finally:
@@ -291,7 +291,7 @@ def test_a_link_that_drops_and_returns_is_picked_up_again(plan_dir):
             _in_auto_for(watcher, 3.0)
             bridge.drop()
             t = time.monotonic()
-            time.sleep(3.0)  # the radio is out of range for 3 s
+            time.sleep(3.0)  # the radio is out of range for 3 s (wall clock)
             bridge.restore()
             return t
 
