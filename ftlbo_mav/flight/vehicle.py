@@ -83,7 +83,8 @@ class FlightVehicle:
                  command_timeout_s: float = 1.5, command_retries: int = 5,
                  position_hz: float = 10.0) -> None:
         self.name, self.sysid, self.link = name, sysid, link
-        self.status = Status()
+        # found by its HEARTBEAT (Fleet's discovery) just now: heard from at creation
+        self.status = Status(heard_t=time.monotonic())
         self.on_position = on_position
         self.command_timeout_s = command_timeout_s
         self.command_retries = command_retries
