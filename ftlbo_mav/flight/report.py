@@ -38,6 +38,8 @@ def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
     sep = min_separation(positions)
     clear = min_clearance(positions, planned.centres, planned.radii)
     goal = planned.paths[:, -1, :2]
+    per_uav = [min_clearance(positions[:, n : n + 1], planned.centres, planned.radii)
+               for n in range(positions.shape[1])]
     summary = {
         "samples": len(times),
         "seconds": float(times[-1] - times[0]),
@@ -51,11 +53,30 @@ def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
         # separation (offsets differing in altitude only) pass at their homes' distance
         "min_separation_airborne_m": float(sep[airborne].min()) if airborne.any() else None,
         "min_clearance_m": float(clear.min()) if np.isfinite(clear).all() else None,
+        # predicted beside flown: what the planner predicted each UAV's flown path keeps
+        "clearance_per_uav_m": [_finite(c.min()) for c in per_uav],
+        "planned_clearance_m": planned.clearance_m,
+        "predicted_clearance_per_uav_m": _listed(planned.predicted_clearance),
+        "predicted_min_clearance_m": _least(planned.predicted_clearance),
+        "predicted_min_separation_m": _least(planned.predicted_separation),
         "inside_obstacle": bool((clear < 0).any()),
         "final_distance_to_goal_m": [
             float(d) for d in np.linalg.norm(positions[-1, :, :2] - goal, axis=1)],
     }
     return summary
+
+
+def _finite(value) -> float | None:
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
+def _listed(values) -> list | None:
+    return None if values is None else [_finite(v) for v in values]
+
+
+def _least(values) -> float | None:
+    return None if values is None or not len(values) else _finite(np.min(values))
 
 
 def render_report_png(planned: PlannedFlight, times, positions, seqs, summary: dict) -> bytes:
