@@ -101,8 +101,11 @@ def render_report_png(planned: PlannedFlight, times, positions, seqs, summary: d
             ground.plot(positions[:, n, 0], positions[:, n, 1], color=colour, lw=1.8,
                         label=f"{name} flown")
             side.plot(positions[:, n, 0], positions[:, n, 2], color=colour, lw=1.8)
-    ground.set(title="Ground track (obstacles green, clearance dotted)", xlabel="east [m]",
-               ylabel="north [m]", aspect="equal")
+    flown, predicted = summary.get("min_clearance_m"), summary.get("predicted_min_clearance_m")
+    kept = ("" if flown is None else f"; clearance flown {flown:.2f} m"
+            + ("" if predicted is None else f", predicted {predicted:.2f} m"))
+    ground.set(title=f"Ground track (obstacles green, clearance dotted{kept})",
+               xlabel="east [m]", ylabel="north [m]", aspect="equal")
     ground.legend(fontsize=8, ncol=2)
     side.set(title="Vertical profile", xlabel="east [m]", ylabel="altitude above home [m]")
 
