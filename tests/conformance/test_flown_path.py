@@ -46,7 +46,7 @@ EXAMPLE_TREES = [(12.2332852, 109.1146519, 4.0), (12.2333304, 109.1148449, 4.5),
                  (12.2333937, 109.1145692, 2.5)]
 
 
-def route(items, frame: LocalFrame, *, hold_m: float = 0.5):
+def route(items, frame: LocalFrame, *, hold_m: float = 0.01):
     """``(points (P, 3), holds (P,), speed)`` of a mission as ``fly`` starts it: from its
     start point (the first waypoint after the takeoff) on, points closer than ``hold_m``
     to the previous one merged (the zero-length first leg of a mission started at its
