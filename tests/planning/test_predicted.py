@@ -83,3 +83,19 @@ def test_the_example_keeps_its_clearance_on_the_flown_path_without_an_allowance(
         assert len(uav["predicted_leg_seconds"]) == len(uav["waypoints"]) - 1
     assert doc["predicted"]["min_clearance_m"] >= scenario.clearance_m - 1e-4
     assert doc["vehicle"]["WPNAV_ACCEL"] == 250.0
+
+
+def test_a_corner_stop_is_the_waypoints_hold_in_every_mission(example_path):
+    from dataclasses import replace
+
+    from ftlbo_mav.mission.waypoints import parse_waypoints
+
+    result = plan(load_scenario(example_path))
+    holds = np.zeros(len(result.centroid))
+    holds[1] = 1
+    files = plan_files(replace(result, holds_s=holds))
+    for n in (1, 2, 3):
+        items = parse_waypoints(files[f"uav{n}.waypoints"])
+        wps = [it for it in items[2:] if it.command == 16]
+        assert [it.param1 for it in wps] == list(holds)
+    assert json.loads(files["plan.json"])["predicted"]["holds_s"] == [0, 1, 0, 0]
