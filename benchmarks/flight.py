@@ -174,7 +174,7 @@ def write_recording(path: Path, plan_dir: Path, samples, summary: dict, *, strat
     """The flight as tests/data's recordings are: what was flown (every position sample
     in AUTO), the plan and missions it flew, how it was recorded."""
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    back = (f"ArduCopter 4.5.6 SITL ({binary}; our own build at bbf0b066, started by "
+    back = ("ArduCopter 4.5.6 SITL ($ARDUPILOT_SITL: our own build at bbf0b066, started by "
             f"`python -m sitl`'s launcher with copter.parm only, --speedup {speedup:g})"
             if binary else f"the emulator (time scale {speedup:g})")
     doc = {
