@@ -317,3 +317,23 @@ def breaches(geometry: FenceGeometry, *, east_north: np.ndarray, alt_m: float,
         if outside or inside_circle:
             out |= TYPE_POLYGON
     return out
+
+
+RALLY_LIMIT_M = 300.0  # AP_Rally.cpp RALLY_LIMIT_KM_DEFAULT 0.3 (copter)
+
+
+def rtl_target(position_en, home_en, rally_en) -> int | None:
+    """Where ArduCopter's RTL goes from ``position_en``: the index of the rally point in
+    ``rally_en`` ((K, 2) east/north), or None for home (AP_Rally::
+    calc_best_rally_or_home_location with RALLY_INCL_HOME 1: the nearest rally point
+    within RALLY_LIMIT_KM if it is nearer than home, else home)."""
+    rally = np.asarray(rally_en, float).reshape(-1, 2)
+    if not len(rally):
+        return None
+    here = np.asarray(position_en, float)[:2]
+    d = np.hypot(*(rally - here).T)
+    k = int(np.argmin(d))
+    home = float(np.hypot(*(here - np.asarray(home_en, float)[:2])))
+    if d[k] > RALLY_LIMIT_M or d[k] >= home:
+        return None
+    return k

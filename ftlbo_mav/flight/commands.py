@@ -15,17 +15,22 @@ import click
 
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, PORT, SYSIDS, FiniteFloat
+from ..errors import FtlboError
 from ..link.commands import _timing, _urls, timing_options
 from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
 from ..mission.files import OutputFolder, check_writable
 from .control import DEFAULT_CONTROL_PORT, ControlServer, request_abort
-from .fly import Fleet, FlyOptions, abort, fly, make_keeper
+from .departures import DepartureWatch
+from .fleet import concurrently
+from .fly import Fleet, FlightLeftPlan, FlyOptions, abort, fly, make_keeper
 from .keeper import KeeperOptions
 from .monitor import LiveView, Monitor
 from .planned import PlannedFlight, load_planned_flight
+from .policy import FaultPolicy
 from .report import render_report_png, summarize
-from .vehicle import FlightAborted
+from .vehicle import FlightAborted, FlightError
+from .watch import describe, landing_points, observe, watch_from_outside
 
 _link_options = [
     click.option("--sysid", "sysid_text", required=True, type=SYSIDS,
@@ -60,7 +65,8 @@ def _control(port: int, fleet: Fleet):
         wanted = [v for v in fleet.vehicles if sysids is None or v.sysid in sysids]
         held = {v.sysid for v in fleet.vehicles}
         late = set(abort(wanted, mode=mode))
-        results = {v.sysid: "NOT CONFIRMED" if v.name in late else mode for v in wanted}
+        results = {v.sysid: mode if v.name not in late else "NOT CONFIRMED" if v.link_up
+                   else "NOT REACHED (link down)" for v in wanted}
         return results, [s for s in (sysids or []) if s not in held]
 
     return ControlServer(on_abort, port=port)
@@ -75,11 +81,17 @@ def _forwarding(url: str | None, fleet: Fleet):
 
 
 def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
-                        sysids: list[int], *, keeper=None) -> dict:
-    """flight.csv, summary.json and report.png in ``out_dir``; returns the summary."""
+                        sysids: list[int], *, keeper=None, outcome: list[str] | None = None,
+                        events: list[str] | None = None) -> dict:
+    """flight.csv, summary.json and report.png in ``out_dir``; returns the summary.
+    ``events``: the departures seen, one line each; ``outcome``: per vehicle, what
+    happened and what was done when the flight left its plan."""
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)
     summary = summarize(planned, times, positions, seqs)
     summary["position_rate_hz"] = {str(s): round(monitor.record.rate_hz(s), 2) for s in sysids}
+    summary["departures"] = list(events or [])
+    if outcome is not None:
+        summary["outcome"] = list(outcome)
     if keeper is not None:
         summary["keeper"] = {"enabled": keeper.options.enabled,
                              "off_reason": keeper.off_reason,
@@ -130,6 +142,16 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @click.option("--control-port", type=PORT, default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="127.0.0.1 port where `ftlbo-mav abort` reaches this flight (0: none).")
+@click.option("--on-departure", "on_departure",
+              type=click.Choice([p.value for p in FaultPolicy]), default="rally",
+              show_default=True,
+              help="When one vehicle leaves the plan (link lost, a mode or failsafe it was "
+                   "not asked for, no progress): the others stop, then RTL to their rally "
+                   "points and land (rally), or land where they are (land), or carry on "
+                   "(continue). The one that left is never commanded against its choice.")
+@click.option("--lost-wait", type=FiniteFloat(0, 50), default=15.0, show_default=True,
+              help="Seconds a vehicle whose link is lost is waited for (it may fly on and "
+                   "come back) before it is reported gone and the flight ends.")
 @click.option("--keeper/--no-keeper", "use_keeper", default=True, show_default=True,
               help="Hold the formation in flight: leaders wait (short pauses), laggards "
                    "catch up (a faster next leg); see docs/flight.md.")
@@ -143,8 +165,8 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
 @timing_options
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
-                use_keeper, arm_budget, preflight_timeout, flight_timeout, timeout, retries,
-                ready_timeout, discover_timeout, signing_key):
+                on_departure, lost_wait, use_keeper, arm_budget, preflight_timeout, flight_timeout,
+                timeout, retries, ready_timeout, discover_timeout, signing_key):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
@@ -158,7 +180,8 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     monitor = Monitor(planned)
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode,
-                         keeper=KeeperOptions(enabled=use_keeper))
+                         keeper=KeeperOptions(enabled=use_keeper),
+                         policy=FaultPolicy(on_departure), lost_wait_s=lost_wait)
     keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
     check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end
@@ -167,21 +190,38 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
             _control(control_port, fleet):
         monitor.vehicles = fleet.vehicles
         view = LiveView(monitor, sys.stderr)
+        events: list[str] = []
+
+        def report(**extra) -> dict:
+            return write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper,
+                                       events=events, **extra)
+
         try:
             fly(planned, fleet.vehicles, options=options,
                 timing=_timing(timeout, retries, ready_timeout), say=view.message,
-                tick=view.update, keeper=keeper)
+                tick=view.update, keeper=keeper, on_event=events.append)
             view.update(force=True)
         except KeyboardInterrupt:
-            summary = write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper)
-            _print_summary(summary, out_dir)
+            _print_summary(report(), out_dir)
             sys.exit(130)
         except FlightAborted as exc:
-            summary = write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper)
+            summary = report()
             click.echo(f"flight aborted: every vehicle sent to {exc.mode}")
             _print_summary(summary, out_dir)
             sys.exit(1)
-    summary = write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper)
+        except FlightLeftPlan as exc:
+            summary = report(outcome=exc.lines)
+            click.echo("the flight left its plan:")
+            for line in exc.lines:
+                click.echo(f"  {line}")
+            _print_summary(summary, out_dir)
+            sys.exit(1)
+        except FlightError as exc:
+            summary = report(outcome=[str(exc)])
+            click.echo(f"error: {exc}")
+            _print_summary(summary, out_dir)
+            sys.exit(1)
+    summary = report()
     click.echo("all vehicles finished their missions")
     _print_summary(summary, out_dir)
 
@@ -218,6 +258,9 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
                on_position=watch, position_hz=rate) as fleet, _forwarding(forward, fleet):
         watch.vehicles = fleet.vehicles
         view = LiveView(watch, sys.stderr)
+        departures = DepartureWatch(len(sysids),
+                                    landing=landing_points(planned) if planned else None)
+        events: list[str] = []
         end = time.monotonic() + duration if duration else float("inf")
         flew = set()
         try:
@@ -226,14 +269,51 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
                 if flew and len(flew) == len(sysids) and not any(
                         v.status.armed for v in fleet.vehicles):
                     break  # every vehicle flew and has landed
+                watch_from_outside(departures, fleet.vehicles, planned)
+                seen = [observe(v, planned) for v in fleet.vehicles]
+                for e in departures.check(seen, time.monotonic()):
+                    events.append(describe(e, fleet.vehicles))
+                    view.message(events[-1])
                 view.update()
                 time.sleep(0.1)
         except KeyboardInterrupt:
             pass
         view.update(force=True)
+    departed = [e for e in departures.events if e.departure]
+    if departed:
+        click.echo(f"{len(departed)} departure(s) from the plan:")
+        for line in events:
+            click.echo(f"  {line}")
     if planned is not None:
         out_dir = log_dir or plan_dir / "monitor"
-        _print_summary(write_flight_report(planned, watch, out_dir, sysids), out_dir)
+        _print_summary(write_flight_report(planned, watch, out_dir, sysids, events=events),
+                       out_dir)
+    if departed:
+        sys.exit(1)
+
+
+def _abort_directly(rest, mode: str, key, discover_timeout: float) -> dict[int, str]:
+    """Abort over links of our own, one link at a time for all its vehicles, every link
+    at once: a link that cannot be opened, or a vehicle not heard, is its own line."""
+    by_url: dict[str, list] = {}
+    for n, s, u in rest:
+        by_url.setdefault(u, []).append((n, s))
+
+    def one_link(item) -> dict[int, str]:
+        url, members = item
+        try:
+            with Fleet([n for n, _ in members], [s for _, s in members], [url] * len(members),
+                       signing_key=key, discover_timeout_s=discover_timeout,
+                       position_hz=1.0) as fleet:
+                late = set(abort(fleet.vehicles, mode=mode))
+        except FtlboError as exc:
+            return {s: f"NOT REACHED ({exc})" for _, s in members}
+        return {s: "NOT CONFIRMED" if n in late else mode for n, s in members}
+
+    out: dict[int, str] = {}
+    for part in concurrently(one_link, list(by_url.items())):
+        out.update(part)
+    return out
 
 
 @click.command(name="abort")
@@ -242,8 +322,10 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
 @click.option("--control-port", type=PORT, default=DEFAULT_CONTROL_PORT,
               show_default=True,
               help="Reach a running `ftlbo-mav fly` here first (0: open links directly).")
-@click.option("--discover-timeout", type=FiniteFloat(0.1, 86_400), default=5.0,
-              show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
+@click.option("--discover-timeout", type=FiniteFloat(0.1, 86_400), default=1.5,
+              show_default=True,
+              help="Seconds to wait for each vehicle's link and HEARTBEAT (ArduPilot "
+                   "sends one a second); one that does not answer is named, not waited for.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
 @user_errors
@@ -264,11 +346,7 @@ def abort_command(sysid_text, connect, land, control_port, discover_timeout, sig
     rest = [(n, s, u) for n, s, u in zip(names, sysids, urls) if s not in results]
     if rest:
         key = load_key(signing_key) if signing_key else None
-        with Fleet([n for n, _, _ in rest], [s for _, s, _ in rest], [u for _, _, u in rest],
-                   signing_key=key, discover_timeout_s=discover_timeout,
-                   position_hz=1.0) as fleet:
-            late = set(abort(fleet.vehicles, mode=mode))
-        results.update({s: "NOT CONFIRMED" if n in late else mode for n, s, _ in rest})
+        results.update(_abort_directly(rest, mode, key, discover_timeout))
     for s in sysids:
         click.echo(f"sysid {s}: {results[s]}")
     if any(results[s] != mode for s in sysids):

@@ -20,6 +20,7 @@ from pymavlink.dialects.v20 import ardupilotmega as R
 from ..ardupilot.modes import CopterMode, mode_name
 from ..ardupilot.streams import flight_streams
 from ..errors import FtlboError
+from ..link.endpoints import LinkError
 
 
 class FlightError(FtlboError):
@@ -28,6 +29,10 @@ class FlightError(FtlboError):
     def __init__(self, name: str, sysid: int, step: str, problem: str) -> None:
         self.name, self.sysid, self.step = name, sysid, step
         super().__init__(f"{name} (sysid {sysid}): {step}: {problem}")
+
+
+class LinkLost(FlightError):
+    """A command could not be sent: the vehicle's link is down (closed, broken)."""
 
 
 class FlightAborted(FtlboError):
@@ -59,7 +64,12 @@ class Status:
     # in bursts, so the arrival time overstates how fresh a position is)
     clock_offset_s: float | None = None
     heartbeat_t: float = 0.0
+    heard_t: float = 0.0  # the last message of any kind from the vehicle
     texts: list[str] = field(default_factory=list)
+    # every STATUSTEXT as (arrival time, severity, text), the last 50; text_count counts
+    # them all, so a watcher knows which ones are new
+    text_log: list[tuple[float, int, str]] = field(default_factory=list)
+    text_count: int = 0
     acks: dict[int, int] = field(default_factory=dict)
     params: dict[str, float] = field(default_factory=dict)
 
@@ -73,12 +83,17 @@ class FlightVehicle:
                  command_timeout_s: float = 1.5, command_retries: int = 5,
                  position_hz: float = 10.0) -> None:
         self.name, self.sysid, self.link = name, sysid, link
-        self.status = Status()
+        # found by its HEARTBEAT (Fleet's discovery) just now: heard from at creation
+        self.status = Status(heard_t=time.monotonic())
         self.on_position = on_position
         self.command_timeout_s = command_timeout_s
         self.command_retries = command_retries
         self._changed = threading.Condition()
         self._requested_mode: str | None = None
+        # the mode this ground station last asked for, and when (a mode it did not ask
+        # for is the pilot's, a failsafe's or another station's: flight/departures.py)
+        self.asked_mode: str | None = None
+        self.asked_t = 0.0
         # set by an abort: from then on only this mode may be asked for
         self.aborted_to: str | None = None
         self._channel = link.channel(sysid)
@@ -103,6 +118,7 @@ class FlightVehicle:
         kind, s, now = msg.get_type(), self.status, time.monotonic()
         position = False
         with self._changed:
+            s.heard_t = now
             if kind == "HEARTBEAT":
                 s.mode = mode_name(msg.custom_mode)
                 s.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
@@ -134,6 +150,9 @@ class FlightVehicle:
             elif kind == "STATUSTEXT":
                 s.texts.append(msg.text)
                 del s.texts[:-20]
+                s.text_log.append((now, msg.severity, msg.text))
+                del s.text_log[:-50]
+                s.text_count += 1
             else:
                 return
             self._changed.notify_all()
@@ -151,9 +170,18 @@ class FlightVehicle:
                 self._changed.wait(min(left, 0.1))
             return True
 
+    @property
+    def link_up(self) -> bool:
+        """False while the link is closed by the other end (it reconnects by itself)."""
+        return self.link.up
+
     # -- commands
-    def send(self, msg) -> None:
-        self.link.send(msg)
+    def send(self, msg, *, step: str = "send") -> None:
+        """Send on the vehicle's link; :class:`LinkLost` when the link is down."""
+        try:
+            self.link.send(msg)
+        except LinkError as exc:
+            raise LinkLost(self.name, self.sysid, step, str(exc)) from None
 
     def command(self, command: int, *params: float, step: str,
                 timeout_s: float | None = None, retries: int | None = None) -> int:
@@ -170,7 +198,8 @@ class FlightVehicle:
         for attempt in range(retries + 1):
             with self._changed:
                 self.status.acks.pop(command, None)
-            self.send(R.MAVLink_command_long_message(self.sysid, 1, command, min(attempt, 255), *p))
+            self.send(R.MAVLink_command_long_message(self.sysid, 1, command, min(attempt, 255), *p),
+                      step=step)
             if self.wait_for(lambda s: command in s.acks, timeout_s):
                 return self.status.acks[command]
         raise FlightError(self.name, self.sysid, step,
@@ -192,9 +221,10 @@ class FlightVehicle:
         if self.aborted_to is not None and mode != self.aborted_to:
             raise FlightAborted(self.name, self.sysid, self.aborted_to)
         self._requested_mode = mode
+        self.asked_mode, self.asked_t = mode, time.monotonic()
         self.send(R.MAVLink_command_long_message(
             self.sysid, 1, R.MAV_CMD_DO_SET_MODE, 0, R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-            CopterMode[mode], 0, 0, 0, 0, 0))
+            CopterMode[mode], 0, 0, 0, 0, 0), step=f"mode {mode}")
 
     def set_mode(self, mode: str, *, timeout_s: float = 5.0) -> None:
         """Switch to ``mode``; confirmed by its acknowledgement or the HEARTBEAT (resent
@@ -242,7 +272,8 @@ class FlightVehicle:
         if self.aborted_to is not None:
             raise FlightAborted(self.name, self.sysid, self.aborted_to)
         self.send(R.MAVLink_command_long_message(
-            self.sysid, 1, R.MAV_CMD_DO_PAUSE_CONTINUE, 0, 0 if pause else 1, 0, 0, 0, 0, 0, 0))
+            self.sysid, 1, R.MAV_CMD_DO_PAUSE_CONTINUE, 0, 0 if pause else 1, 0, 0, 0, 0, 0, 0),
+            step="pause" if pause else "continue")
 
     def set_current(self, seq: int, *, timeout_s: float = 5.0) -> None:
         """Make ``seq`` the current mission item.

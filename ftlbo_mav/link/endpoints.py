@@ -34,6 +34,11 @@ class LinkError(FtlboError):
     """A link cannot be opened, or a requested vehicle is not on any link."""
 
 
+class LinkDown(LinkError, ConnectionResetError):
+    """A message could not be sent: the link is closed or broken (and not yet back).
+    Also a ConnectionResetError, for callers that handle a broken socket as such."""
+
+
 MAX_SYSID = 254  # 255 is the ground station's
 
 
@@ -160,17 +165,19 @@ class Link:
     """
 
     def __init__(self, url: str, *, signing_key: bytes | None = None,
-                 connect_timeout_s: float = 5.0):
+                 connect_timeout_s: float = 5.0, reconnect: bool = True,
+                 reconnect_every_s: float = 0.5):
         self.url = url
-        self._conn = _open(url, timeout_s=connect_timeout_s)
-        if signing_key is not None:
-            # Sign what we send; accept what arrives whether signed or not (a vehicle
-            # with signing enabled signs its replies, one without does not).
-            self._conn.setup_signing(signing_key, sign_outgoing=True,
-                                     allow_unsigned_callback=lambda _mav, _msgid: True)
-        # pymavlink prints and retries on a closed TCP peer; here it ends the reader instead
+        self.signing_key = signing_key
+        self._conn = self._prepare(_open(url, timeout_s=connect_timeout_s))
+        # a TCP peer that closes (a vehicle that reboots, a radio bridge that drops) is
+        # connected to again every ``reconnect_every_s`` while the link is open; other
+        # links (UDP, serial) simply resume when messages arrive again
+        self.reconnect = reconnect and url.startswith("tcp:")
+        self.reconnect_every_s = reconnect_every_s
         self.closed_by_peer = False
-        self._conn.handle_eof = self._conn.handle_disconnect = self._peer_closed
+        self.down_since: float | None = None  # monotonic time the peer closed, while down
+        self.reconnects = 0
         self._send_lock = threading.Lock()
         self._subs_lock = threading.Lock()
         self._queues: dict[int, list[queue.SimpleQueue]] = {}
@@ -186,6 +193,22 @@ class Link:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
         self._thread.start()
+
+    def _prepare(self, conn):
+        if self.signing_key is not None:
+            # Sign what we send; accept what arrives whether signed or not (a vehicle
+            # with signing enabled signs its replies, one without does not).
+            conn.setup_signing(self.signing_key, sign_outgoing=True,
+                               allow_unsigned_callback=lambda _mav, _msgid: True)
+        # pymavlink prints and retries on a closed TCP peer; here the reader notes it
+        # (and reconnects, see _run) instead
+        conn.handle_eof = conn.handle_disconnect = self._peer_closed
+        return conn
+
+    @property
+    def up(self) -> bool:
+        """False from the moment the peer closed until the link is connected again."""
+        return not self.closed_by_peer
 
     # -- lifetime
     def close(self) -> None:
@@ -204,14 +227,25 @@ class Link:
 
     # -- sending and receiving
     def send(self, msg) -> None:
-        """Send one message (a pymavlink message object) from the ground station's ids."""
+        """Send one message (a pymavlink message object) from the ground station's ids;
+        :class:`LinkDown` when the link is closed or broken."""
         with self._send_lock:
-            self._conn.mav.send(msg)
+            if self.closed_by_peer:
+                raise LinkDown(f"{self.url}: link down (closed by the other end)")
+            try:
+                self._conn.mav.send(msg)
+            except (OSError, ValueError) as exc:
+                raise LinkDown(f"{self.url}: link down ({exc})") from None
 
     def write_raw(self, data: bytes) -> None:
         """Send an already packed MAVLink frame unchanged (a relayed ground station's)."""
         with self._send_lock:
-            self._conn.write(data)
+            if self.closed_by_peer:
+                raise LinkDown(f"{self.url}: link down (closed by the other end)")
+            try:
+                self._conn.write(data)
+            except (OSError, ValueError) as exc:
+                raise LinkDown(f"{self.url}: link down ({exc})") from None
 
     def want(self, sysid: int, rates) -> None:
         """Have vehicle ``sysid`` send these messages (``{msgid: hz}``) on this link,
@@ -233,7 +267,7 @@ class Link:
         for m in out:
             try:
                 self.send(m)
-            except OSError:
+            except LinkError:
                 return
 
     def channel(self, sysid: int) -> Channel:
@@ -253,6 +287,11 @@ class Link:
     def _run(self) -> None:
         next_beat = 0.0
         while not self._stop.is_set():
+            if self.closed_by_peer:
+                if not self.reconnect or self._stop.wait(self.reconnect_every_s):
+                    return
+                self._connect_again()
+                continue
             now = time.monotonic()
             if now >= next_beat:
                 next_beat = now + 1.0
@@ -260,7 +299,7 @@ class Link:
                     self.send(mavlink2.MAVLink_heartbeat_message(
                         mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0,
                         mavlink2.MAV_STATE_ACTIVE, 3))
-                except OSError:
+                except LinkError:
                     pass
             self._ask_streams(now)
             try:
@@ -268,11 +307,27 @@ class Link:
                 while (msg := self._conn.recv_msg()) is not None:
                     self._dispatch(msg)
             except (OSError, ValueError):
-                if self.closed_by_peer or self._stop.wait(0.1):
+                if not self.closed_by_peer and self._stop.wait(0.1):
                     return
 
+    def _connect_again(self) -> None:
+        """One attempt to open the TCP connection again (the peer closed it)."""
+        try:
+            conn = self._prepare(_open(self.url, timeout_s=0.0))
+        except LinkError:
+            return
+        with self._send_lock:
+            try:
+                self._conn.close()
+            except OSError:
+                pass
+            self._conn = conn
+            self.closed_by_peer, self.down_since = False, None
+            self.reconnects += 1
+
     def _peer_closed(self) -> None:
-        self.closed_by_peer = True
+        if not self.closed_by_peer:
+            self.closed_by_peer, self.down_since = True, time.monotonic()
         raise ConnectionResetError(f"{self.url}: closed by the other end")
 
     def _dispatch(self, msg) -> None:
@@ -348,12 +403,13 @@ class Channel:
 
 
 def open_links(urls: Sequence[str], *, signing_key: bytes | None = None,
-               connect_timeout_s: float = 5.0) -> list[Link]:
+               connect_timeout_s: float = 5.0, reconnect: bool = True) -> list[Link]:
     """Open every link, closing those already opened if one fails."""
     links: list[Link] = []
     try:
         for url in urls:
-            links.append(Link(url, signing_key=signing_key, connect_timeout_s=connect_timeout_s))
+            links.append(Link(url, signing_key=signing_key, connect_timeout_s=connect_timeout_s,
+                              reconnect=reconnect))
     except BaseException:
         for link in links:
             link.close()

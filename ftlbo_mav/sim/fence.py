@@ -28,8 +28,6 @@ import numpy as np
 from ..ardupilot import fence as ap
 from ..ardupilot.storage import WireItem
 
-RALLY_LIMIT_M = 300.0  # AP_Rally.cpp RALLY_LIMIT_KM_DEFAULT 0.3 (copter)
-
 
 class FenceGuard:
     """One copter's stored fence and rally points, and its breach state."""
@@ -81,14 +79,9 @@ class FenceGuard:
 
     def return_target(self, position: np.ndarray) -> np.ndarray:
         """Where RTL goes: ``(east, north, alt)``; home is ``(0, 0, 0)``."""
-        home = np.zeros(3)
-        if not len(self.rally):
-            return home
-        d = np.hypot(self.rally[:, 0] - position[0], self.rally[:, 1] - position[1])
-        k = int(np.argmin(d))
-        if d[k] > RALLY_LIMIT_M or d[k] >= float(np.hypot(*position[:2])):
-            return home
-        return self.rally[k].copy()
+        k = ap.rtl_target(position[:2], (0.0, 0.0), self.rally[:, :2]) if len(
+            self.rally) else None
+        return np.zeros(3) if k is None else self.rally[k].copy()
 
     def rtl_alt_limit(self, params: Mapping[str, float]) -> float | None:
         """The highest RTL return altitude the altitude fence allows, or None."""

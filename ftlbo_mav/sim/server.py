@@ -77,6 +77,7 @@ class VehicleRunner:
             self.packer.signing.timestamp = _signing_timestamp()
         self.attachments: list[_Attachment] = []
         self.items_received = 0  # MISSION_ITEM_INTs, for Faults.close_after_items
+        self.dead = False  # killed (Simulator.kill): no more flying, sending or answering
 
     def attach(self, write: Callable[[bytes], None], link: Hashable = "SERIAL0", *,
                close: Callable[[], None] | None = None) -> _Attachment:
@@ -98,7 +99,7 @@ class VehicleRunner:
 
     def feed(self, att: _Attachment, data: bytes) -> None:
         """Bytes from a client: parse, then each message through the uplink's faults."""
-        if self.faults.silent:
+        if self.faults.silent or self.dead:
             return
         for msg in att.parser.parse_buffer(data) or []:
             if msg.get_type() == "BAD_DATA":
@@ -138,6 +139,8 @@ class VehicleRunner:
                 self.detach(att)
 
     def tick(self) -> None:
+        if self.dead:
+            return
         out = self.vehicle.tick(self.clock())
         if self.faults.silent:
             return
@@ -170,10 +173,14 @@ class _SharedUdp(asyncio.DatagramProtocol):
 
 
 class Simulator:
-    """N emulated ArduCopters, system ids ``first_sysid``.., one TCP port each.
+    """N emulated ArduCopters, system ids ``first_sysid``.., two TCP ports each.
 
     ``homes``: ``(lat_deg, lon_deg, alt_m AMSL)`` per vehicle. ``base_port``: vehicle i
-    listens on ``base_port + 10*i``; ``0`` lets the system choose free ports (tests).
+    listens on ``base_port + 10*i`` (SERIAL0) and, as SITL's second serial port does,
+    ``base_port + 10*i + 2`` (SERIAL1: another ground station, a pilot's telemetry);
+    ``0`` lets the system choose free ports (tests). Faults in flight, for tests:
+    :meth:`kill` (the vehicle's process dies), :meth:`drop_link` (its SERIAL0 link drops
+    and comes back).
     ``faults`` / ``options``: one for all vehicles, or one per vehicle. ``seed``: seeds
     the fault decisions. ``time_scale``: the vehicles' clock runs this many times faster
     than the wall clock (flights in tests; link latency stays real). ``vary``: each
@@ -210,7 +217,10 @@ class Simulator:
                 [seed, 0x7A, i]))) for i, o in enumerate(self.options)]
         self.signing_key, self.seed, self.first_sysid = signing_key, seed, first_sysid
         self.ports: list[int] = []
+        self.serial1_ports: list[int] = []
         self.runners: list[VehicleRunner] = []
+        self._servers: list[dict] = []  # per vehicle: link -> asyncio server
+        self._writers: list[dict] = []  # per vehicle: link -> set of client writers
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
         self._stopping: asyncio.Event | None = None
@@ -219,6 +229,11 @@ class Simulator:
     @property
     def urls(self) -> list[str]:
         return [f"tcp:{self.host}:{p}" for p in self.ports]
+
+    @property
+    def serial1_urls(self) -> list[str]:
+        """Each vehicle's second port (SITL's SERIAL1, TCP 5762 + 10*i)."""
+        return [f"tcp:{self.host}:{p}" for p in self.serial1_ports]
 
     @property
     def udp_url(self) -> str | None:
@@ -244,11 +259,15 @@ class Simulator:
                                               signing_key=self.signing_key, clock=clock))
         servers = []
         try:
-            for i, runner in enumerate(self.runners):
-                port = self.base_port + 10 * i if self.base_port else 0
-                server = await asyncio.start_server(self._client_handler(runner), self.host, port)
-                servers.append(server)
-                self.ports.append(server.sockets[0].getsockname()[1])
+            for i in range(len(self.runners)):
+                self._servers.append({})
+                self._writers.append({"SERIAL0": set(), "SERIAL1": set()})
+                for link, ports, offset in (("SERIAL0", self.ports, 0),
+                                            ("SERIAL1", self.serial1_ports, 2)):
+                    port = self.base_port + 10 * i + offset if self.base_port else 0
+                    server = await self._listen(i, link, port)
+                    servers.append(server)
+                    ports.append(server.sockets[0].getsockname()[1])
             udp = None
             if self.udp_out:
                 udp, _ = await loop.create_datagram_endpoint(
@@ -264,32 +283,43 @@ class Simulator:
             if udp is not None:
                 udp.close()
         finally:
-            for s in servers:
-                s.close()
+            for server in [s for d in self._servers for s in d.values()]:
+                server.close()
             for writer in self._clients.values():  # clients are dropped, as SITL exiting does
                 writer.close()
             await asyncio.gather(*self._clients, return_exceptions=True)
             for s in servers:
                 await s.wait_closed()
 
-    def _client_handler(self, runner: VehicleRunner):
+    async def _listen(self, i: int, link: str, port: int):
+        server = await asyncio.start_server(self._client_handler(self.runners[i], link, i),
+                                            self.host, port)
+        self._servers[i][link] = server
+        return server
+
+    def _client_handler(self, runner: VehicleRunner, link: str, index: int):
         one_at_a_time = asyncio.Lock()
 
         async def serve(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
             task = asyncio.current_task()
             self._clients[task] = writer
+            self._writers[index][link].add(writer)
             try:
-                await self._serve(runner, one_at_a_time, reader, writer)
+                await self._serve(runner, one_at_a_time, reader, writer, link)
             finally:
                 del self._clients[task]
+                self._writers[index][link].discard(writer)
 
         return serve
 
     async def _serve(self, runner: VehicleRunner, one_at_a_time: asyncio.Lock,
-                     reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+                     reader: asyncio.StreamReader, writer: asyncio.StreamWriter,
+                     link: str = "SERIAL0") -> None:
         try:
             async with one_at_a_time:  # the next client is served after this one leaves
-                att = runner.attach(writer.write, close=writer.close)
+                if runner.dead:
+                    return
+                att = runner.attach(writer.write, link, close=writer.close)
                 try:
                     while data := await reader.read(4096):
                         runner.feed(att, data)
@@ -334,6 +364,38 @@ class Simulator:
         """Run ``fn`` in the simulator's loop thread and return its result (inspection)."""
         fut = asyncio.run_coroutine_threadsafe(_call(fn), self._loop)
         return fut.result(timeout=5.0)
+
+    # -- faults in flight (from another thread: tests)
+    def kill(self, index: int) -> None:
+        """Vehicle ``index`` dies as a killed SITL process does: its connections close,
+        its ports refuse, it neither flies nor says anything again."""
+
+        async def die() -> None:
+            self.runners[index].dead = True
+            self._close(index, ("SERIAL0", "SERIAL1"))
+
+        asyncio.run_coroutine_threadsafe(die(), self._loop).result(timeout=5.0)
+
+    def drop_link(self, index: int, down_s: float) -> None:
+        """Vehicle ``index``'s SERIAL0 link drops (its client is disconnected, the port
+        refuses) for ``down_s`` wall seconds, then listens again; the vehicle flies on."""
+        port = self.ports[index]
+
+        async def drop() -> None:
+            self._close(index, ("SERIAL0",))
+            await asyncio.sleep(down_s)
+            if not self._stopping.is_set():
+                await self._listen(index, "SERIAL0", port)
+
+        asyncio.run_coroutine_threadsafe(drop(), self._loop)
+
+    def _close(self, index: int, links) -> None:
+        for link in links:
+            server = self._servers[index].pop(link, None)
+            if server is not None:
+                server.close()
+            for writer in list(self._writers[index][link]):
+                writer.close()
 
     # -- foreground (the CLI)
     def run(self, ready: Callable[[], None] = lambda: None) -> None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import socket
+from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -24,12 +25,17 @@ FAST = VehicleOptions(heartbeat_s=0.2)  # quicker discovery; protocol timings st
 
 @dataclass
 class Fleet:
-    """Running vehicles: ``urls[i]`` reaches system id i+1; ``sim`` is the emulator, if any."""
+    """Running vehicles: ``urls[i]`` reaches system id i+1, ``serial1_urls[i]`` its
+    second port (SITL's SERIAL1: another station, a pilot); ``kill(i)`` ends vehicle i
+    as a crash does (its SITL process killed by pid, or the emulator's ``kill``);
+    ``sim`` is the emulator, if any."""
 
     urls: list[str]
     sim: Simulator | None = None
     udp_url: str | None = None
     extra: dict = field(default_factory=dict)
+    serial1_urls: list[str] = field(default_factory=list)
+    kill: Callable[[int], None] | None = None
 
     def missions(self) -> list[list]:
         """What each emulated vehicle stores (emulator only)."""
@@ -56,11 +62,14 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
         from sitl import SitlSwarm
 
         with SitlSwarm(binary=SITL_BINARY, homes=homes, speedup=speedup) as swarm:
-            yield Fleet(urls=swarm.urls)
+            serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
+            yield Fleet(urls=swarm.urls, serial1_urls=serial1,
+                        kill=lambda i: swarm.processes[i].kill())
         return
     udp_out = ("127.0.0.1", free_udp_port()) if shared_link else None
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
                    signing_key=signing_key, seed=seed) as sim:
-        yield Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url)
+        yield Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
+                    serial1_urls=sim.serial1_urls, kill=sim.kill)

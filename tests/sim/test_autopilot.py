@@ -5,15 +5,8 @@ import pytest
 
 from ftlbo_mav.ardupilot.commands import BootTimeline
 from ftlbo_mav.mission.items import build_mission
-from ftlbo_mav.sim.autopilot import (
-    AUTO,
-    GUIDED,
-    LAND,
-    RTL,
-    Autopilot,
-    AutopilotOptions,
-    LocalTangent,
-)
+from ftlbo_mav.sim.autopilot import Autopilot, AutopilotOptions, LocalTangent
+from ftlbo_mav.sim.modes.common import AUTO, GUIDED, LAND, RTL
 
 HOME = (12.2332099, 109.1145051)
 

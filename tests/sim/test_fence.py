@@ -20,9 +20,10 @@ from ftlbo_mav.mission.export import read_plan
 from ftlbo_mav.mission.fence import plan_fences
 from ftlbo_mav.mission.fence_files import FenceSet
 from ftlbo_mav.scenario import load_scenario
-from ftlbo_mav.sim.autopilot import BRAKE, GUIDED, RTL, Autopilot, LocalTangent
+from ftlbo_mav.sim.autopilot import Autopilot, LocalTangent
 from ftlbo_mav.sim.homes import scenario_homes
 from ftlbo_mav.sim.loopback import LoopbackChannel
+from ftlbo_mav.sim.modes.common import BRAKE, GUIDED, RTL
 from ftlbo_mav.sim.vehicle import Vehicle, VehicleOptions
 
 from ..conftest import EXAMPLE

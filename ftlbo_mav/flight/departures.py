@@ -1,0 +1,221 @@
+"""A vehicle leaving the plan, told from what it says: the watch behind ``fly`` and
+``monitor``.
+
+:class:`DepartureWatch` is fed a :class:`Seen` per vehicle (a snapshot of its status and
+link) a few times a second and returns :class:`Event` s: a departure the first time a
+vehicle
+
+- falls silent (no message for ``link_lost_s``) or its link closes: ``link lost``;
+- is in a mode this ground station did not ask for (BRAKE, RTL or LAND from a fence
+  breach or a failsafe, LOITER or ALT_HOLD from a pilot, GUIDED from another station):
+  ``mode``;
+- announces a failsafe, a fence breach or a crash (:mod:`ftlbo_mav.ardupilot.failsafes`);
+- disarms in the air: ``disarmed in the air``;
+- makes no progress along its mission on the legs (no new item and no movement for
+  ``stall_s`` plus the item's hold time): ``no progress``;
+- lands (disarms) farther than ``landed_away_m`` from where its mission lands:
+  ``landed away``;
+
+and a ``link back`` event when a lost vehicle is heard from again. Pure: no I/O, the
+time is given.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..ardupilot.failsafes import departure_text
+
+LINK_LOST, LINK_BACK, MODE, FAILSAFE, FENCE, CRASH = (
+    "link lost", "link back", "mode", "failsafe", "fence", "crash")
+DISARMED_AIRBORNE, NO_PROGRESS, LANDED_AWAY = "disarmed in the air", "no progress", "landed away"
+# departures the vehicle (its pilot, its failsafe, another station) chose: the flight
+# never commands that vehicle against them
+VEHICLE_CHOSE = frozenset({MODE, FAILSAFE, FENCE, CRASH, DISARMED_AIRBORNE})
+
+
+@dataclass(frozen=True)
+class WatchOptions:
+    """``link_lost_s``: silence that counts as a lost link (ArduPilot sends HEARTBEAT at
+    1 Hz and a flight asks for positions at 10 Hz). ``mode_grace_s``: how long after this
+    station asked for a mode the vehicle may still be in the one before. ``stall_s`` /
+    ``stall_m``: no progress. ``airborne_m``: above this a disarm is in the air (and below
+    it a vehicle has landed). ``landed_away_m``: how far from its mission's landing point
+    a vehicle may land."""
+
+    link_lost_s: float = 1.5
+    mode_grace_s: float = 3.0
+    stall_s: float = 10.0
+    stall_m: float = 0.5
+    airborne_m: float = 1.0
+    landed_away_m: float = 1.5
+
+
+DEFAULT_WATCH = WatchOptions()
+
+@dataclass(frozen=True)
+class Seen:
+    """One vehicle as the watch sees it at one instant (times are ``time.monotonic()``).
+    ``position``: ENU metres in the plan's frame, or None; ``seq``: its current item."""
+
+    mode: str
+    armed: bool
+    alt_m: float
+    heard_t: float
+    link_up: bool
+    asked_mode: str | None
+    asked_t: float
+    texts: Sequence[tuple[float, int, str]] = ()
+    text_count: int = 0
+    position: np.ndarray | None = None
+    seq: int = -1
+
+
+@dataclass(frozen=True)
+class Event:
+    """What happened to vehicle ``index`` at ``t``: ``kind`` (a departure, or ``link
+    back``) and a few words of ``detail``."""
+
+    index: int
+    kind: str
+    detail: str
+    t: float
+
+    @property
+    def departure(self) -> bool:
+        return self.kind != LINK_BACK
+
+    @property
+    def vehicle_chose(self) -> bool:
+        return self.kind in VEHICLE_CHOSE
+
+
+@dataclass
+class _Track:
+    reported: set = field(default_factory=set)
+    lost: bool = False
+    texts_read: int = 0
+    was_armed: bool = False
+    flew: bool = False
+    last_alt: float = 0.0
+    mode_at_ask: str | None = None
+    asked_t: float = -1.0
+    progress_t: float | None = None
+    progress_seq: int = -1
+    progress_at: np.ndarray | None = None
+
+
+class DepartureWatch:
+    """Watches ``count`` vehicles. ``expect(i, mode)`` says which mode the plan has
+    vehicle i in now (GUIDED while it takes off, AUTO on the mission; None: any);
+    ``legs(i, hold_s)`` that it flies its legs (no-progress watch on, the current item's
+    hold time allowed); ``landing`` (per vehicle, ENU or None) where each mission lands.
+    """
+
+    def __init__(self, count: int, *, options: WatchOptions = WatchOptions(),
+                 landing: Sequence[np.ndarray | None] | None = None) -> None:
+        self.options = options
+        self.tracks = [_Track() for _ in range(count)]
+        self.expected: list[str | None] = [None] * count
+        self.on_legs = [False] * count
+        self.hold_s = [0.0] * count
+        self.landing = list(landing) if landing is not None else [None] * count
+        self.events: list[Event] = []
+
+    def expect(self, index: int, mode: str | None) -> None:
+        self.expected[index] = mode
+
+    def legs(self, index: int, on: bool, *, hold_s: float = 0.0) -> None:
+        tr = self.tracks[index]
+        if on and not self.on_legs[index]:
+            tr.progress_t = None
+        self.on_legs[index], self.hold_s[index] = on, hold_s
+
+    def stop_landing_check(self, index: int) -> None:
+        """After the flight sent the vehicle elsewhere, where it lands is no departure."""
+        self.landing[index] = None
+
+    def check(self, seen: Sequence[Seen], now: float) -> list[Event]:
+        """The new events since the last call."""
+        out: list[Event] = []
+        for i, s in enumerate(seen):
+            out += self._check_one(i, s, now)
+        self.events += out
+        return out
+
+    # -- one vehicle
+    def _once(self, i: int, kind: str, detail: str, now: float) -> list[Event]:
+        tr = self.tracks[i]
+        if kind in tr.reported:
+            return []
+        tr.reported.add(kind)
+        return [Event(i, kind, detail, now)]
+
+    def _check_one(self, i: int, s: Seen, now: float) -> list[Event]:
+        o, tr = self.options, self.tracks[i]
+        silent = now - s.heard_t if s.heard_t else float("inf")
+        if not s.link_up or silent > o.link_lost_s:
+            if not tr.lost:
+                tr.lost = True
+                tr.reported.discard(LINK_LOST)
+                why = ("its link was closed by the other end" if not s.link_up
+                       else f"no message for {silent:.1f} s")
+                return self._once(i, LINK_LOST, why, now)
+            return []
+        out: list[Event] = []
+        if tr.lost:
+            tr.lost = False
+            tr.progress_t = None
+            out.append(Event(i, LINK_BACK, "heard from again", now))
+        # what it announces (every STATUSTEXT since the last look, in order)
+        new = s.text_count - tr.texts_read
+        tr.texts_read = s.text_count
+        for _t, _severity, text in (list(s.texts)[-new:] if new > 0 else []):
+            kind = departure_text(text)
+            if kind is not None:
+                out += self._once(i, kind, f'"{text.strip()}"', now)
+        # mode
+        if s.asked_t != tr.asked_t:  # this station asked for a mode: the one before it
+            tr.asked_t, tr.mode_at_ask = s.asked_t, s.mode  # may linger a moment
+        expected = self.expected[i]
+        if expected is not None and s.armed and s.mode not in (expected, s.asked_mode):
+            lingering = s.mode == tr.mode_at_ask and now - s.asked_t <= o.mode_grace_s
+            if not lingering:
+                out += self._once(i, MODE, f"switched to {s.mode}, not asked for by this "
+                                           f"flight", now)
+        # arming and landing
+        airborne = s.alt_m > o.airborne_m
+        if s.armed:
+            tr.was_armed = True
+            tr.flew = tr.flew or airborne
+        elif tr.was_armed:
+            tr.was_armed = False
+            if tr.last_alt > o.airborne_m and airborne:
+                out += self._once(i, DISARMED_AIRBORNE, f"disarmed at {s.alt_m:.1f} m", now)
+            elif tr.flew and self.landing[i] is not None and s.position is not None:
+                off = float(np.hypot(*(s.position[:2] - self.landing[i][:2])))
+                if off > o.landed_away_m:
+                    out += self._once(i, LANDED_AWAY, f"landed {off:.1f} m from its mission's "
+                                                      "landing point", now)
+        tr.last_alt = s.alt_m
+        out += self._progress(i, s, now)
+        return out
+
+    def _progress(self, i: int, s: Seen, now: float) -> list[Event]:
+        o, tr = self.options, self.tracks[i]
+        if not (self.on_legs[i] and s.armed and s.mode == "AUTO" and s.position is not None):
+            tr.progress_t = None
+            return []
+        moved = (tr.progress_at is not None
+                 and float(np.linalg.norm(s.position - tr.progress_at)) > o.stall_m)
+        if tr.progress_t is None or s.seq != tr.progress_seq or moved:
+            tr.progress_t, tr.progress_seq, tr.progress_at = now, s.seq, s.position.copy()
+            return []
+        stalled = now - tr.progress_t
+        if stalled > o.stall_s + self.hold_s[i]:
+            return self._once(i, NO_PROGRESS, f"still at item {s.seq}, moved less than "
+                                              f"{o.stall_m:g} m in {stalled:.0f} s", now)
+        return []

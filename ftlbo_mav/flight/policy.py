@@ -1,0 +1,231 @@
+"""What the formation does when one vehicle leaves the plan.
+
+:class:`FaultPolicy` is the operator's choice (``fly --on-departure``):
+
+- ``rally`` (default): the others stop where they are, within one watch cycle of the
+  departure: on the legs with MAV_CMD_DO_PAUSE_CONTINUE, which stops the copter *on its
+  planned track* (AC_WPNav shapes its track clock to zero), elsewhere with BRAKE (which
+  stops along the direction of flight, off the track in a turn). Once stopped (or after
+  ``stop_s``) each goes to its rally point and lands there: ArduCopter's RTL, which
+  climbs where it is and flies a straight line to the nearer of home and the vehicle's
+  rally points (ArduCopter/mode_rtl.cpp, AP_Rally::calc_best_rally_or_home_location)
+  -- but only where that line keeps the plan's clearance from every obstacle and 2 m
+  from the other vehicles (``route_check``); where it does not, the vehicle lands where
+  it stopped, and its line says why;
+- ``land``: the others stop, then land where they are (LAND: straight down, and the
+  obstacles are vertical cylinders);
+- ``continue``: the others carry on with their missions; the flight ends when they have.
+
+The vehicle that left is never commanded against what its pilot, its failsafe or another
+station chose (:data:`~ftlbo_mav.flight.departures.VEHICLE_CHOSE`). One that left
+without choosing (its link was lost and came back, it made no progress) is answered as
+the others are. :class:`Response` carries the policy out over the watch's cycles and
+writes, per vehicle, what happened and what was done.
+"""
+
+from __future__ import annotations
+
+import enum
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from .departures import LINK_BACK, LINK_LOST, DepartureWatch, Event
+from .vehicle import FlightError, FlightVehicle
+
+STOPPED_M_S = 0.3
+
+
+class FaultPolicy(enum.Enum):
+    RALLY = "rally"
+    LAND = "land"
+    CONTINUE = "continue"
+
+    @property
+    def then_mode(self) -> str | None:
+        return {FaultPolicy.RALLY: "RTL", FaultPolicy.LAND: "LAND"}.get(self)
+
+
+@dataclass
+class _Answer:
+    """What the flight does with one vehicle: ``stage`` stop -> then -> sent."""
+
+    stage: str = "stop"
+    mode: str | None = None  # the mode it is sent to once stopped
+    since: float = 0.0
+    sent_t: float = 0.0
+    tries: int = 0
+    done: list[str] = field(default_factory=list)
+
+
+class Response:
+    """The policy at work: ``react`` to the watch's events, ``step`` every cycle,
+    ``ended`` once nothing is left to wait for; ``lines`` for the report."""
+
+    def __init__(self, policy: FaultPolicy, names: Sequence[str], sysids: Sequence[int], *,
+                 stop_s: float = 3.0, budget_s: float = 50.0, lost_wait_s: float = 15.0,
+                 confirm_tries: int = 5,
+                 t0: float | None = None,
+                 route_check: Callable[[int], str | None] = lambda _j: None,
+                 landing: Callable[[int], bool] = lambda _j: False) -> None:
+        self.policy = policy
+        self.landing = landing  # vehicle -> already on its mission's final landing
+        self.route_check = route_check  # vehicle -> why RTL from here is not safe, or None
+        self.names, self.sysids = list(names), list(sysids)
+        self.stop_s, self.budget_s, self.confirm_tries = stop_s, budget_s, confirm_tries
+        self.lost_wait_s = lost_wait_s  # how long a lost link is waited for
+        self.lost_at: dict[int, float] = {}
+        self.t0 = time.monotonic() if t0 is None else t0
+        self.first_t: float | None = None
+        self.left: dict[int, list[Event]] = {}  # vehicle -> its departures
+        self.chose: set[int] = set()  # left by its own choice: never commanded
+        self.lost: set[int] = set()  # link down now
+        self.back: dict[int, float] = {}  # link back at
+        self.answers: dict[int, _Answer] = {}
+        self.history: dict[int, list[str]] = {}  # what was done, kept after a choice
+
+    @property
+    def active(self) -> bool:
+        return self.first_t is not None
+
+    def _at(self, t: float) -> str:
+        return f"t+{t - self.t0:.1f} s"
+
+    # -- events
+    def react(self, events: Sequence[Event], vehicles: Sequence[FlightVehicle],
+              watch: DepartureWatch, now: float) -> None:
+        for e in events:
+            if e.kind == LINK_BACK:
+                self.lost.discard(e.index)
+                self.back[e.index] = e.t
+                if e.index in self.answers:
+                    self.answers[e.index].done.append(f"link back at {self._at(e.t)}")
+                elif self.active:
+                    self._answer(e.index, vehicles, watch, now,
+                                 note=f"link back at {self._at(e.t)}")
+                continue
+            self.left.setdefault(e.index, []).append(e)
+            if e.kind == LINK_LOST:
+                self.lost.add(e.index)
+                self.lost_at[e.index] = e.t
+            if e.vehicle_chose:
+                self.chose.add(e.index)
+                gone = self.answers.pop(e.index, None)  # its own choice now stands
+                if gone is not None:
+                    self.history.setdefault(e.index, []).extend(gone.done)
+            watch.expect(e.index, None)
+            watch.legs(e.index, False)
+            watch.stop_landing_check(e.index)
+            if self.first_t is None:
+                self.first_t = e.t
+                if self.policy is not FaultPolicy.CONTINUE:
+                    for j in range(len(vehicles)):
+                        self._answer(j, vehicles, watch, now)
+            elif self.policy is not FaultPolicy.CONTINUE:
+                self._answer(e.index, vehicles, watch, now)
+
+    def _answer(self, j: int, vehicles: Sequence[FlightVehicle], watch: DepartureWatch,
+                now: float, *, note: str | None = None) -> None:
+        """Stop vehicle j (BRAKE) unless it chose otherwise, cannot be reached or landed."""
+        if (self.policy is FaultPolicy.CONTINUE or j in self.chose or j in self.lost
+                or j in self.answers):
+            return
+        v = vehicles[j]
+        if not v.status.armed:
+            return
+        if self.landing(j) and v.status.mode == "AUTO":
+            self.history.setdefault(j, []).append("already on its final landing: left to land")
+            return
+        a = self.answers[j] = _Answer(since=now)
+        if note:
+            a.done.append(note)
+        watch.stop_landing_check(j)
+        watch.legs(j, False)
+        watch.expect(j, None)
+        on_track = v.status.mode == "AUTO"
+        try:
+            if on_track:  # stays in AUTO, stops on its track (ModeAuto::pause)
+                v.send_pause(True)
+                a.done.append(f"stopped on its track (pause) at {self._at(now)}")
+            else:
+                v.send_mode("BRAKE")
+                a.done.append(f"stopped (BRAKE) at {self._at(now)}")
+        except FlightError as exc:
+            a.done.append(f"could not be stopped ({exc})")
+            a.stage = "failed"
+
+    # -- every cycle
+    def step(self, vehicles: Sequence[FlightVehicle], watch: DepartureWatch,
+             now: float) -> None:
+        for j, a in self.answers.items():
+            v = vehicles[j]
+            then = self.policy.then_mode
+            if a.stage == "stop" and then is not None:
+                slow = v.status.ground_speed_m_s < STOPPED_M_S
+                if slow or now - a.since >= self.stop_s:
+                    a.stage, a.tries = "then", 0
+                    why = self.route_check(j) if then == "RTL" else None
+                    if why is not None:
+                        a.mode = "LAND"
+                        a.done.append(f"no RTL: {why}")
+                    else:
+                        a.mode = then
+            then = a.mode
+            if a.stage == "then":
+                if v.status.mode == then:
+                    a.stage = "sent"
+                    a.done.append(f"{then} at {self._at(now)}"
+                                  + (" (to its rally point or home)" if then == "RTL" else ""))
+                    watch.expect(j, then)
+                elif a.tries >= self.confirm_tries:
+                    a.stage = "failed"
+                    a.done.append(f"did not switch to {then} (still {v.status.mode})")
+                elif now - a.sent_t >= 1.0:
+                    a.sent_t, a.tries = now, a.tries + 1
+                    try:
+                        v.send_mode(then)
+                    except FlightError:
+                        pass  # its link: the watch reports that
+
+    def ended(self, vehicles: Sequence[FlightVehicle], now: float) -> bool:
+        """Every vehicle the flight answers for has landed, or the budget is spent. Not
+        waited for: one that left by its own choice (its pilot or failsafe flies it now);
+        one whose link is down is waited for ``lost_wait_s`` after it was lost (it may
+        still fly its mission and come back), then reported gone."""
+        if not self.active:
+            return False
+        if now - self.first_t >= self.budget_s:
+            return True
+        return all(not v.status.armed or j in self.chose
+                   or (j in self.lost and now - self.lost_at[j] >= self.lost_wait_s)
+                   for j, v in enumerate(vehicles))
+
+    # -- the report
+    def lines(self, vehicles: Sequence[FlightVehicle]) -> list[str]:
+        """One line per vehicle: what happened, what was done, where it is now."""
+        out = []
+        for j, v in enumerate(vehicles):
+            what: list[str] = []
+            for e in self.left.get(j, []):
+                what.append(f"{e.kind} at {self._at(e.t)} ({e.detail})")
+            if j in self.left:
+                if j in self.chose:
+                    what.append("left to what it chose: not commanded")
+                elif j in self.lost:
+                    what.append(f"gone: not heard from again within "
+                                f"{time.monotonic() - self.left[j][0].t:.0f} s")
+            what += self.history.get(j, [])
+            if j in self.answers:
+                what += self.answers[j].done
+            s = v.status
+            if j in self.lost:
+                state = "link down"
+            elif s.armed:
+                state = f"still flying in {s.mode} at {s.alt_m:.1f} m when the flight ended"
+            else:
+                state = "landed (disarmed)"
+            if not what:
+                what.append("carried on with its mission"
+                            if self.policy is FaultPolicy.CONTINUE else "nothing to do")
+            out.append(f"{v.name} (sysid {v.sysid}): " + "; ".join(what) + f"; {state}")
+        return out

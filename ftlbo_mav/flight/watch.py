@@ -1,0 +1,329 @@
+"""Watching a flight: until every vehicle is done, the formation keeper on the legs, and
+the departure watch (:mod:`.departures`) whose events the policy (:mod:`.policy`)
+answers.
+
+:class:`FlightWatch` turns what the vehicles say into events once per cycle (``poll``)
+and has the policy answer them; :func:`watch` is the loop after the synchronized start.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..ardupilot.fence import rtl_target
+from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
+from .departures import DEFAULT_WATCH, DepartureWatch, Event, Seen, WatchOptions
+from .keeper import FormationKeeper
+from .outcome import FlightLeftPlan, aborted
+from .planned import PlannedFlight
+from .policy import FaultPolicy, Response
+from .vehicle import FlightAborted, FlightError, FlightVehicle
+
+LOITER_REACHED_M = 2.0  # ArduCopter's default waypoint radius (WPNAV_RADIUS)
+
+
+class LeftPlan(Exception):  # noqa: N818 - a signal inside the flight, not an error
+    """Raised by :meth:`FlightWatch.check` before the start when a vehicle left the plan."""
+
+
+def landing_points(planned: PlannedFlight) -> list[np.ndarray | None]:
+    """Where each mission lands (its last NAV_LAND with a position), ENU; None if not."""
+    out: list[np.ndarray | None] = []
+    for mission in planned.missions:
+        land = [it for it in mission if it.command == CMD_NAV_LAND
+                and not (it.lat_deg == 0 and it.lon_deg == 0)]
+        out.append(None if not land else planned.frame.to_enu(
+            lat_deg=land[-1].lat_deg, lon_deg=land[-1].lon_deg, alt_m=0.0))
+    return out
+
+
+def rally_points(planned: PlannedFlight, j: int) -> np.ndarray:
+    """Vehicle j's rally points, (K, 2) ENU east/north."""
+    fence = planned.fences[j] if j < len(planned.fences) else None
+    if fence is None or not fence.rally:
+        return np.zeros((0, 2))
+    enu = planned.frame.to_enu(lat_deg=[r.lat_deg for r in fence.rally],
+                               lon_deg=[r.lon_deg for r in fence.rally],
+                               alt_m=[0.0] * len(fence.rally))
+    return np.asarray(enu, float).reshape(-1, 3)[:, :2]
+
+
+def _segment_distance(a: np.ndarray, b: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distance of each point (M, 2) from segment a-b."""
+    ab = b - a
+    t = np.clip(((points - a) @ ab) / max(float(ab @ ab), 1e-12), 0.0, 1.0)
+    return np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
+
+
+def rtl_line_problem(planned: PlannedFlight, j: int, position: np.ndarray,
+                     others: Sequence[np.ndarray], *, separation_m: float = 2.0) -> str | None:
+    """Why ArduCopter's RTL from ``position`` (ENU) would not be safe for vehicle j, or
+    None: RTL climbs where it is and flies straight to its rally point or home
+    (:func:`~ftlbo_mav.ardupilot.fence.rtl_target`); that line must keep the plan's
+    clearance from every obstacle and ``separation_m`` from the other vehicles."""
+    home = np.asarray(planned.paths[j][0][:2], float)
+    rally = rally_points(planned, j)
+    k = rtl_target(position[:2], home, rally)
+    target, name = (home, "home") if k is None else (rally[k], "its rally point")
+    here = np.asarray(position[:2], float)
+    if len(planned.centres):
+        gap = _segment_distance(here, target, np.asarray(planned.centres)[:, :2]) - planned.radii
+        worst = int(np.argmin(gap))
+        if gap[worst] < planned.clearance_m:
+            return (f"the straight line to {name} passes {gap[worst]:.1f} m from an obstacle "
+                    f"(clearance {planned.clearance_m:g} m); landing where it stopped")
+    if others:
+        near = float(np.min(_segment_distance(here, target, np.asarray(others)[:, :2])))
+        if near < separation_m:
+            return (f"the straight line to {name} passes {near:.1f} m from another vehicle; "
+                    "landing where it stopped")
+    return None
+
+
+def last_leg_seq(mission) -> int:
+    """The last item flown as a leg: before the final landing (or the final loiter)."""
+    return mission[-1].seq - 1 if mission[-1].command != CMD_NAV_LOITER_UNLIM else mission[-1].seq
+
+
+def observe(v: FlightVehicle, planned: PlannedFlight | None) -> Seen:
+    """A snapshot of ``v`` for the departure watch (no position without a plan)."""
+    s = v.status
+    position = None
+    if s.lat_deg is not None and planned is not None:
+        position = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
+    return Seen(mode=s.mode, armed=s.armed, alt_m=s.alt_m, heard_t=s.heard_t,
+                link_up=v.link_up, asked_mode=v.asked_mode, asked_t=v.asked_t,
+                texts=tuple(s.text_log), text_count=s.text_count, position=position,
+                seq=s.seq)
+
+
+def watch_from_outside(departures: DepartureWatch, vehicles: Sequence[FlightVehicle],
+                       planned: PlannedFlight | None) -> None:
+    """What ``monitor`` expects, flying nothing itself: a vehicle seen in AUTO on its
+    mission stays in AUTO until its last item (a mode after that is its own)."""
+    for i, v in enumerate(vehicles):
+        s = v.status
+        last = planned.missions[i][-1].seq if planned is not None else None
+        if s.armed and s.mode == "AUTO" and (last is None or 0 < s.seq < last):
+            departures.expect(i, "AUTO")
+        elif last is not None and s.seq >= last or not s.armed:
+            departures.expect(i, None)
+
+
+def describe(event: Event, vehicles: Sequence[FlightVehicle]) -> str:
+    v = vehicles[event.index]
+    return f"{v.name} (sysid {v.sysid}): {event.kind}: {event.detail}"
+
+
+class FlightWatch:
+    """The departure watch and the policy of one flight. ``say`` prints a line."""
+
+    def __init__(self, planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
+                 policy: FaultPolicy = FaultPolicy.RALLY,
+                 options: WatchOptions = DEFAULT_WATCH, budget_s: float = 50.0,
+                 lost_wait_s: float = 15.0,
+                 say: Callable[[str], None] = lambda _t: None,
+                 on_event: Callable[[str], None] = lambda _t: None) -> None:
+        self.planned, self.vehicles, self.say = planned, list(vehicles), say
+        self.on_event = on_event
+        self.departures = DepartureWatch(len(vehicles), options=options,
+                                         landing=landing_points(planned))
+        self.response = Response(policy, [v.name for v in vehicles],
+                                 [v.sysid for v in vehicles], budget_s=budget_s,
+                                 lost_wait_s=lost_wait_s,
+                                 route_check=self.rtl_problem, landing=self.landing)
+        self.keeper: FormationKeeper | None = None
+        self.started = False
+
+    def landing(self, j: int) -> bool:
+        """Vehicle j flies its mission's final NAV_LAND."""
+        mission, seq = self.planned.missions[j], self.vehicles[j].status.seq
+        return 0 < seq < len(mission) and mission[seq].command == CMD_NAV_LAND and all(
+            it.command != CMD_NAV_WAYPOINT for it in mission[seq + 1:])
+
+    def rtl_problem(self, j: int) -> str | None:
+        """Why vehicle j's RTL from where it is now would not be safe, or None."""
+        seen = [observe(v, self.planned) for v in self.vehicles]
+        if seen[j].position is None:
+            return "its position is unknown"
+        others = [s.position for i, s in enumerate(seen) if i != j and s.position is not None]
+        return rtl_line_problem(self.planned, j, seen[j].position, others)
+
+    def expect(self, mode: str | None) -> None:
+        """The mode every vehicle still on the plan is in from now on."""
+        for i in range(len(self.vehicles)):
+            if i not in self.response.left and i not in self.response.answers:
+                self.departures.expect(i, mode)
+
+    def poll(self) -> list[Event]:
+        """Look once: new events are said, the keeper stands down at the first
+        departure, and the policy answers."""
+        now = time.monotonic()
+        if self.started:
+            self._legs()
+        seen = [observe(v, self.planned) for v in self.vehicles]
+        events = self.departures.check(seen, now)
+        for e in events:
+            self.say(describe(e, self.vehicles))
+            self.on_event(describe(e, self.vehicles))
+        if any(e.departure for e in events):  # before the policy pauses the others
+            self.stand_keeper_down(skip={e.index for e in events if e.vehicle_chose})
+        self.response.react(events, self.vehicles, self.departures, now)
+        if self.response.active:
+            self.response.step(self.vehicles, self.departures, now)
+        return events
+
+    def check(self) -> None:
+        """:meth:`poll`, then :class:`LeftPlan` if a vehicle has left (before the start)."""
+        self.poll()
+        if self.response.active:
+            raise LeftPlan
+
+    def _legs(self) -> None:
+        for i, (v, mission) in enumerate(zip(self.vehicles, self.planned.missions)):
+            if i in self.response.left or i in self.response.answers:
+                continue
+            s = v.status
+            on = s.mode == "AUTO" and 0 <= s.seq <= last_leg_seq(mission)
+            item = mission[s.seq] if 0 <= s.seq < len(mission) else None
+            hold = float(item.param1) if item is not None and item.command == CMD_NAV_WAYPOINT \
+                else 0.0
+            self.departures.legs(i, on, hold_s=max(hold, 0.0))
+
+    def stand_keeper_down(self, *, skip: set[int] = frozenset()) -> None:
+        """No more pauses: every pause under way is continued, but on a vehicle that
+        chose otherwise (``skip``, or earlier)."""
+        if self.keeper is None:
+            return
+        keeper, self.keeper = self.keeper, None
+        for i, pause in keeper.release().items():
+            if i not in self.response.chose and i not in skip:
+                try:
+                    self.vehicles[i].send_pause(pause)
+                except FlightError:
+                    pass
+
+    def left_plan(self) -> FlightLeftPlan:
+        return FlightLeftPlan(self.response.lines(self.vehicles))
+
+    def until_ended(self, *, tick: Callable[[], None]) -> FlightLeftPlan:
+        """After a departure: answer until every vehicle has landed or the budget is
+        spent; returns the error to end the flight with."""
+        while not self.response.ended(self.vehicles, time.monotonic()):
+            self.poll()
+            tick()
+            time.sleep(0.05)
+        return self.left_plan()
+
+
+def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
+             skip: set[int] = frozenset()) -> bool:
+    """Every vehicle (but those in ``skip``) landed (disarmed), left AUTO after its last
+    item, or holds at the point of a final NAV_LOITER_UNLIM (within the waypoint radius)."""
+
+    def done(v: FlightVehicle, mission) -> bool:
+        s, last = v.status, mission[-1]
+        if not s.armed:
+            return True
+        if s.seq < last.seq:
+            return False
+        if last.command != CMD_NAV_LOITER_UNLIM:
+            return s.mode != "AUTO"
+        here = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
+        there = planned.frame.to_enu(lat_deg=last.lat_deg, lon_deg=last.lon_deg,
+                                     alt_m=last.alt_m)
+        return float(np.linalg.norm(here - there)) <= LOITER_REACHED_M
+
+    return all(done(v, m) for i, (v, m) in enumerate(zip(vehicles, planned.missions))
+               if i not in skip)
+
+
+def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
+                   keeper: FormationKeeper) -> bool:
+    """One step of the formation keeper; False once the legs are over (every pause
+    continued)."""
+    st = [v.status for v in vehicles]
+    last_leg = [last_leg_seq(m) for m in planned.missions]
+    if any(s.seq > last for s, last in zip(st, last_leg)) or any(
+            s.mode != "AUTO" for s in st):
+        for i, pause in keeper.release().items():
+            _send_pause(vehicles[i], pause)
+        return False
+    if any(s.lat_deg is None for s in st):
+        return True
+    positions = planned.frame.to_enu(lat_deg=[s.lat_deg for s in st],
+                                     lon_deg=[s.lon_deg for s in st],
+                                     alt_m=[s.alt_m for s in st])
+    # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
+    # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
+    now = time.monotonic()
+    age = np.array([[now - (s.position_boot_s + s.clock_offset_s
+                            if s.clock_offset_s is not None else s.position_t)] for s in st])
+    positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)
+    speeds = np.array([s.ground_speed_m_s for s in st])
+    # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
+    # with a time scale runs faster than ours), carried on between reports (10 Hz) for
+    # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
+    # last report on our clock
+    arrived = np.array([now - s.position_t for s in st])
+    vehicle_now = max(s.position_boot_s + min(a, 0.1) for s, a in zip(st, arrived))
+    for i, pause in keeper.update(positions, speeds, vehicle_now, ages_s=arrived).items():
+        _send_pause(vehicles[i], pause)
+    return True
+
+
+def _send_pause(v: FlightVehicle, pause: bool) -> None:
+    try:
+        v.send_pause(pause)
+    except FlightError:
+        pass  # a link down: the departure watch reports it within its timeout
+
+
+def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_s: float,
+          tick: Callable[[], None], keeper: FormationKeeper | None = None,
+          flight_watch: FlightWatch | None = None) -> bool:
+    """Until every vehicle is done; ``tick`` runs a few times a second, the formation
+    keeper (if any) every 50 ms while the legs last (10 ms during a pause), the
+    departure watch every cycle. False on timeout; :class:`FlightLeftPlan` once a
+    vehicle left the plan and the policy's answer is over."""
+    fw = flight_watch or FlightWatch(planned, vehicles)
+    fw.keeper, fw.started = keeper, True
+    fw.expect("AUTO")
+    deadline = time.monotonic() + timeout_s
+    next_tick = 0.0
+    while time.monotonic() < deadline:
+        if aborted(vehicles):
+            raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
+        fw.poll()
+        response = fw.response
+        if response.active and response.policy is not FaultPolicy.CONTINUE:
+            raise fw.until_ended(tick=tick)
+        if finished(planned, vehicles, skip=set(response.left)):
+            if response.active:
+                raise fw.left_plan()
+            return True
+        if fw.keeper is not None and not keep_formation(planned, vehicles, fw.keeper):
+            fw.keeper = None
+        if time.monotonic() >= next_tick:
+            tick()
+            next_tick = time.monotonic() + 0.1
+        # a pause's continue is timed to the hundredth (an emulator's time scale makes a
+        # 50 ms wait tenths of a second of the vehicles' time)
+        time.sleep(0.01 if fw.keeper is not None and fw.keeper.pausing else 0.05)
+    return False
+
+
+def watch_abort(vehicles: Sequence[FlightVehicle], *, timeout_s: float,
+                tick: Callable[[], None]) -> bool:
+    """After an abort: watch until every vehicle has landed (disarmed) or its link is
+    down. False on timeout."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if not any(v.status.armed and v.link_up for v in vehicles):
+            return True
+        tick()
+        time.sleep(0.1)
+    return False

@@ -1,0 +1,84 @@
+"""GUIDED (ArduCopter/mode_guided.cpp) and the user takeoff it runs.
+
+MAV_CMD_NAV_TAKEOFF is accepted in GUIDED when armed (ArduCopter/GCS_Mavlink.cpp
+``handle_command_long_packet``, ``Mode::do_user_takeoff``); the copter leaves the ground
+after the spool-up and throttle slew (recorded ~3 s) and climbs as ``_AutoTakeoff::run``
+asks (AC_PosControl's jerk-limited vertical shaping), then hovers. A position target
+flies there with AC_WPNav (ModeGuided::set_destination), refused outside the fence.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..physics import VerticalShaper
+from .common import AUTO, GUIDED
+
+
+class ModeGuided:
+    """The GUIDED part of :class:`~ftlbo_mav.sim.autopilot.Autopilot`."""
+
+    def takeoff(self, alt_m: float, now: float | None = None) -> bool:
+        """MAV_CMD_NAV_TAKEOFF: Mode::do_user_takeoff refuses unless armed, landed
+        (``ap.land_complete``) and in a mode that has a user takeoff (GUIDED here)."""
+        if not self.armed or self.mode != GUIDED or alt_m <= 0 or not self.landed:
+            return False
+        self._start_takeoff(alt_m, self.time if now is None else now)
+        return True
+
+    def goto(self, target: np.ndarray) -> bool:
+        """GUIDED: fly to ``target`` (ENU metres) with AC_WPNav (ModeGuided::set_destination)."""
+        if self.mode != GUIDED or not self.armed or self.landed:
+            return False
+        if not self.fence.destination_ok(np.asarray(target, float), self.params):
+            return False  # ModeGuided::set_destination: outside the fence, refused
+        self._takeoff_at = self._enter = None
+        self._start_nav()
+        self.nav.set_destination(np.asarray(target, float))
+        self._phase = "goto"
+        return True
+
+    def _start_takeoff(self, alt_m: float, now: float) -> None:
+        """Mode::do_user_takeoff / ModeAuto::takeoff_start -> _AutoTakeoff::start: from
+        the ground the climb starts after the spool-up and throttle slew."""
+        self._enter = None
+        self._takeoff_alt = alt_m
+        self._takeoff_done_at = None
+        delay = self.options.limits.takeoff_delay_s if self.landed else 0.0
+        self._takeoff_at = now + delay
+        self.z = VerticalShaper(pos=float(self.position[2]), vel=float(self.velocity[2]))
+        self._phase = "takeoff"
+
+    def _takeoff_step(self, dt: float, out: list) -> None:
+        """_AutoTakeoff::run: shape the altitude to the takeoff altitude at WPNAV_SPEED_UP,
+        WPNAV_ACCEL_Z, PSC_JERK_Z; complete when the target is within the stopping distance
+        of a tenth of the climb speed and climbs slower than that."""
+        if self._takeoff_at is not None:
+            if self.time < self._takeoff_at:
+                return  # motors spooling up, throttle slewing (still on the ground)
+            self._takeoff_at = None
+        nav = self.nav_params()
+        self.z.to_altitude(self._takeoff_alt, dt, up=nav.wp_speed_up, down=nav.wp_speed_dn,
+                           accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
+        self.position[2] = max(self.z.pos, 0.0)
+        self.velocity[:] = (0.0, 0.0, self.z.vel)
+        slow = 0.1 * nav.wp_speed_up
+        if (self.z.pos >= self._takeoff_alt - 0.5 * slow * slow / nav.wp_accel_z
+                and self.z.vel < slow):
+            self._takeoff_done_at = self.time
+            if self.mode == AUTO:  # ModeAuto::verify_takeoff
+                self._phase_before_item = "takeoff_done"
+                self._reached(out)
+                self._phase_before_item = ""
+            else:  # GUIDED keeps running the takeoff controller: it hovers there
+                self._phase = "hover"
+
+    def _hover_step(self, dt: float) -> None:
+        """Hovering after a GUIDED takeoff: the altitude target settles on the takeoff
+        altitude, the copter ``hover_error_m`` below it (FlightLimits)."""
+        nav = self.nav_params()
+        self.z.to_altitude(self._takeoff_alt, dt, up=nav.wp_speed_up, down=nav.wp_speed_dn,
+                           accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
+        settled = min(1.0, (self.time - self._takeoff_done_at) / 1.0)
+        self.position[2] = self.z.pos - self.options.limits.hover_error_m * settled
+        self.velocity[:] = (0.0, 0.0, self.z.vel)

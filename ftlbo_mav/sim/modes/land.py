@@ -1,0 +1,32 @@
+"""LAND (ArduCopter/mode_land.cpp) and every landing's descent: Mode::
+land_run_vertical_control (WPNAV_SPEED_DN above LAND_ALT_LOW, LAND_SPEED below); the
+land detector's delay then disarms (recorded ~2.1 s)."""
+
+from __future__ import annotations
+
+from ..physics import VerticalShaper, landing_rate
+
+
+class ModeLand:
+    """The LAND part of :class:`~ftlbo_mav.sim.autopilot.Autopilot`."""
+
+    def _descend_enter(self) -> None:
+        """Landing: the vertical target starts where the copter is."""
+        self.nav = None
+        self.z = VerticalShaper(pos=float(self.position[2]), vel=float(self.velocity[2]))
+        self.velocity[:2] = 0.0
+        self._phase = "descend"
+
+    def _descend_step(self, dt: float) -> None:
+        """Mode::land_run_vertical_control: descend at :func:`physics.landing_rate`
+        (the copter achieving ``land_rate_achieved`` of it), shaped by WPNAV_ACCEL_Z and
+        PSC_JERK_Z; on the ground the land detector's delay starts."""
+        nav = self.nav_params()
+        rate = landing_rate(nav, float(self.position[2]), dt)
+        rate *= self.options.limits.land_rate_achieved
+        self.z.at_rate(rate, dt, accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
+        self.position[2] = max(self.z.pos, 0.0)
+        self.velocity[:] = (0.0, 0.0, self.z.vel)
+        if self.position[2] <= 0.0:
+            self.velocity[:] = 0.0
+            self._touchdown_at = self.time

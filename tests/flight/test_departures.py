@@ -1,0 +1,119 @@
+"""The departure watch (pure): each way a vehicle leaves the plan is told once, at the
+cycle it shows, and only what ArduCopter says counts (its texts, its modes)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ftlbo_mav.ardupilot.failsafes import departure_text
+from ftlbo_mav.flight.departures import (
+    CRASH,
+    DISARMED_AIRBORNE,
+    FAILSAFE,
+    FENCE,
+    LANDED_AWAY,
+    LINK_BACK,
+    LINK_LOST,
+    MODE,
+    NO_PROGRESS,
+    DepartureWatch,
+    Seen,
+)
+
+
+def seen(**kw) -> Seen:
+    base = dict(mode="AUTO", armed=True, alt_m=10.0, heard_t=100.0, link_up=True,
+                asked_mode="AUTO", asked_t=50.0, position=np.zeros(3), seq=3)
+    base.update(kw)
+    return Seen(**base)
+
+
+@pytest.mark.parametrize(("text", "kind"), [
+    ("Fence Breached", FENCE),
+    ("Battery Failsafe - Continuing Landing", FAILSAFE),
+    ("GCS Failsafe", FAILSAFE),
+    ("Radio + Battery Failsafe - Continuing Landing", FAILSAFE),
+    ("EKF Failsafe: changed to LAND Mode", FAILSAFE),
+    ("Failsafe: Terrain data missing", FAILSAFE),
+    ("Crash: Disarming: AngErr=31>30, Accel=0.2<3.0", CRASH),
+    ("Potential Thrust Loss (3)", CRASH),
+    ("Radio Failsafe Cleared", None),
+    ("EKF Failsafe Cleared", None),
+    ("Reached command #4", None),
+    ("Mission: 5 WP", None),
+])
+def test_arducopter_texts_that_mean_it_left_its_mission(text, kind):
+    assert departure_text(text) == kind
+
+
+def test_a_silent_vehicle_is_lost_after_the_timeout_and_back_when_heard():
+    w = DepartureWatch(1)
+    assert w.check([seen(heard_t=100.0)], 101.4) == []
+    (e,) = w.check([seen(heard_t=100.0)], 101.6)
+    assert (e.kind, e.index) == (LINK_LOST, 0) and "no message for 1.6 s" in e.detail
+    assert w.check([seen(heard_t=100.0)], 103.0) == []  # said once
+    (back,) = w.check([seen(heard_t=104.0)], 104.1)
+    assert back.kind == LINK_BACK and not back.departure
+    (again,) = w.check([seen(link_up=False, heard_t=104.0)], 104.2)  # closed: at once
+    assert again.kind == LINK_LOST and "closed by the other end" in again.detail
+
+
+def test_a_mode_not_asked_for_is_a_departure_once_the_grace_is_over():
+    w = DepartureWatch(2)
+    w.expect(0, "AUTO")
+    w.expect(1, "AUTO")
+    # vehicle 1 was just asked for AUTO and still shows GUIDED: the switch is under way
+    out = w.check([seen(), seen(mode="GUIDED", asked_t=100.0)], 100.2)
+    assert out == []
+    out = w.check([seen(mode="BRAKE", asked_t=50.0, heard_t=104.0),
+                   seen(mode="GUIDED", asked_t=100.0, heard_t=104.0)], 104.0)
+    assert [(e.index, e.kind) for e in out] == [(0, MODE), (1, MODE)]
+    assert "switched to BRAKE" in out[0].detail and out[0].vehicle_chose
+    # a mode this station asked for is no departure; nor any mode without an expectation
+    w2 = DepartureWatch(1)
+    w2.expect(0, "AUTO")
+    assert w2.check([seen(mode="RTL", asked_mode="RTL")], 100.0) == []
+    w2.expect(0, None)
+    assert w2.check([seen(mode="LOITER")], 100.0) == []
+
+
+def test_failsafe_texts_are_read_once_in_order():
+    w = DepartureWatch(1)
+    texts = [(99.0, 6, "Mission: 4 WP"), (99.5, 4, "Battery Failsafe - Continuing RTL"),
+             (99.6, 5, "Fence Breached")]
+    out = w.check([seen(texts=texts, text_count=3)], 100.0)
+    assert [e.kind for e in out] == [FAILSAFE, FENCE]
+    assert w.check([seen(texts=texts, text_count=3)], 100.1) == []
+
+
+def test_disarmed_in_the_air_and_landed_away():
+    w = DepartureWatch(2, landing=[np.zeros(3), np.zeros(3)])
+    w.check([seen(alt_m=8.0), seen(alt_m=0.5)], 100.0)
+    w.check([seen(alt_m=8.0), seen(alt_m=2.0)], 100.1)  # vehicle 1 flew
+    out = w.check([seen(armed=False, alt_m=7.9),
+                   seen(armed=False, alt_m=0.0, position=np.array([3.0, 0.0, 0.0]))], 100.2)
+    assert [(e.index, e.kind) for e in out] == [(0, DISARMED_AIRBORNE), (1, LANDED_AWAY)]
+    assert "3.0 m from" in out[1].detail
+    # a landing at the planned point is none
+    w = DepartureWatch(1, landing=[np.zeros(3)])
+    w.check([seen(alt_m=3.0)], 1.0)
+    assert w.check([seen(armed=False, alt_m=0.0, position=np.array([0.4, 0.3, 0]))], 2.0) == []
+
+
+def test_no_progress_on_the_legs_allows_the_items_hold_time():
+    w = DepartureWatch(1)
+    w.legs(0, True, hold_s=5.0)
+    here = np.array([10.0, 5.0, 10.0])
+    assert w.check([seen(position=here)], 100.0) == []
+    assert w.check([seen(position=here + 0.2, heard_t=114.0)], 114.0) == []  # 10 s + 5 s hold
+    (e,) = w.check([seen(position=here + 0.2, heard_t=115.5)], 115.5)
+    assert e.kind == NO_PROGRESS and "item 3" in e.detail
+    # moving, or a new item, is progress; off the legs nothing is watched
+    w = DepartureWatch(1)
+    w.legs(0, True)
+    w.check([seen(position=here, heard_t=1000.0)], 1000.0)
+    for t in range(1001, 1030):
+        assert w.check([seen(position=here + [t - 1000.0, 0, 0], heard_t=t)], float(t)) == []
+    w.legs(0, False)
+    assert w.check([seen(position=here, heard_t=1100.0)], 1100.0) == []

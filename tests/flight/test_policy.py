@@ -1,0 +1,125 @@
+"""The formation policy (flight/policy.py) on stand-in vehicles: who is stopped, how, what
+follows, and that a vehicle that chose is never commanded."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ftlbo_mav.flight.departures import (
+    LINK_BACK,
+    LINK_LOST,
+    MODE,
+    NO_PROGRESS,
+    DepartureWatch,
+    Event,
+)
+from ftlbo_mav.flight.policy import FaultPolicy, Response
+from ftlbo_mav.flight.vehicle import LinkLost
+
+
+@dataclass
+class Status:
+    mode: str = "AUTO"
+    armed: bool = True
+    alt_m: float = 10.0
+    ground_speed_m_s: float = 5.0
+
+
+@dataclass
+class StandIn:
+    name: str
+    sysid: int
+    status: Status = field(default_factory=Status)
+    sent: list = field(default_factory=list)
+    link_up: bool = True
+
+    def send_mode(self, mode: str) -> None:
+        if not self.link_up:
+            raise LinkLost(self.name, self.sysid, f"mode {mode}", "link down")
+        self.sent.append(mode)
+
+    def send_pause(self, pause: bool) -> None:
+        self.sent.append("pause" if pause else "continue")
+
+
+def fleet(n=3):
+    return [StandIn(f"uav{i + 1}", i + 1) for i in range(n)]
+
+
+def response(policy=FaultPolicy.RALLY, **kw):
+    return Response(policy, ["uav1", "uav2", "uav3"], [1, 2, 3], t0=0.0, **kw)
+
+
+def test_rally_stops_the_others_on_their_track_then_rtl_and_leaves_the_chooser_alone():
+    vs, watch = fleet(), DepartureWatch(3)
+    r = response()
+    vs[2].status.mode = "LOITER"  # its pilot took it
+    r.react([Event(2, MODE, "switched to LOITER", 10.0)], vs, watch, 10.0)
+    assert [v.sent for v in vs] == [["pause"], ["pause"], []]
+    r.step(vs, watch, 10.5)  # still moving: nothing yet
+    assert vs[0].sent == ["pause"]
+    for v in vs[:2]:
+        v.status.ground_speed_m_s = 0.1
+    r.step(vs, watch, 11.0)
+    assert [v.sent for v in vs] == [["pause", "RTL"], ["pause", "RTL"], []]
+    for v in vs[:2]:
+        v.status.mode = "RTL"
+    r.step(vs, watch, 11.2)
+    lines = r.lines(vs)
+    assert lines[0].startswith("uav1 (sysid 1): stopped on its track (pause) at t+10.0 s; RTL at")
+    assert "mode at t+10.0 s (switched to LOITER); left to what it chose: not commanded" in lines[2]
+    assert not r.ended(vs, 20.0)  # uav1 and uav2 still flying
+    vs[0].status.armed = vs[1].status.armed = False
+    assert r.ended(vs, 30.0)  # uav3 is its pilot's: not waited for
+    assert vs[2].sent == []
+
+
+def test_an_unsafe_return_line_lands_instead_and_says_why():
+    vs, watch = fleet(), DepartureWatch(3)
+    r = response(route_check=lambda j: "the straight line passes 0.4 m from an obstacle"
+                 if j == 0 else None)
+    r.react([Event(2, NO_PROGRESS, "stuck", 5.0)], vs, watch, 5.0)
+    for v in vs:
+        v.status.ground_speed_m_s = 0.0
+    r.step(vs, watch, 6.0)
+    # no progress is no choice: uav3 is answered as the others are
+    assert [v.sent for v in vs] == [["pause", "LAND"], ["pause", "RTL"], ["pause", "RTL"]]
+    assert "no RTL: the straight line passes 0.4 m" in r.lines(vs)[0]
+
+
+def test_a_lost_vehicle_is_answered_once_its_link_is_back():
+    vs, watch = fleet(), DepartureWatch(3)
+    r = response(FaultPolicy.LAND)
+    vs[1].link_up = False
+    r.react([Event(1, LINK_LOST, "closed", 3.0)], vs, watch, 3.0)
+    assert [v.sent for v in vs] == [["pause"], [], ["pause"]]
+    assert r.ended(vs, 4.0) is False
+    vs[0].status.armed = vs[2].status.armed = False
+    assert not r.ended(vs, 4.0)  # the lost one is waited for a while
+    assert r.ended(vs, 18.0)  # 15 s after its loss: gone
+    vs[1].link_up = True
+    r.react([Event(1, LINK_BACK, "heard from again", 6.0)], vs, watch, 6.0)
+    assert vs[1].sent == ["pause"]
+    assert not r.ended(vs, 6.0)
+    assert "link back at t+6.0 s" in r.lines(vs)[1]
+
+
+def test_continue_commands_nobody_and_the_budget_ends_it():
+    vs, watch = fleet(), DepartureWatch(3)
+    r = response(FaultPolicy.CONTINUE, budget_s=50.0)
+    r.react([Event(0, MODE, "switched to RTL", 1.0)], vs, watch, 1.0)
+    r.step(vs, watch, 5.0)
+    assert all(v.sent == [] for v in vs)
+    assert r.active and not r.ended(vs, 40.0) and r.ended(vs, 51.0)
+    assert "carried on with its mission" in r.lines(vs)[1]
+
+
+def test_before_the_legs_the_others_brake_and_a_dead_link_is_said():
+    vs, watch = fleet(), DepartureWatch(3)
+    for v in vs:
+        v.status.mode = "GUIDED"
+    vs[0].link_up = False  # its link broke as the answer went out
+    r = response()
+    r.react([Event(2, MODE, "switched to LAND", 1.0)], vs, watch, 1.0)
+    assert vs[1].sent == ["BRAKE"]
+    assert "could not be stopped" in r.lines(vs)[0]
