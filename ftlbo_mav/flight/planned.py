@@ -46,6 +46,7 @@ class PlannedFlight:
     fences: tuple[FenceSet | None, ...] = ()
     predicted_clearance: np.ndarray | None = None
     predicted_separation: np.ndarray | None = None
+    vehicle: dict[str, float] | None = None  # plan.json's [vehicle] parameters, if any
 
     @property
     def count(self) -> int:
@@ -86,6 +87,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
         clearance = float(doc.get("clearance", 0.0))
         predicted = [_predicted(u, "predicted_clearance_m") for u in uavs]
         separated = [_predicted(u, "predicted_separation_m") for u in uavs]
+        vehicle = {str(k): float(v) for k, v in (doc.get("vehicle") or {}).items()}
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise PlanFolderError(f"{doc_path}: not a plan.json written by ftlbo-mav ({exc})") from None
     missions = []
@@ -101,7 +103,8 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
     return PlannedFlight(folder, names, offsets, paths, tuple(missions), frame, centres, radii,
                          clearance, fences,
                          None if None in predicted else np.array(predicted, float),
-                         None if None in separated else np.array(separated, float))
+                         None if None in separated else np.array(separated, float),
+                         vehicle or None)
 
 
 def _predicted(uav: dict, key: str) -> float | None:
