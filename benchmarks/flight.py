@@ -92,7 +92,8 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
     keeper = None
-    with Fleet(planned.names, [1, 2, 3], urls, on_position=monitor) as fleet:
+    sysids = list(range(1, planned.count + 1))
+    with Fleet(planned.names, sysids, urls, on_position=monitor) as fleet:
         monitor.vehicles = fleet.vehicles  # Fleet asks each vehicle for 10 Hz positions
         if strategy == "naive":
             for v, m in zip(fleet.vehicles, planned.missions):
@@ -108,8 +109,9 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
             keeper = make_keeper(planned, options.keeper)
             fly(planned, fleet.vehicles, options=options, timing=Timing(),
                 say=lambda _t: None, tick=lambda: None, keeper=keeper)
-    times, positions, seqs = monitor.record.grid([1, 2, 3], planned.frame)
+    times, positions, seqs = monitor.record.grid(sysids, planned.frame)
     summary = summarize(planned, times, positions, seqs)
+    summary["_samples"] = monitor.record.samples  # for --record, not in the JSON summary
     if keeper is not None:
         summary["keeper"] = {"active": keeper.active, "link_gaps": keeper.log.link_gaps,
                              "off_reason": keeper.off_reason,
@@ -149,6 +151,57 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
         return fly_once(plan_dir, vehicles.urls, strategy)
 
 
+def print_clearance(scenario: Path, rows: dict, *, binary: str | None) -> None:
+    """Per UAV: the clearance planned, predicted (plan.json) and flown (worst run)."""
+    print(f"\nclearance per UAV, {scenario.name} on "
+          f"{'ArduPilot SITL' if binary else 'the emulator'} (flown: worst run)")
+    print("| flight | UAV | planned | predicted | flown | flown - planned | flown - predicted |")
+    print("|---|---|---|---|---|---|---|")
+    for strategy, summaries in rows.items():
+        if strategy == "naive" or not summaries:
+            continue
+        planned = summaries[0]["planned_clearance_m"]
+        predicted = summaries[0]["predicted_clearance_per_uav_m"] or []
+        flown = [min(s["clearance_per_uav_m"][n] for s in summaries)
+                 for n in range(len(summaries[0]["clearance_per_uav_m"]))]
+        for n, (f, p) in enumerate(zip(flown, predicted)):
+            print(f"| {strategy} | uav{n + 1} | {planned:.2f} m | {p:.2f} m | {f:.2f} m | "
+                  f"{f - planned:+.2f} m | {f - p:+.2f} m |")
+
+
+def write_recording(path: Path, plan_dir: Path, samples, summary: dict, *, strategy: str,
+                    binary: str | None, speedup: float, scenario: Path) -> None:
+    """The flight as tests/data's recordings are: what was flown (every position sample
+    in AUTO), the plan and missions it flew, how it was recorded."""
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    back = ("ArduCopter 4.5.6 SITL ($ARDUPILOT_SITL: our own build at bbf0b066, started by "
+            f"`python -m sitl`'s launcher with copter.parm only, --speedup {speedup:g})"
+            if binary else f"the emulator (time scale {speedup:g})")
+    doc = {
+        "about": (f"Recorded {when} by `python benchmarks/flight.py --scenario {scenario} "
+                  f"--record ...` against {back}: the plan folder uploaded as `ftlbo-mav "
+                  f"upload` does, then flown as `{strategy}` ("
+                  f"{'with' if strategy == 'fly' else 'without'} the formation keeper). "
+                  "`samples` are the GLOBAL_POSITION_INT positions each vehicle sent in "
+                  "AUTO at 10 Hz (lat/lon 1e-7 degrees, altitude above "
+                  "home mm), t in seconds on the recorder's clock, boot_ms the vehicle's."),
+        "scenario": str(scenario),
+        "strategy": strategy,
+        "plan": json.loads((plan_dir / "plan.json").read_text()),
+        "missions": {p.stem: p.read_text() for p in sorted(plan_dir.glob("uav*.waypoints"))},
+        "samples": {
+            "fields": ["t", "sysid", "lat_e7", "lon_e7", "alt_mm", "seq", "boot_ms"],
+            "rows": [[round(x.t, 3), x.sysid, int(round(x.lat_deg * 1e7)),
+                      int(round(x.lon_deg * 1e7)), int(round(x.alt_m * 1000)), x.seq,
+                      int(round(x.boot_s * 1000)) if x.boot_s == x.boot_s else None]
+                     for x in samples if x.mode == "AUTO"],
+        },
+        "summary": summary,
+    }
+    path.write_text(json.dumps(doc, indent=1) + "\n")
+    print(f"recorded {path}", flush=True)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
@@ -167,6 +220,9 @@ def main() -> int:
                         help="set a parameter on one vehicle before each flight (PARAM_SET, "
                              "read back), e.g. 2:WPNAV_JERK=0.8 for a copter that is slower "
                              "than the others; repeatable")
+    parser.add_argument("--record", type=Path, default=None,
+                        help="write the first `fly` flight's telemetry (in AUTO), its plan and "
+                             "missions as JSON here (tests/data/ardupilot-4.5.6/flown-*.json)")
     parser.add_argument("--scenario", type=Path, default=EXAMPLE,
                         help="scenario to fly (default the shipped example); planned with "
                              "the default planner unless a folder of its name holds missions")
@@ -182,6 +238,7 @@ def main() -> int:
             shutil.copytree(shipped, plan_dir)
         else:
             write_plan(plan(scenario), plan_dir)
+        recorded = False
         for run in range(args.runs):
             for strategy in rows:
                 try:
@@ -191,6 +248,12 @@ def main() -> int:
                 except UploadFailed as exc:  # flying without its mission measures nothing
                     print(exc, file=sys.stderr)
                     return 1
+                samples = summary.pop("_samples")
+                if args.record and strategy != "naive" and not recorded:
+                    write_recording(args.record, plan_dir, samples, summary,
+                                    strategy=strategy, binary=binary, speedup=args.speedup,
+                                    scenario=args.scenario)
+                    recorded = True
                 rows[strategy].append(summary)
                 print(f"run {run} {strategy:>15}: formation error "
                       f"{summary['formation_error_rms_legs_m']:.3f} m RMS, "
@@ -220,6 +283,7 @@ def main() -> int:
         print(f"| {strategy} | {rms[len(rms) // 2]:.3f} m | {worst:.3f} m | {legs:.1f} s | "
               f"{sep:.2f} m | "
               f"{clear:.2f} m | {land:.2f} m |")
+    print_clearance(args.scenario, rows, binary=binary)
     Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
     print(f"wrote {args.out}")
     return 0

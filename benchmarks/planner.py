@@ -19,6 +19,11 @@ the figures, and every median is over several seeds or repeats.
    length over the lower bound, wall seconds, waypoints, over seeds 0..2 (the same plan
    for every seed says the planner is deterministic there); and ``auto`` on the dense
    100-tree field timed alone (median of 5).
+5. Planning time as ``ftlbo-mav plan`` plans (``--only flown``): ``plan()`` with the
+   scenario's own settings, including the prediction of every UAV's flown path and the
+   clearance keeping (``Plan.seconds``; of it ``Plan.predict_seconds``), median of 5, on
+   the example, the slalom, the zigzag at 10 m/s and a ten-UAV formation
+   (``benchmarks/scenarios/``). Goals: the example in <= 0.2 s, ten UAVs in <= 1 s.
 4. When the optional ``mealpy`` package is importable: its TLBO (``OriginalTLO``) on our
    cost, one path per call as mealpy evaluates, at the same evaluation budget, next to
    ours (cost and time). mealpy pins numpy <= 1.26, so run it from its own virtual
@@ -326,7 +331,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer seeds and repeats")
     parser.add_argument("--json", default="planner-benchmark.json", help="output JSON path")
-    parser.add_argument("--only", choices=("algorithms", "scaling", "maps", "mealpy"),
+    parser.add_argument("--only", choices=("algorithms", "scaling", "maps", "mealpy", "flown"),
                         help="run one part only")
     args = parser.parse_args()
     seeds, repeats = (3, 2) if args.quick else (7, 5)
@@ -345,10 +350,40 @@ def main() -> None:
         report_maps(doc, 3)
     if part("mealpy"):
         report_mealpy(doc, seeds)
+    if part("flown"):
+        report_flown(doc)
     doc["load_after"] = load()
     print(f"\nload average after (1/5/15 min): {doc['load_after']}")
     Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
     print(f"wrote {args.json}")
+
+
+FLOWN_MAPS = (EXAMPLE, ROOT / "missions" / "six-tree-slalom.toml",
+              ROOT / "benchmarks" / "scenarios" / "zigzag-fast.toml",
+              ROOT / "benchmarks" / "scenarios" / "orchard-ten-uavs.toml")
+
+
+def report_flown(doc: dict, repeats: int = 5) -> None:
+    rows, out = [], []
+    for path in FLOWN_MAPS:
+        scenario = load_scenario(path)
+        runs = [plan(scenario) for _ in range(repeats)]
+        total = statistics.median(r.seconds for r in runs)
+        predict = statistics.median(r.predict_seconds for r in runs)
+        last = runs[-1]
+        out.append({"scenario": path.name, "uavs": scenario.uav_count, "seconds": total,
+                    "predict_seconds": predict, "corners_moved": last.corners_moved,
+                    "corner_stops": last.corner_stops, "replans": last.replans,
+                    "predicted_min_clearance_m": float(last.prediction.clearance.min()),
+                    "clearance_m": scenario.clearance_m})
+        rows.append([path.name, scenario.uav_count, f"{total:.3f}", f"{predict:.3f}",
+                     last.corners_moved, last.corner_stops, last.replans,
+                     f"{last.prediction.clearance.min():.3f}", f"{scenario.clearance_m:g}"])
+    doc["flown"] = out
+    print(f"\n5. planning time with the flown-path prediction (plan(), the scenario's settings, "
+          f"median of {repeats})")
+    print(table(["scenario", "UAVs", "plan s", "of it predicting s", "corners moved",
+                 "stops", "re-plans", "predicted clearance m", "clearance m"], rows))
 
 
 def report_algorithms(doc: dict, seeds: int) -> None:

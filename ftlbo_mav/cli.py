@@ -211,7 +211,21 @@ def format_summary(result) -> str:
             else "; no route: no lower bound"
         )
         + shape
+        + _flown(result)
     )
+
+
+def _flown(result) -> str:
+    """The predicted flown path: the clearance it keeps, what the planner did for it."""
+    p = result.prediction
+    if p is None or not len(p.obstacle_clearance):
+        return ""
+    did = [f"{n} {what}{'s' if n > 1 else ''}"
+           for n, what in ((result.corners_moved, "corner move"),
+                           (result.corner_stops, "corner stop"),
+                           (result.replans, "re-plan")) if n]
+    return (f"; flown path (predicted): clearance {p.clearance.min():.2f} m"
+            + (f" ({', '.join(did)})" if did else ""))
 
 
 def format_leg(index: int, count: int, leg) -> str:

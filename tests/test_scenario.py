@@ -105,3 +105,16 @@ def test_offsets_and_count_together_are_refused(small_text):
     text = small_text.replace("clearance = 1.0", "clearance = 1.0\ncount = 3")
     with pytest.raises(ScenarioError, match="not both"):
         parse_scenario(text)
+
+
+def test_the_vehicle_table_takes_arducopters_parameters(small_text):
+    from ftlbo_mav.scenario import parse_scenario
+
+    assert parse_scenario(small_text).vehicle.wp_accel == 2.5  # ArduCopter's default
+    s = parse_scenario(small_text + "[vehicle]\nWPNAV_ACCEL = 100\nWPNAV_JERK = 2.0\n")
+    assert (s.vehicle.wp_accel, s.vehicle.wp_jerk) == (1.0, 2.0)
+    for bad, said in (("WPNAV_SPEDE = 5", "vehicle.WPNAV_SPEDE: unknown key"),
+                      ("WPNAV_ACCEL = 5000", "vehicle.WPNAV_ACCEL"),
+                      ("WPNAV_JERK = 'fast'", "vehicle.WPNAV_JERK")):
+        with pytest.raises(ScenarioError, match=said.replace(".", r"\.")):
+            parse_scenario(small_text + f"[vehicle]\n{bad}\n")

@@ -208,6 +208,43 @@ _SCALES = (
 assert {f.name for f in fields(Navigation)} == {attr for _n, attr, _s in _SCALES}
 
 
+# The parameters a scenario's ``[vehicle]`` table may set (ArduPilot's names and units):
+# those that shape the flown path, each with the range ArduCopter 4.5.6 documents for it
+# (the ``@Range`` of its var_info entry).
+VEHICLE_PARAMS: Mapping[str, tuple[float, float]] = {
+    "WPNAV_SPEED": (20.0, 2000.0),     # AC_WPNav.cpp, cm/s
+    "WPNAV_RADIUS": (5.0, 1000.0),     # cm
+    "WPNAV_SPEED_UP": (10.0, 1000.0),  # cm/s
+    "WPNAV_SPEED_DN": (10.0, 500.0),   # cm/s
+    "WPNAV_ACCEL": (50.0, 500.0),      # cm/s/s
+    "WPNAV_ACCEL_Z": (50.0, 500.0),    # cm/s/s
+    "WPNAV_JERK": (1.0, 20.0),         # m/s/s/s
+    "WPNAV_ACCEL_C": (0.0, 500.0),     # cm/s/s (0: twice WPNAV_ACCEL)
+    "PSC_JERK_XY": (1.0, 20.0),        # AC_PosControl.cpp, m/s/s/s
+    "ATC_INPUT_TC": (0.0, 1.0),        # AC_AttitudeControl.cpp, s
+}
+
+
+def vehicle_navigation(values: Mapping[str, float]) -> Navigation:
+    """ArduCopter's defaults with ``values`` (names of :data:`VEHICLE_PARAMS`, ArduPilot
+    units) set; a name it does not know or a value outside its range is a ValueError
+    naming it."""
+    for name, value in values.items():
+        if name not in VEHICLE_PARAMS:
+            raise ValueError(f"{name}: not a parameter the flown path depends on "
+                             f"(known: {', '.join(VEHICLE_PARAMS)})")
+        lo, hi = VEHICLE_PARAMS[name]
+        if not (math.isfinite(value) and lo <= value <= hi):
+            raise ValueError(f"{name}: {value:g} is outside ArduCopter's range [{lo:g}, {hi:g}]")
+    return Navigation().with_params(values)
+
+
+def vehicle_params(nav: Navigation) -> dict[str, float]:
+    """The :data:`VEHICLE_PARAMS` of ``nav``, in ArduPilot's units."""
+    params = nav.to_params()
+    return {name: round(params[name], 6) for name in VEHICLE_PARAMS}
+
+
 def param_value(name: str, value: float) -> float:
     """A value as PARAM_VALUE carries it: integer types are whole numbers (AP_Param
     casts on set), REAL32 a float32."""

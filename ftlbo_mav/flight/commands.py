@@ -115,7 +115,8 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
                f"{m('formation_error_max_legs_m')} worst; smallest separation "
                f"{m('min_separation_legs_m')} on the legs, {m('min_separation_airborne_m')} in "
                f"the air (planned {m('planned_min_separation_m')}); "
-               f"smallest clearance {m('min_clearance_m')}")
+               f"smallest clearance {m('min_clearance_m')} (predicted "
+               f"{m('predicted_min_clearance_m')})")
     keeper = summary.get("keeper")
     if keeper and keeper["off_reason"]:
         click.echo(f"formation keeper off: {keeper['off_reason']}")

@@ -28,7 +28,10 @@ class PlannedFlight:
     ``offsets``: ``(N, 3)`` metres ENU; ``paths``: ``(N, P, 3)`` each UAV's planned
     points (start .. goal) in ``frame``; ``centres`` ``(K, 2)`` and ``radii`` ``(K,)``
     the obstacles (their own radii, without clearance); ``fences``: each UAV's fence,
-    rally points and fence parameters (None: it has no ``uavN.fence``).
+    rally points and fence parameters (None: it has no ``uavN.fence``);
+    ``predicted_clearance`` / ``predicted_separation``: ``(N,)`` metres each UAV's
+    predicted flown path keeps from the obstacles and the other UAVs (``plan.json``;
+    None for a plan written without the prediction).
     """
 
     folder: Path
@@ -41,6 +44,9 @@ class PlannedFlight:
     radii: np.ndarray
     clearance_m: float
     fences: tuple[FenceSet | None, ...] = ()
+    predicted_clearance: np.ndarray | None = None
+    predicted_separation: np.ndarray | None = None
+    vehicle: dict[str, float] | None = None  # plan.json's [vehicle] parameters, if any
 
     @property
     def count(self) -> int:
@@ -79,6 +85,9 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
                                    lon_deg=[o["lon"] for o in obstacles])[:, :2]
         radii = np.array([o["radius"] for o in obstacles], float)
         clearance = float(doc.get("clearance", 0.0))
+        predicted = [_predicted(u, "predicted_clearance_m") for u in uavs]
+        separated = [_predicted(u, "predicted_separation_m") for u in uavs]
+        vehicle = {str(k): float(v) for k, v in (doc.get("vehicle") or {}).items()}
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise PlanFolderError(f"{doc_path}: not a plan.json written by ftlbo-mav ({exc})") from None
     missions = []
@@ -92,4 +101,14 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
     except MissionFileError as exc:
         raise PlanFolderError(str(exc)) from None
     return PlannedFlight(folder, names, offsets, paths, tuple(missions), frame, centres, radii,
-                         clearance, fences)
+                         clearance, fences,
+                         None if None in predicted else np.array(predicted, float),
+                         None if None in separated else np.array(separated, float),
+                         vehicle or None)
+
+
+def _predicted(uav: dict, key: str) -> float | None:
+    """A predicted figure of one UAV in plan.json (null: infinite, no obstacles)."""
+    if key not in uav:
+        return None
+    return float("inf") if uav[key] is None else float(uav[key])

@@ -10,8 +10,10 @@ import io
 
 import numpy as np
 
+from ..ardupilot.flight_path import fly_paths
+from ..ardupilot.navigation import Navigation
 from ..formation import min_separation as planned_separation
-from ..mission.items import CMD_NAV_WAYPOINT
+from ..mission.items import CMD_DO_CHANGE_SPEED, CMD_NAV_WAYPOINT
 from .metrics import formation_error, min_clearance, min_separation
 from .planned import PlannedFlight
 
@@ -38,6 +40,8 @@ def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
     sep = min_separation(positions)
     clear = min_clearance(positions, planned.centres, planned.radii)
     goal = planned.paths[:, -1, :2]
+    per_uav = [min_clearance(positions[:, n : n + 1], planned.centres, planned.radii)
+               for n in range(positions.shape[1])]
     summary = {
         "samples": len(times),
         "seconds": float(times[-1] - times[0]),
@@ -51,11 +55,47 @@ def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
         # separation (offsets differing in altitude only) pass at their homes' distance
         "min_separation_airborne_m": float(sep[airborne].min()) if airborne.any() else None,
         "min_clearance_m": float(clear.min()) if np.isfinite(clear).all() else None,
+        # predicted beside flown: what the planner predicted each UAV's flown path keeps
+        "clearance_per_uav_m": [_finite(c.min()) for c in per_uav],
+        "planned_clearance_m": planned.clearance_m,
+        "predicted_clearance_per_uav_m": _listed(planned.predicted_clearance),
+        "predicted_min_clearance_m": _least(planned.predicted_clearance),
+        "predicted_min_separation_m": _least(planned.predicted_separation),
         "inside_obstacle": bool((clear < 0).any()),
         "final_distance_to_goal_m": [
             float(d) for d in np.linalg.norm(positions[-1, :, :2] - goal, axis=1)],
     }
     return summary
+
+
+def _finite(value) -> float | None:
+    value = float(value)
+    return value if np.isfinite(value) else None
+
+
+def _listed(values) -> list | None:
+    return None if values is None else [_finite(v) for v in values]
+
+
+def _least(values) -> float | None:
+    return None if values is None or not len(values) else _finite(np.min(values))
+
+
+def predicted_paths(planned: PlannedFlight) -> list[np.ndarray] | None:
+    """Per UAV ``(T, 3)``: the path each UAV's mission is predicted to fly from its start point
+    (:mod:`ftlbo_mav.ardupilot.flight_path`: its DO_CHANGE_SPEED, its holds, the plan's
+    ``[vehicle]`` parameters); None for a plan written without the prediction."""
+    if planned.predicted_clearance is None or not planned.missions:
+        return None
+    items = planned.missions[0]
+    speeds = [it.param2 for it in items if it.command == CMD_DO_CHANGE_SPEED]
+    holds = [it.param1 for it in items[2:] if it.command == CMD_NAV_WAYPOINT]
+    if len(holds) != planned.paths.shape[1]:
+        return None
+    nav = Navigation().with_params(planned.vehicle or {})
+    flown = fly_paths(planned.paths, nav=nav, speed_m_s=speeds[0] if speeds else None,
+                      holds_s=np.array(holds, float))
+    return [f.positions for f in flown]
 
 
 def render_report_png(planned: PlannedFlight, times, positions, seqs, summary: dict) -> bytes:
@@ -71,17 +111,25 @@ def render_report_png(planned: PlannedFlight, times, positions, seqs, summary: d
     for c, r in zip(planned.centres, planned.radii):
         ground.add_patch(Circle(c, r, color="tab:green", alpha=0.45, lw=0))
         ground.add_patch(Circle(c, r + planned.clearance_m, fill=False, ls=":", color="tab:green"))
+    predicted = predicted_paths(planned)
     for n, name in enumerate(planned.names):
         colour = colours[n % len(colours)]
         p = planned.paths[n]
         ground.plot(p[:, 0], p[:, 1], "--", color=colour, lw=1, label=f"{name} planned")
+        if predicted is not None:
+            q = predicted[n]
+            ground.plot(q[:, 0], q[:, 1], ":", color=colour, lw=1.2,
+                        label=f"{name} predicted")
         side.plot(p[:, 0], p[:, 2], "--", color=colour, lw=1)
         if len(times):
             ground.plot(positions[:, n, 0], positions[:, n, 1], color=colour, lw=1.8,
                         label=f"{name} flown")
             side.plot(positions[:, n, 0], positions[:, n, 2], color=colour, lw=1.8)
-    ground.set(title="Ground track (obstacles green, clearance dotted)", xlabel="east [m]",
-               ylabel="north [m]", aspect="equal")
+    flown, least = summary.get("min_clearance_m"), summary.get("predicted_min_clearance_m")
+    kept = ("" if flown is None else f"; clearance flown {flown:.2f} m"
+            + ("" if least is None else f", predicted {least:.2f} m"))
+    ground.set(title=f"Ground track (obstacles green, clearance dotted{kept})",
+               xlabel="east [m]", ylabel="north [m]", aspect="equal")
     ground.legend(fontsize=8, ncol=2)
     side.set(title="Vertical profile", xlabel="east [m]", ylabel="altitude above home [m]")
 

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..ardupilot.navigation import vehicle_params
 from ..errors import MissionFileError
 from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
@@ -55,6 +56,7 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
             path=[tuple(map(float, row)) for row in lla],
             end_action=settings.end_action,
             speed_m_s=settings.speed_m_s,
+            holds_s=None if plan.holds_s is None else [float(h) for h in plan.holds_s],
         )
         offset = tuple(float(v) for v in plan.problem.offsets[n])
         missions.append(UavMission(f"uav{n + 1}", offset, tuple(items)))
@@ -128,6 +130,8 @@ def plan_document(
         "history": [_finite(h) for h in plan.history],
         "clearance": plan.scenario.clearance_m,
         "corner_allowance": plan.scenario.mission.corner_allowance_m,
+        "vehicle": vehicle_params(sc.vehicle),
+        "predicted": _predicted_document(plan),
         "min_separation": plan.scenario.min_separation_m,
         "area": {
             "corner_a": [sc.corner_a.lat_deg, sc.corner_a.lon_deg],
@@ -157,6 +161,7 @@ def plan_document(
                 "waypoints": _points(path),
                 "mission_file": f"{m.name}.waypoints" if written else None,
                 "mission_sha256": (digests or {}).get(m.name) if written else None,
+                **_uav_predicted(plan, n),
                 **_fence_document(m.name, fences, n, written),
             }
             for n, (m, path) in enumerate(zip(missions, view.uav_paths))
@@ -166,6 +171,38 @@ def plan_document(
         "params_file": FENCE_PARAMS_FILE if written else None,
         "exclusion_radii_m": list(fences[0].exclusion_radii_m),
     }})
+
+
+def _predicted_document(plan: Plan) -> dict | None:
+    """What the planner did for the flown path: its corner moves, stops and re-plans,
+    and how long predicting took."""
+    if plan.prediction is None:
+        return None
+    return {
+        "model": "ArduCopter 4.5.6 AC_WPNav/SCurve (ftlbo_mav.ardupilot.flight_path)",
+        "corners_moved": plan.corners_moved,
+        "corner_stops": plan.corner_stops,
+        "holds_s": [] if plan.holds_s is None else [int(h) for h in plan.holds_s],
+        "replans": plan.replans,
+        "seconds": round(plan.predict_seconds, 4),
+        "min_clearance_m": _round(_finite(float(plan.prediction.clearance.min())), 4),
+        "min_separation_m": _round(_finite(float(plan.prediction.separation.min())), 4),
+        "obstacle_clearance_m": [round(float(c), 4) for c in plan.prediction.obstacle_clearance],
+    }
+
+
+def _uav_predicted(plan: Plan, n: int) -> dict:
+    """Per UAV: its predicted flown path's smallest clearance and separation, seconds
+    per leg (point to point) and in all."""
+    p = plan.prediction
+    if p is None:
+        return {}
+    return {
+        "predicted_clearance_m": _round(_finite(float(p.clearance[n])), 4),
+        "predicted_separation_m": _round(_finite(float(p.separation[n])), 4),
+        "predicted_leg_seconds": [round(float(t), 2) for t in p.leg_seconds[n]],
+        "predicted_seconds": round(float(p.seconds[n]), 2),
+    }
 
 
 def _fence_document(name: str, fences: list[UavFence] | None, n: int, written: bool) -> dict:
@@ -393,7 +430,19 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         seconds=seconds,
         lower_bound_length=bound,
         legs=tuple(legs),
+        holds_s=_holds(doc, len(centroid_enu), source),
     )
+
+
+def _holds(doc: dict, points: int, source: str) -> np.ndarray | None:
+    """``predicted.holds_s`` of a plan.json (None when it has none)."""
+    holds = (doc.get("predicted") or {}).get("holds_s") or None
+    if holds is None:
+        return None
+    if len(holds) != points:
+        raise MissionFileError(f"{source}: predicted.holds_s has {len(holds)} values for "
+                               f"{points} points")
+    return np.array(holds, float)
 
 
 def _cost_terms(doc: dict) -> CostTerms:

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -171,6 +171,24 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
     return chosen
 
 
+def _predicted_cut(plan: Plan, lo: np.ndarray, hi: np.ndarray,
+                   settings: FenceSettings) -> float:
+    """How far outside the area the flown path may go: the predicted paths' furthest
+    excursion beyond the area's box (0 for a feasible plan), else ``corner_cut_m``."""
+    if plan.prediction is None:
+        return settings.corner_cut_m
+    xy = plan.prediction.positions[..., :2]
+    return float(max(0.0, (lo - xy).max(), (xy - hi).max()))
+
+
+def _flown_clearance(plan: Plan, k: int, kept: float) -> float:
+    """The clearance the flown path keeps from obstacle ``k``: the predicted one (at
+    most ``kept``; a plan keeps more only by chance), else ``kept``."""
+    if plan.prediction is None or k >= len(plan.prediction.obstacle_clearance):
+        return kept
+    return min(kept, float(plan.prediction.obstacle_clearance[k]))
+
+
 def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> list[UavFence]:
     """Every UAV's fence, rally point and fence parameters for ``plan`` (module notes)."""
     s = plan.scenario
@@ -182,17 +200,20 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
     corners = frame.to_enu(lat_deg=[s.corner_a.lat_deg, s.corner_b.lat_deg],
                            lon_deg=[s.corner_a.lon_deg, s.corner_b.lon_deg]).reshape(-1, 3)
     lo, hi = corners[:, :2].min(axis=0), corners[:, :2].max(axis=0)
-    grow = settings.corner_cut_m + settings.margin_m
+    cut = _predicted_cut(plan, lo, hi, settings)
+    grow = cut + settings.margin_m
     ring = np.array([[lo[0] - grow, lo[1] - grow], [hi[0] + grow, lo[1] - grow],
                      [hi[0] + grow, hi[1] + grow], [lo[0] - grow, hi[1] + grow]])
     ring_lla = plan.lla(np.column_stack([ring, np.zeros(len(ring))]))
     centre_lla = plan.lla(centres) if len(centres) else np.zeros((0, 3))
-    # the planner kept the clearance plus the scenario's corner allowance
+    # the planner kept the clearance plus the scenario's corner allowance: on the
+    # predicted flown path when there is one (the circles then need no corner cut)
     kept = s.clearance_m + s.mission.corner_allowance_m
-    excl = tuple(round(exclusion_radius_m(float(r), clearance_m=kept,
-                                          settings=settings), 2) for r in radii)
+    flown = replace(settings, corner_cut_m=0.0) if plan.prediction is not None else settings
+    excl = tuple(round(exclusion_radius_m(float(r), clearance_m=_flown_clearance(plan, k, kept),
+                                          settings=flown), 2) for k, r in enumerate(radii))
     notes: list[str] = []
-    if kept < settings.corner_cut_m + settings.margin_m and len(radii):
+    if kept < flown.corner_cut_m + settings.margin_m and len(radii):
         notes.append(f"clearance {kept:g} m is less than the corner cut "
                      f"{settings.corner_cut_m:g} m + FENCE_MARGIN {settings.margin_m:g} m: "
                      "the exclusion circles are the obstacles themselves and a flown path "

@@ -101,6 +101,7 @@ def build_mission(
     path: Sequence[tuple[float, float, float]],
     end_action: str = "land",
     speed_m_s: float | None = None,
+    holds_s: Sequence[float] | None = None,
 ) -> list[MissionItem]:
     """The mission of one UAV.
 
@@ -112,7 +113,9 @@ def build_mission(
     NAV_TAKEOFF to ``takeoff_alt_m``, one NAV_WAYPOINT per path point (with a
     DO_CHANGE_SPEED after the first, the start point, when ``speed_m_s`` is given), then
     NAV_LAND at the goal, RTL, or NAV_LOITER_UNLIM at the goal for ``end_action`` "land",
-    "rtl" or "loiter".
+    "rtl" or "loiter". ``holds_s``: per path point the whole seconds the copter holds
+    there (NAV_WAYPOINT param1: ArduCopter stops at such a waypoint instead of rounding
+    its corner; the planner's corner stops); default none.
     """
     if len(path) < 2:
         raise ValueError("a path needs at least a start and a goal")
@@ -123,9 +126,12 @@ def build_mission(
         # writes them as 0 (ArduPilot wiki, "Mission Commands": NAV_TAKEOFF).
         dict(command=CMD_NAV_TAKEOFF, alt_m=takeoff_alt_m),
     ]
+    holds = [0.0] * len(path) if holds_s is None else [float(h) for h in holds_s]
+    if len(holds) != len(path):
+        raise ValueError(f"holds_s has {len(holds)} values for {len(path)} path points")
     items += [
-        dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt)
-        for lat, lon, alt in path
+        dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt, param1=hold)
+        for (lat, lon, alt), hold in zip(path, holds)
     ]
     if speed_m_s is not None:
         # After the start point, before the first leg: a mission started there (fly's

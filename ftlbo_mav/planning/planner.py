@@ -21,6 +21,7 @@ from .feasibility import violations
 from .geometric import lower_bound, shortest_routes
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import Progress
+from .predicted import FlightModel, Prediction, keep_clearance, predict, predicted_violations
 from .problem import PlanningProblem, problem_from_scenario
 from .seeds import RouteChains, seed_waypoints
 
@@ -98,10 +99,31 @@ class Plan:
     """Metres no feasible centroid path can beat (:func:`.geometric.lower_bound`, summed
     over the legs); ``None`` when some leg has no route for the formation."""
     legs: tuple[Leg, ...] = ()
+    holds_s: np.ndarray | None = None
+    """``(P,)`` whole seconds each UAV holds at each point (its waypoint's param1): the
+    corners the planner made the copters stop at to keep the clearance; None: none."""
+    prediction: Prediction | None = None
+    """Every UAV's predicted flown path (:mod:`.predicted`), on which feasibility is
+    judged; None for a plan made without it (:func:`combine` alone)."""
+    corners_moved: int = 0
+    """Corner moves :func:`.predicted.keep_clearance` made (each move counted)."""
+    predict_seconds: float = 0.0
+    """Wall seconds of predicting the flown paths and keeping the clearance (in
+    ``seconds`` too)."""
+    stopped_for: np.ndarray | None = None
+    """``(K,)`` metres by which corners made stops fell short of each obstacle."""
+    replans: int = 0
+    """Times the route was planned again to avoid corner stops (:data:`REPLANS`); the
+    best of the plans is kept, ``seconds`` counts them all."""
 
     @property
     def feasible(self) -> bool:
         return not self.violations
+
+    @property
+    def corner_stops(self) -> int:
+        """Corners where the copters are made to stop (a hold) to keep the clearance."""
+        return 0 if self.holds_s is None else int((self.holds_s > 0).sum())
 
     @property
     def length_ratio(self) -> float | None:
@@ -157,8 +179,48 @@ def plan(
     settings = replace(settings, **{k: v for k, v in overrides.items() if v is not None})
     _check_settings(settings)
     check_size(scenario, settings)
-    points, names = scenario.route_enu(), scenario.route_names()
     base = problem_from_scenario(scenario, waypoints=_count(settings))
+    extra = np.zeros(len(base.radii))
+    best: Plan | None = None
+    for attempt in range(REPLANS + 1):
+        problem = replace(base, radii=base.radii + extra)
+        quiet = attempt > 0  # progress and notices once, for the first plan
+        legs = _plan_legs(scenario, settings, problem, progress=None if quiet else progress,
+                          notice=None if quiet else notice, on_leg=None if quiet else on_leg)
+        result = fly_as_arducopter(combine(scenario, settings, legs))
+        replans = replace(result, replans=attempt, seconds=result.seconds
+                          + (best.seconds if best is not None else 0.0))
+        if best is None or _better(replans, best):
+            best = replans
+        else:
+            best = replace(best, seconds=replans.seconds, replans=attempt)
+        stopped = result.stopped_for
+        if result.corner_stops == 0 or stopped is None or not stopped.any():
+            break
+        extra = extra + stopped
+    return best
+
+
+REPLANS = 2
+"""Re-plans at most when the planner had to make the copters stop at corners: each plans
+again with the obstacles those corners cut in on widened by what they fell short, so
+that the polyline keeps away from them and its corners can be flown through."""
+
+
+def _better(a: Plan, b: Plan) -> bool:
+    """Feasible first, then fewer corner stops, then the shorter predicted flight."""
+    def key(p: Plan):
+        t = float(p.prediction.seconds.max()) if p.prediction is not None else np.inf
+        return (not p.feasible, p.corner_stops, t)
+    return key(a) < key(b)
+
+
+def _plan_legs(scenario: Scenario, settings: PlannerSettings, base: PlanningProblem, *,
+               progress: Progress | None, notice: Callable[[str], None] | None,
+               on_leg: LegDone | None) -> list[Leg]:
+    """Every leg of the route on ``base`` (one generator seeded with ``settings.seed``
+    serving the legs in turn)."""
+    points, names = scenario.route_enu(), scenario.route_names()
     rng = np.random.default_rng(settings.seed)
     count = len(points) - 1
     legs = []
@@ -170,7 +232,64 @@ def plan(
         legs.append(leg)
         if on_leg is not None:
             on_leg(k, count, leg)
-    return combine(scenario, settings, legs)
+    return legs
+
+
+def flight_model(scenario: Scenario) -> FlightModel:
+    """How the scenario's copters fly: its ``[vehicle]`` parameters and cruise speed."""
+    return FlightModel(nav=scenario.vehicle, speed_m_s=scenario.mission.speed_m_s)
+
+
+def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Plan:
+    """``plan`` judged on, and changed for, the path ArduCopter flies.
+
+    A plan whose polyline is feasible is handed to :func:`.predicted.keep_clearance`
+    (corners moved or made stops until every UAV's predicted flown path keeps the
+    clearance plus the corner allowance), its legs take the changed points, and the
+    predicted flight's violations (clearance, area, altitude band, separation at the
+    same instant) join the polyline's. An infeasible polyline is left as it is and only
+    predicted. ``own_radii``: ``(K,)`` the radii of ``plan.problem``'s cylinders without
+    any clearance (default: the scenario's obstacles)."""
+    t0 = time.perf_counter()
+    sc = plan.scenario
+    model = flight_model(sc)
+    keep = sc.clearance_m + sc.mission.corner_allowance_m
+    if own_radii is None:
+        _centres, own_radii = sc.obstacles_enu()
+    holds = np.zeros(len(plan.centroid))
+    legs, moved = list(plan.legs), 0
+    stopped_for = None
+    if plan.feasible:
+        firsts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs])
+        fixed = np.zeros(len(plan.centroid), bool)
+        fixed[firsts] = True  # the start, every via point, the goal
+        kept = keep_clearance(plan.problem, plan.centroid, model=model, obstacle_radii=own_radii,
+                              clearance_m=keep, fixed=fixed)
+        holds, prediction, moved = kept.holds_s, kept.prediction, kept.moved
+        stopped_for = kept.stopped_for
+        if moved:
+            legs = [_with_centroid(leg, kept.centroid[a : b + 1])
+                    for leg, a, b in zip(plan.legs, firsts[:-1], firsts[1:])]
+            plan = combine(sc, plan.settings, legs)
+    else:
+        prediction = predict(plan.uav_paths, model=model, centres=plan.problem.centres,
+                             radii=own_radii)
+    flown = predicted_violations(plan.problem, prediction, clearance_m=keep,
+                                 obstacle_radii=own_radii, min_separation_m=sc.min_separation_m)
+    seconds = time.perf_counter() - t0
+    return replace(plan, violations=plan.violations + tuple(flown), holds_s=holds,
+                   prediction=prediction, corners_moved=moved, predict_seconds=seconds,
+                   seconds=plan.seconds + seconds, stopped_for=stopped_for)
+
+
+def _with_centroid(leg: Leg, centroid: np.ndarray) -> Leg:
+    """``leg`` with its points moved: cost and polyline violations recomputed."""
+    if np.array_equal(centroid, leg.centroid):
+        return leg
+    best = centroid[None, 1:-1]
+    terms = CostTerms(*(float(t[0]) for t in cost_terms(leg.problem, best)))
+    return replace(leg, centroid=centroid, cost=terms,
+                   violations=tuple(violations(leg.problem, centroid)))
 
 
 def route_lower_bound(scenario: Scenario) -> float | None:
@@ -270,7 +389,9 @@ def solve(
     _check_settings(settings)
     rng = np.random.default_rng(settings.seed)
     leg = plan_leg(problem, settings, rng=rng, progress=progress, notice=notice)
-    return combine(scenario, settings, [leg])
+    # problem's radii include the scenario's clearance and allowance (problem_from_scenario)
+    own = problem.radii - scenario.clearance_m - scenario.mission.corner_allowance_m
+    return fly_as_arducopter(combine(scenario, settings, [leg]), own_radii=own)
 
 
 def plan_leg(

@@ -11,6 +11,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..ardupilot.navigation import Navigation
 from ..geo import LocalFrame
 from ..obstacles import Cylinder
 
@@ -117,7 +118,8 @@ class MissionSettings:
 
     end_action: str = "land"
     speed_m_s: float | None = None
-    # metres the planner keeps beyond the clearance, for the corners the autopilot cuts
+    # metres the planner keeps beyond the clearance, an optional extra margin: the corners
+    # ArduCopter cuts are predicted and kept clear of by the planner itself
     corner_allowance_m: float = 0.0
 
 
@@ -144,6 +146,9 @@ class Scenario:
     survey: Survey | None = None
     min_separation_m: float = MIN_SEPARATION_M
     """No two UAVs of the formation are closer than this (metres)."""
+    vehicle: Navigation = field(default_factory=Navigation)
+    """How the copters fly (the ``[vehicle]`` table: ArduCopter's parameters, its defaults
+    unless set); the planner predicts the flown path with it."""
     dropped_obstacles: int = 0
     """Obstacles of the file that cannot touch any UAV's path inside the area (their
     disc, radius + clearance, does not reach it): left out of ``obstacles``."""

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..ardupilot.navigation import VEHICLE_PARAMS, vehicle_navigation
 from ..errors import ScenarioError
 from ..formation import PLANES, closest_pair, regular_formation
 from ..obstacles import Cylinder, read_obstacle_geojson
@@ -104,6 +105,7 @@ def parse_scenario(
     survey = _read_survey(survey_t, default_alt=start.alt_m) if survey_t else None
     planner = _read_planner(root.table("planner", required=False))
     mission = _read_mission(root.table("mission", required=False))
+    vehicle = _read_vehicle(root.table("vehicle", required=False))
     root.done()
 
     scenario = Scenario(
@@ -122,6 +124,7 @@ def parse_scenario(
         source=source,
         via=via,
         min_separation_m=separation,
+        vehicle=vehicle,
     )
     _check_area_size(scenario)
     if obstacles_file:
@@ -338,6 +341,20 @@ def _read_mission(t: Table | None) -> MissionSettings:
     allowance = t.number("corner_allowance", 0.0, lo=0.0, hi=10.0, unit="m")
     t.done()
     return MissionSettings(end_action=end, speed_m_s=speed, corner_allowance_m=allowance)
+
+
+def _read_vehicle(t: Table | None):
+    """``[vehicle]``: ArduCopter parameters the copters fly with (names and units as
+    ArduPilot's: ``WPNAV_SPEED = 1000`` cm/s, ``WPNAV_ACCEL = 250`` cm/s/s, ``WPNAV_JERK
+    = 1`` m/s/s/s, ...), the defaults of ArduCopter 4.5.6 for those not given."""
+    if t is None:
+        return vehicle_navigation({})
+    values = {}
+    for name, (lo, hi) in VEHICLE_PARAMS.items():
+        if t.has(name):
+            values[name] = t.number(name, lo=lo, hi=hi)
+    t.done()
+    return vehicle_navigation(values)
 
 
 def _check_geometry(s: Scenario) -> None:

@@ -30,6 +30,7 @@ pytestmark = pytest.mark.sitl
 
 SPEEDUP = 4.0
 CORNER_CUT_TOLERANCE_M = 0.05
+PREDICTED_TOLERANCE_M = 0.1
 OPTIONS = VehicleOptions(heartbeat_s=0.25)
 HOMES = scenario_homes(load_scenario(EXAMPLE))
 
@@ -70,9 +71,16 @@ def test_fly_the_example_all_land_at_the_goal_in_formation(plan_dir):
     assert summary["leg_seconds"] > 1.0
     # the clearance the plan promised, less what ArduCopter's S-curve cuts at the tangent
     # waypoints (measured on SITL: 0.03-0.04 m of the 1 m)
-    promised = load_planned_flight(plan_dir).clearance_m
+    planned = load_planned_flight(plan_dir)
+    promised = planned.clearance_m
     assert summary["inside_obstacle"] is False
     assert summary["min_clearance_m"] >= promised - CORNER_CUT_TOLERANCE_M
+    # each UAV flies the path the planner predicted for it (ardupilot.flight_path: the
+    # emulator flies with the same model; on SITL tests/conformance/test_flown_path.py)
+    for flown, predicted in zip(summary["clearance_per_uav_m"], planned.predicted_clearance):
+        assert abs(flown - predicted) <= PREDICTED_TOLERANCE_M, (flown, predicted)
+    assert summary["predicted_clearance_per_uav_m"] == pytest.approx(
+        list(planned.predicted_clearance))
     assert max(summary["final_distance_to_goal_m"]) < 1.0
     assert min(summary["position_rate_hz"].values()) >= 5.0
     csv = (plan_dir / "flight" / "flight.csv").read_text().splitlines()

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from ftlbo_mav.ardupilot.navigation import DEFAULTS, Navigation
+from ftlbo_mav.ardupilot.scurve import SCurve
 from ftlbo_mav.sim.physics import FlightLimits, WaypointNav, varied
-from ftlbo_mav.sim.scurve import SCurve
 
 from ..conformance.replay import load
 

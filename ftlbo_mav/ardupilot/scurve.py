@@ -8,7 +8,8 @@ rewrites the same pieces it does): a start piece, seven that accelerate, seven t
 speed, one at constant speed and seven that decelerate. Jerk rises and falls as a raised
 cosine over ``tj`` seconds (its "snap" limit), holds at ``Jm`` in between.
 
-Any consistent units work; the emulator uses metres and seconds.
+Any consistent units work; its users (:mod:`.wpnav`: the emulator and the planner's
+prediction of the flown path) use metres and seconds.
 """
 
 from __future__ import annotations

@@ -1,0 +1,129 @@
+"""The path ArduCopter 4.5.6 flies through a run of waypoints: predicted, not assumed.
+
+A copter in AUTO does not fly the straight segments between its waypoints: AC_WPNav
+plans every leg as an S-curve (:mod:`.scurve`) and, at a waypoint with no hold time
+whose next navigation command is a waypoint, starts the next leg before this one ends,
+so the corner is rounded (ModeAuto::do_nav_wp -> ModeAuto::set_next_wp ->
+AC_WPNav::set_wp_destination_next; SCurve::advance_target_along_track decides when the
+next leg begins). :func:`fly_path` runs the same model the emulator flies with
+(:class:`.wpnav.WaypointNav`) through the mission's waypoints, as ModeAuto sequences
+them (ArduCopter/mode_auto.cpp):
+
+- the lead-in: the mission starts with the copter hovering at the first point (after
+  its takeoff; ``fly`` starts AUTO there), so AC_WPNav::wp_and_spline_init starts from
+  rest at that point, with the speed a DO_CHANGE_SPEED before the first leg set
+  (ModeAuto::do_change_speed -> AC_WPNav::set_speed_xy), else WPNAV_SPEED;
+- every waypoint without a hold time is flown through (set_next_wp), one with a hold
+  (``param1`` seconds, ModeAuto::verify_nav_wp counts whole seconds) is stopped at;
+- the last point is stopped at (the NAV_LAND / RTL after it is not a waypoint: set_next_wp
+  adds no next destination), and the path ends when it is reached.
+
+The step is the emulator's (:data:`STEP_S`); positions are AC_PosControl's target (the
+copter follows it within centimetres on SITL; ``tests/conformance`` holds this to recorded
+SITL tracks).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .navigation import Navigation
+from .wpnav import WaypointNav
+
+STEP_S = 0.02  # the emulator's step (sim.autopilot STEP_S); ArduCopter runs at 400 Hz
+DEFAULT_NAV = Navigation()  # ArduCopter 4.5.6's defaults (copter.parm keeps them)
+_MIN_PACE_M_S = 0.05  # for the step budget: no leg is flown slower on average
+
+
+@dataclass(frozen=True, eq=False)
+class FlownPath:
+    """``times``: ``(T,)`` seconds since the first leg began; ``positions``: ``(T, 3)``
+    metres ENU; ``reached``: ``(P,)`` when each point was reached (0 for the first, where
+    the copter starts)."""
+
+    times: np.ndarray
+    positions: np.ndarray
+    reached: np.ndarray
+
+    @property
+    def seconds(self) -> float:
+        return float(self.times[-1]) if len(self.times) else 0.0
+
+    def leg_seconds(self) -> np.ndarray:
+        """``(P-1,)`` seconds from each point to the next (a hold included in the leg
+        after it)."""
+        return np.diff(self.reached)
+
+    def translated(self, by: np.ndarray) -> FlownPath:
+        return FlownPath(self.times, self.positions + np.asarray(by, float), self.reached)
+
+
+def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
+             speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
+             dt: float = STEP_S) -> FlownPath:
+    """Fly ``points`` ``(P, 3)`` metres ENU (the copter hovering at the first) as
+    ArduCopter's AUTO does (see the module's docstring). ``speed_m_s``: the
+    DO_CHANGE_SPEED before the first leg (None: WPNAV_SPEED); ``holds_s``: ``(P,)`` whole
+    seconds held at each point (its waypoint's ``param1``; default none)."""
+    points = np.asarray(points, float)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
+        raise ValueError(f"points must be (P >= 2, 3), got {points.shape}")
+    holds = np.zeros(len(points)) if holds_s is None else np.asarray(holds_s, float)
+    wp = WaypointNav(nav, points[0].copy(), speed_m_s)
+    pace = max(min(wp.desired_speed, nav.wp_speed_up, nav.wp_speed_dn), _MIN_PACE_M_S)
+    length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    budget = int((length / pace + 10.0 * len(points) + holds.sum()) / dt)
+
+    def start(k: int) -> None:  # ModeAuto::do_nav_wp / set_next_wp
+        wp.set_destination(points[k])
+        if holds[k] <= 0 and k + 1 < len(points):
+            wp.set_destination_next(points[k + 1])
+
+    times, positions = [0.0], [points[0].copy()]
+    reached = np.zeros(len(points))
+    k, t, wait_until = 1, 0.0, None
+    start(k)
+    for _ in range(budget):
+        t += dt
+        wp.advance(dt, wp.target)
+        times.append(t)
+        positions.append(wp.target.copy())
+        if not wp.reached:
+            continue
+        if holds[k] > 0 and wait_until is None:  # ModeAuto::verify_nav_wp: the hold
+            reached[k] = t
+            wait_until = t + holds[k]
+        if wait_until is not None and t < wait_until - 1e-9:
+            continue
+        if wait_until is None:
+            reached[k] = t
+        wait_until = None
+        k += 1
+        if k == len(points):
+            break
+        start(k)
+    else:
+        raise RuntimeError(f"the path of {len(points)} points was not flown within "
+                           f"{budget * dt:.0f} s")
+    return FlownPath(np.array(times), np.array(positions), reached)
+
+
+def fly_paths(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
+              speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
+              dt: float = STEP_S) -> list[FlownPath]:
+    """:func:`fly_path` for every row of ``paths`` ``(N, P, 3)``. The model is the same
+    wherever a path lies (AC_WPNav works on offsets from its origin), so paths that are
+    translations of one another (a formation's, each UAV at a fixed offset) are flown once
+    and translated; any other is flown on its own."""
+    paths = np.asarray(paths, float)
+    flown: dict[bytes, FlownPath] = {}
+    out = []
+    for path in paths:
+        shape = np.round(path - path[0], 6)
+        key = shape.tobytes()
+        if key not in flown:
+            flown[key] = fly_path(shape, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s, dt=dt)
+        out.append(flown[key].translated(path[0]))
+    return out

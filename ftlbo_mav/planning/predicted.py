@@ -1,0 +1,253 @@
+"""The flown path, predicted: what every UAV's mission makes ArduCopter fly, and whether
+that keeps the plan's promises.
+
+A plan's waypoints are not the path flown: ArduCopter rounds every corner
+(:mod:`ftlbo_mav.ardupilot.flight_path`). :func:`predict` flies each UAV's own path
+(start, waypoints, goal; its corners, its speed, its holds) through that model, all
+starting together as ``fly`` starts them, and measures on the predicted paths what the
+plan promises: the clearance from every obstacle, the area, the altitude band and the
+separation between UAVs at the same instant. :func:`keep_clearance` changes a centroid
+path until the predicted paths keep the clearance (see there).
+
+Pure computation, metres ENU and seconds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..ardupilot.flight_path import FlownPath, fly_paths
+from ..ardupilot.navigation import Navigation
+from .feasibility import violations as segment_violations
+from .problem import PlanningProblem
+
+_TOL = 1e-6
+PUSH_MARGIN_M = 0.02
+"""A corner moved to keep the clearance is moved this much further than the shortfall."""
+MAX_ROUNDS = 12
+"""Rounds of :func:`keep_clearance` (predict, change the corners that cut in) at most."""
+MAX_PUSHES = 4
+"""Times one corner is moved before the copters are made to stop at it instead."""
+HOLD_S = 1
+"""The hold (whole seconds, NAV_WAYPOINT param1) that makes a copter stop at a corner."""
+
+
+@dataclass(frozen=True)
+class FlightModel:
+    """How the copters fly a plan: ArduCopter's parameters (the scenario's
+    ``[vehicle]``) and the cruise speed (``[mission] speed``; None: WPNAV_SPEED)."""
+
+    nav: Navigation = Navigation()
+    speed_m_s: float | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """The predicted flight of N UAVs on a common clock (0: the first leg begins).
+
+    ``times``: ``(T,)`` s; ``positions``: ``(N, T, 3)`` metres ENU (a UAV that has
+    arrived stays at its goal); ``reached``: ``(N, P)`` when each UAV reached each point;
+    ``clearance``: ``(N,)`` each UAV's smallest horizontal distance to any obstacle's
+    surface (inf without obstacles); ``obstacle_clearance``: ``(K,)`` the smallest over
+    the UAVs, per obstacle; ``separation``: ``(N,)`` each UAV's smallest 3D distance to
+    any other at the same instant (inf for one UAV); ``worst``: per UAV ``(time index,
+    obstacle index)`` of its smallest clearance (-1 without obstacles)."""
+
+    times: np.ndarray
+    positions: np.ndarray
+    reached: np.ndarray
+    clearance: np.ndarray
+    obstacle_clearance: np.ndarray
+    separation: np.ndarray
+    worst: np.ndarray
+
+    @property
+    def leg_seconds(self) -> np.ndarray:
+        """``(N, P-1)`` seconds from each point to the next."""
+        return np.diff(self.reached, axis=1)
+
+    @property
+    def seconds(self) -> np.ndarray:
+        """``(N,)`` seconds from the first leg's start to the goal."""
+        return self.reached[:, -1]
+
+
+def _common_clock(flown: list[FlownPath]) -> tuple[np.ndarray, np.ndarray]:
+    """Every UAV's positions on the longest clock (they share the step)."""
+    longest = max(flown, key=lambda f: len(f.times))
+    T = len(longest.times)
+    out = np.empty((len(flown), T, 3))
+    for n, f in enumerate(flown):
+        out[n, : len(f.times)] = f.positions
+        out[n, len(f.times):] = f.positions[-1]
+    return longest.times, out
+
+
+def predict(paths: np.ndarray, *, model: FlightModel, centres: np.ndarray,
+            radii: np.ndarray, holds_s: np.ndarray | None = None) -> Prediction:
+    """Fly every UAV's path ``(N, P, 3)`` (holds ``(P,)`` whole seconds, default none)
+    and measure it against the cylinders ``centres`` ``(K, 2)``, ``radii`` ``(K,)``
+    (their own radii, no clearance)."""
+    flown = fly_paths(paths, nav=model.nav, speed_m_s=model.speed_m_s, holds_s=holds_s)
+    times, pos = _common_clock(flown)
+    N, T = pos.shape[:2]
+    K = len(radii)
+    if K:
+        d = np.linalg.norm(pos[:, :, None, :2] - np.asarray(centres, float)[None, None], axis=-1)
+        surface = d - np.asarray(radii, float)  # (N, T, K)
+        flat = surface.reshape(N, -1).argmin(axis=1)
+        worst = np.stack(np.unravel_index(flat, (T, K)), axis=1)
+        clearance = surface.reshape(N, -1).min(axis=1)
+        per_obstacle = surface.min(axis=(0, 1))
+    else:
+        worst = np.full((N, 2), -1)
+        clearance = np.full(N, np.inf)
+        per_obstacle = np.zeros(0)
+    if N > 1:
+        gap = np.linalg.norm(pos[:, None] - pos[None, :], axis=-1)  # (N, N, T)
+        gap[np.arange(N), np.arange(N)] = np.inf
+        separation = gap.min(axis=(1, 2))
+    else:
+        separation = np.full(N, np.inf)
+    return Prediction(times=times, positions=pos,
+                      reached=np.array([f.reached for f in flown]), clearance=clearance,
+                      obstacle_clearance=per_obstacle, separation=separation, worst=worst)
+
+
+def predicted_violations(problem: PlanningProblem, prediction: Prediction, *,
+                         clearance_m: float, obstacle_radii: np.ndarray,
+                         min_separation_m: float, limit: int = 20) -> list[str]:
+    """What the predicted flight breaks, in sentences (empty: nothing): a UAV closer
+    than ``clearance_m`` to an obstacle's surface, outside the area or the altitude band
+    (between its start and its goal), or two UAVs closer than ``min_separation_m`` at the
+    same instant."""
+    out: list[str] = []
+    p = prediction
+    for n in np.flatnonzero(p.clearance < clearance_m - _TOL):
+        i, k = p.worst[n]
+        out.append(f"UAV {n + 1}'s predicted flown path passes {p.clearance[n]:.2f} m from "
+                   f"obstacle {k + 1}'s surface {p.times[i]:.1f} s into its legs (needs "
+                   f"{clearance_m:.2f} m: ArduCopter cuts the corner)")
+    xy = p.positions[:, :, :2]
+    outside = ((xy < problem.area_lower - _TOL) | (xy > problem.area_upper + _TOL)).any(axis=2)
+    for n in np.flatnonzero(outside.any(axis=1)):
+        i = int(np.argmax(outside[n]))
+        out.append(f"UAV {n + 1}'s predicted flown path leaves the area {p.times[i]:.1f} s "
+                   "into its legs")
+    z = p.positions[:, :, 2]
+    band = (z < problem.h_min - _TOL) | (z > problem.h_max + _TOL)
+    for n in np.flatnonzero(band.any(axis=1)):
+        i = int(np.argmax(band[n]))
+        out.append(f"UAV {n + 1}'s predicted flown path is at {z[n, i]:.2f} m, outside the "
+                   f"altitude band [{problem.h_min:g}, {problem.h_max:g}] m, "
+                   f"{p.times[i]:.1f} s into its legs")
+    for n in np.flatnonzero(p.separation < min_separation_m - _TOL):
+        out.append(f"UAV {n + 1} is predicted {p.separation[n]:.2f} m from another UAV "
+                   f"(needs {min_separation_m:g} m)")
+    if len(out) > limit:
+        out = out[: limit - 1] + [f"... and {len(out) - limit + 1} more"]
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class Kept:
+    """What :func:`keep_clearance` did: the centroid path ``(P, 3)``, the holds ``(P,)``,
+    the prediction of the result, how many corners it moved (``moved``, counting each
+    move) and made stops (``stops``), the rounds it took, and ``stopped_for``: ``(K,)``
+    per obstacle the most metres a corner made a stop fell short of it (0: none)."""
+
+    centroid: np.ndarray
+    holds_s: np.ndarray
+    prediction: Prediction
+    moved: int
+    stops: int
+    rounds: int
+    stopped_for: np.ndarray
+
+
+def _corner(reached: np.ndarray, t: float, fixed: np.ndarray) -> int | None:
+    """The corner (a point index, neither end) a UAV turns at time ``t``: the point it
+    reached nearest that time."""
+    inner = np.arange(1, len(reached) - 1)
+    if not len(inner):
+        return None
+    return int(inner[np.argmin(np.abs(reached[inner] - t))])
+
+
+def _moved(problem: PlanningProblem, path: np.ndarray, j: int, shift: np.ndarray,
+           fixed: np.ndarray) -> np.ndarray | None:
+    """``path`` with corner ``j`` moved by ``shift`` (horizontal), else with it and its
+    movable neighbours moved together (a corner in a cluster of close points, as around a
+    tree the polyline hugs), whichever keeps the polyline feasible first; None if neither
+    does."""
+    for run in ([j], [i for i in (j - 1, j, j + 1) if not fixed[i]]):
+        if fixed[j]:
+            continue
+        trial = path.copy()
+        trial[run, :2] += shift
+        if not segment_violations(problem, trial, limit=1):
+            return trial
+    return None
+
+
+def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: FlightModel,
+                   obstacle_radii: np.ndarray, clearance_m: float,
+                   fixed: np.ndarray | None = None) -> Kept:
+    """Change the centroid path until every UAV's predicted flown path keeps
+    ``clearance_m`` from every obstacle's surface (``obstacle_radii``: the cylinders' own
+    radii at ``problem.centres``).
+
+    Each round predicts the flight; where a UAV comes too close it finds the corner it
+    was turning at and moves that corner (the centroid's point, so every UAV's) straight
+    away from the obstacle by the shortfall plus :data:`PUSH_MARGIN_M`, if the moved
+    polyline still keeps the clearance segment by segment, inside the area and the band
+    (:func:`..feasibility.violations`), else together with its neighbours; a corner that
+    cannot be moved (a via point, a move that breaks the polyline either way, or one moved
+    :data:`MAX_PUSHES` times) becomes a stop:
+    a hold of :data:`HOLD_S` s, so that every copter stops on it and the polyline's
+    clearance is flown. ``fixed``: ``(P,)`` True for points that may not move (the start,
+    via points and the goal always are)."""
+    path = np.array(centroid, float)
+    P = len(path)
+    fixed = np.zeros(P, bool) if fixed is None else np.array(fixed, bool)
+    fixed[[0, -1]] = True
+    holds = np.zeros(P)
+    pushes = np.zeros(P, int)
+    stopped_for = np.zeros(len(obstacle_radii))
+    moved = stops = 0
+    rounds = 0
+    while True:
+        uavs = path[None] + problem.offsets[:, None]
+        pred = predict(uavs, model=model, centres=problem.centres, radii=obstacle_radii,
+                       holds_s=holds)
+        short = pred.clearance < clearance_m - _TOL
+        if not short.any() or rounds >= MAX_ROUNDS:
+            break
+        rounds += 1
+        # the worst shortfall at each corner, over the UAVs that cut in
+        worst: dict[int, tuple[float, np.ndarray, int]] = {}
+        for n in np.flatnonzero(short):
+            t_i, k = pred.worst[n]
+            j = _corner(pred.reached[n], pred.times[t_i], fixed)
+            if j is None or holds[j] > 0:
+                continue
+            where = pred.positions[n, t_i, :2]
+            away = where - problem.centres[k]
+            away = away / max(float(np.linalg.norm(away)), 1e-9)
+            need = clearance_m - pred.clearance[n] + PUSH_MARGIN_M
+            if j not in worst or need > worst[j][0]:
+                worst[j] = (need, away, int(k))
+        if not worst:
+            break
+        for j, (need, away, k) in sorted(worst.items()):
+            trial = _moved(problem, path, j, away * need, fixed) if pushes[j] < MAX_PUSHES else None
+            if trial is not None:
+                path, pushes[j], moved = trial, pushes[j] + 1, moved + 1
+            else:
+                holds[j] = HOLD_S
+                stops += 1
+                stopped_for[k] = max(stopped_for[k], need)
+    return Kept(centroid=path, holds_s=holds, prediction=pred, moved=moved, stops=stops,
+                rounds=rounds, stopped_for=stopped_for)

@@ -1,0 +1,182 @@
+"""The model of how ArduCopter flies a mission (``ftlbo_mav.ardupilot.flight_path``)
+against what ArduCopter 4.5.6 SITL flew.
+
+Each ``tests/data/ardupilot-4.5.6/flown-*.json`` is a formation flight on SITL with
+copter.parm (``benchmarks/flight.py --record``): the plan and missions flown and every
+position the copters sent in AUTO. Here each UAV's mission is flown through the model,
+from its start point (where ``fly`` starts AUTO) with the mission's DO_CHANGE_SPEED, its
+hold times and the plan's ``[vehicle]`` parameters, and compared with the recorded track:
+
+- the smallest clearance from the obstacles, per UAV: the model's within
+  :data:`CLEARANCE_M` of the one flown;
+- every recorded position within :data:`TRACK_M` of the model's path.
+
+Both on the legs: from AUTO's start to the goal, before the mission's last item (its
+NAV_LAND, whose descent the model does not fly) is current.
+
+``flight.json`` and ``flight_speed.json`` (one copter, the example's earlier 10-waypoint
+mission at 10 and 3 m/s) are held to the same.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ftlbo_mav.ardupilot.flight_path import fly_path
+from ftlbo_mav.ardupilot.navigation import Navigation
+from ftlbo_mav.geo import LocalFrame
+from ftlbo_mav.mission.items import CMD_DO_CHANGE_SPEED, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT
+from ftlbo_mav.mission.waypoints import parse_waypoints
+
+from .replay import HOME, load
+
+DATA = Path(__file__).parents[1] / "data" / "ardupilot-4.5.6"
+FLOWN = sorted(p.name for p in DATA.glob("flown-*.json"))
+CLEARANCE_M = 0.1
+TRACK_M = 0.3
+STOP_OVERSHOOT_M = 1.0
+# the example's seven trees (missions/nha-trang-orchard.toml), which flight.json flew past
+EXAMPLE_TREES = [(12.2332852, 109.1146519, 4.0), (12.2333304, 109.1148449, 4.5),
+                 (12.2334208, 109.1150103, 3.5), (12.2334117, 109.1147346, 3.0),
+                 (12.2332038, 109.1148908, 3.5), (12.2333214, 109.1150746, 3.0),
+                 (12.2333937, 109.1145692, 2.5)]
+
+
+def route(items, frame: LocalFrame):
+    """``(points (P, 3), holds (P,), speed)`` of a mission as ``fly`` starts it: from its
+    start point (the first waypoint after the takeoff) on, every waypoint as it is (a
+    waypoint on top of the previous one is a zero-length leg, at which ArduCopter stops,
+    as the model does), the DO_CHANGE_SPEED before the first leg."""
+    after = [it for it in items if it.seq > next(i.seq for i in items
+                                                 if i.command == CMD_NAV_TAKEOFF)]
+    speeds = [it.param2 for it in after if it.command == CMD_DO_CHANGE_SPEED]
+    wps = [it for it in after if it.command == CMD_NAV_WAYPOINT]
+    enu = frame.to_enu(lat_deg=[w.lat_deg for w in wps], lon_deg=[w.lon_deg for w in wps],
+                       alt_m=[w.alt_m for w in wps]).reshape(-1, 3)
+    return enu, np.array([w.param1 for w in wps]), (speeds[0] if speeds else None)
+
+
+def clearance(xy: np.ndarray, centres: np.ndarray, radii: np.ndarray) -> float:
+    d = np.linalg.norm(xy[:, None, :] - centres[None], axis=-1) - radii[None]
+    return float(d.min())
+
+
+def off_path(xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
+    """Each point's distance to the polyline through ``path_xy`` (dense: every 2 cm of
+    time), ``(len(xy),)``."""
+    a, b = path_xy[:-1], path_xy[1:]
+    ab = b - a
+    denom = np.maximum((ab * ab).sum(-1), 1e-12)
+    out = np.empty(len(xy))
+    for i in range(0, len(xy), 64):
+        q = xy[i : i + 64, None, :]
+        t = np.clip(((q - a) * ab).sum(-1) / denom, 0.0, 1.0)
+        out[i : i + 64] = np.linalg.norm(a + t[..., None] * ab - q, axis=-1).min(axis=1)
+    return out
+
+
+def cases():
+    """(name, [(recorded xy (T, 2), model xy (S, 2))], centres, radii) per recording."""
+    out = []
+    for name in FLOWN:
+        rec = load(name)
+        plan = rec["plan"]
+        (lat_a, lon_a), (lat_b, lon_b) = plan["area"]["corner_a"], plan["area"]["corner_b"]
+        frame = LocalFrame(origin_lat_deg=min(lat_a, lat_b), origin_lon_deg=min(lon_a, lon_b))
+        obstacles = plan["obstacles"]
+        centres = frame.to_enu(lat_deg=[o["lat"] for o in obstacles],
+                               lon_deg=[o["lon"] for o in obstacles])[:, :2]
+        radii = np.array([o["radius"] for o in obstacles], float)
+        nav = Navigation().with_params(plan.get("vehicle", {}))
+        rows = np.array([r[:6] for r in rec["samples"]["rows"]], float)
+        pairs = []
+        for n, uav in enumerate(plan["uavs"]):
+            items = parse_waypoints(rec["missions"][uav["name"]])
+            points, holds, speed = route(items, frame)
+            model = fly_path(points, nav=nav, speed_m_s=speed, holds_s=holds)
+            land = [it.seq for it in items if it.command not in (CMD_NAV_WAYPOINT,
+                                                                   CMD_DO_CHANGE_SPEED)]
+            mine = rows[(rows[:, 1] == n + 1) & (rows[:, 5] < land[-1])]  # on the legs
+            flown = frame.to_enu(lat_deg=mine[:, 2] / 1e7, lon_deg=mine[:, 3] / 1e7)[:, :2]
+            pairs.append((flown, model.positions[:, :2]))
+        out.append((name, pairs, centres, radii))
+    for name in ("flight.json", "flight_speed.json"):  # one copter, the earlier mission
+        rec = load(name)
+        frame = LocalFrame(origin_lat_deg=HOME[0], origin_lon_deg=HOME[1])
+        items = parse_waypoints(_waypoints_text(rec["mission"]["uploaded"]))
+        points, holds, speed = route(items, frame)
+        model = fly_path(points, speed_m_s=speed, holds_s=holds)
+        t_auto = rec["milestones"]["t_auto_cmd"]
+        t_land = rec["derived"]["landing"]["t_statustext_mission_land"]
+        rows = np.array(rec["global_position_int"]["rows"], float)
+        rows = rows[(rows[:, 0] >= t_auto) & (rows[:, 0] <= t_land)]
+        flown = frame.to_enu(lat_deg=rows[:, 2] / 1e7, lon_deg=rows[:, 3] / 1e7)[:, :2]
+        trees = np.array(EXAMPLE_TREES)
+        centres = frame.to_enu(lat_deg=trees[:, 0], lon_deg=trees[:, 1])[:, :2]
+        out.append((name, [(flown, model.positions[:, :2])], centres, trees[:, 2]))
+    return out
+
+
+def _waypoints_text(rows) -> str:
+    """A recording's uploaded items as a QGC WPL 110 file."""
+    lines = ["QGC WPL 110"]
+    for seq, frame, cmd, p1, p2, p3, p4, x, y, z in rows:
+        lines.append("\t".join(str(v) for v in (
+            seq, int(seq == 0), frame, cmd, p1, p2, p3, p4, x / 1e7, y / 1e7, z, 1)))
+    return "\n".join(lines) + "\n"
+
+
+CASES = cases()
+
+
+# SITL's copter lags its position target through the zigzag's sharp via-point turns (about
+# 110 degrees at 6.5 m/s): it swings up to 0.64 m outside the predicted path there, and
+# uav3 passed a tree 0.15 m further off than predicted. The model is ArduCopter's target,
+# not the airframe that follows it; this recording shows where that stops being enough.
+LAGS_ITS_TARGET = {"flown-zigzag-fast.json"}
+
+
+def _params(name):
+    return [pytest.param(c, id=c[0], marks=pytest.mark.xfail(
+        strict=True, reason="the copter lags its target in sharp turns at speed"))
+            if c[0] in name else pytest.param(c, id=c[0]) for c in CASES]
+
+
+@pytest.mark.parametrize("case", _params(LAGS_ITS_TARGET))
+def test_the_predicted_clearance_is_the_one_flown(case):
+    name, pairs, centres, radii = case
+    for n, (flown, model) in enumerate(pairs):
+        got, want = clearance(model, centres, radii), clearance(flown, centres, radii)
+        assert abs(got - want) <= CLEARANCE_M, (name, f"uav{n + 1}", got, want)
+
+
+def _stops(model: np.ndarray) -> np.ndarray:
+    """Where the model's path comes to rest (a zero-length leg, a hold, the goal)."""
+    speed = np.linalg.norm(np.diff(model, axis=0), axis=1)
+    return model[1:][speed < 1e-4]
+
+
+@pytest.mark.parametrize("case", _params(LAGS_ITS_TARGET))
+def test_every_flown_position_is_on_the_predicted_path(case):
+    """Within TRACK_M, except where the copter stops: the model's path is ArduCopter's
+    position target, and the copter following it overshoots a stop along its track
+    (0.41-0.46 m at the example's goal after ~6 m/s, 0.9 m at the survey's lane ends
+    after 10 m/s) before it comes back."""
+    name, pairs, _centres, _radii = case
+    for n, (flown, model) in enumerate(pairs):
+        stops = _stops(model)
+        near = (np.linalg.norm(flown[:, None] - stops[None], axis=-1) < STOP_OVERSHOOT_M
+                ).any(axis=1) if len(stops) else np.zeros(len(flown), bool)
+        worst = float(off_path(flown[~near], model).max())
+        assert worst <= TRACK_M, (name, f"uav{n + 1}", worst)
+
+
+def test_the_recordings_are_formation_flights_of_several_maps():
+    assert len(FLOWN) >= 1
+    for name in FLOWN:
+        rec = json.loads((DATA / name).read_text())
+        assert "ArduCopter 4.5.6 SITL" in rec["about"] and rec["samples"]["rows"], name
