@@ -235,7 +235,8 @@ def main() -> int:
           f"speedup {args.speedup:g}, {args.runs} runs each"
           + (f"; parameters set: {', '.join(args.params)}" if args.params else "")
           + ("; per-vehicle variation (--vary)" if args.vary else "")
-          + ("; wind %g m/s from %g deg, turbulence %g m/s" % args.wind if args.wind else ""))
+          + ("; wind {:g} m/s from {:g} deg, turbulence {:g} m/s".format(*args.wind)
+             if args.wind else ""))
     print("| flight | formation error RMS (median) | worst (max) | legs (median) | smallest "
           "separation on legs | smallest clearance | landing error (max) |")
     print("|---|---|---|---|---|---|---|")
