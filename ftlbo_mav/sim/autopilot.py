@@ -462,13 +462,14 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         """AC_WPNav moves the target (the emulated copter is on it); the mode in use then
         checks whether its leg is over (ModeAuto::verify_command, ModeRTL::run)."""
         nav = self.nav
-        nav.advance(dt, self.position)
+        nav.advance(dt, self.position, None if self.gusts is None else self.velocity)
         self.position = nav.target.copy()
-        if self.gusts is not None:
+        self.velocity = nav.target_vel.copy()
+        if self.gusts is not None:  # in wind the copter is off its target
             airspeed = float(np.linalg.norm(nav.target_vel - self.gusts.wind.velocity_enu()))
             self.position += self.gusts.step(dt, airspeed)
+            self.velocity += self.gusts.error_vel
         self.position[2] = max(self.position[2], 0.0)
-        self.velocity = nav.target_vel.copy()
         if self._phase in ("wp", "land_fly"):
             self._verify_auto_nav(out)
         elif self._phase.startswith("rtl_"):
