@@ -27,15 +27,21 @@ DT = 0.02
 NAIVE_GAP_S = 0.25  # AUTO sent one by one: each copter starts a little after the last
 
 
-def fly_legs(wind: Wind, seed: int, *, starts=(0.0, 0.0, 0.0), keeper: bool = False):
+def fly_legs(wind: Wind, seed: int, **kw) -> np.ndarray:
     """Formation error over the legs, ``(T,)`` metres."""
+    return formation_error(fly_legs_positions(wind, seed, **kw)[1], OFFSETS)
+
+
+def fly_legs_positions(wind: Wind, seed: int, *, starts=(0.0, 0.0, 0.0),
+                       keeper: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Times ``(T,)`` and positions ``(T, N, 3)`` over the legs."""
     nav = Navigation()
     navs = [WaypointNav(nav, p[0], CRUISE) for p in PATHS]
     gusts = [Gusts(wind, np.random.default_rng([seed, i])) for i in range(len(PATHS))]
     leg = [0] * len(PATHS)
     keep = FormationKeeper(PATHS, CRUISE) if keeper else None
     positions = PATHS[:, 0].copy()
-    t, errors = 0.0, []
+    t, times, flown = 0.0, [], []
     while t < 60.0 and min(leg) < PATHS.shape[1]:
         for i, (n, path) in enumerate(zip(navs, PATHS)):
             if t < starts[i]:
@@ -54,9 +60,10 @@ def fly_legs(wind: Wind, seed: int, *, starts=(0.0, 0.0, 0.0), keeper: bool = Fa
             speeds = np.array([np.linalg.norm(n.target_vel[:2]) for n in navs])
             for i, pause in keep.update(positions, speeds, t).items():
                 navs[i].set_pause(pause)
-        errors.append(formation_error(positions, OFFSETS))
+        times.append(t)
+        flown.append(positions.copy())
         t += DT
-    return np.array(errors)
+    return np.array(times), np.array(flown)
 
 
 @pytest.mark.parametrize("wind", [Wind(5, 315, 2), Wind(8, 315, 3)])
