@@ -1,8 +1,8 @@
 """The example's legs flown by the emulator's navigation in wind, without MAVLink: three
 AC_WPNav S-curves (``WaypointNav``) from the same start, each copter off its target by
 its own gusts (``Gusts``), and the formation keeper pausing the leaders as ``fly`` does.
-The order of the three ways (a naive start, ``fly --no-keeper``, ``fly``) is the order
-SITL measured (docs/flight.md); the full flights are ``benchmarks/flight.py --wind``."""
+A naive start is clearly worse than either way of ``fly``, as SITL measured
+(docs/flight.md); the full flights are ``benchmarks/flight.py --wind``."""
 
 from __future__ import annotations
 
@@ -67,11 +67,14 @@ def fly_legs_positions(wind: Wind, seed: int, *, starts=(0.0, 0.0, 0.0),
 
 
 @pytest.mark.parametrize("wind", [Wind(5, 315, 2), Wind(8, 315, 3)])
-def test_in_wind_fly_beats_no_keeper_beats_naive(wind):
+def test_in_wind_a_naive_start_is_clearly_worse(wind):
+    """SITL (docs/flight.md, "In wind"): naive 0.71 / 1.52 m RMS, fly --no-keeper
+    0.14 m, fly 0.07-0.29 m; the keeper's edge over no keeper is not asserted, SITL did
+    not show one in wind."""
     rms = {}
     for way, kw in (("naive", {"starts": (0.0, NAIVE_GAP_S, 2 * NAIVE_GAP_S)}),
                     ("no keeper", {}), ("fly", {"keeper": True})):
         rms[way] = max(float(np.sqrt(np.mean(fly_legs(wind, seed, **kw) ** 2)))
                        for seed in range(2))
     assert rms["naive"] > 2 * rms["no keeper"]
-    assert rms["fly"] < rms["no keeper"]
+    assert rms["naive"] > 2 * rms["fly"]
