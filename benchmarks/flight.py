@@ -88,6 +88,31 @@ def set_params(urls, settings) -> None:
                 raise SystemExit(f"could not set {name} = {value:g} on sysid {sysid}")
 
 
+def parse_wind(text: str) -> tuple[float, float, float]:
+    """``SPD,DIR,TURB`` (m/s, degrees the wind comes from, m/s) for ``--wind``."""
+    try:
+        spd, direction, turb = (float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--wind wants SPD,DIR,TURB (e.g. 5,315,2), got {text!r}") from None
+    if spd < 0 or turb < 0 or not 0 <= direction <= 360:
+        raise argparse.ArgumentTypeError(
+            f"--wind {text}: speed and turbulence >= 0, direction 0..360 degrees")
+    return spd, direction, turb
+
+
+def wind_params(wind, n: int) -> list[str]:
+    """SITL's own wind on every one of ``n`` copters (libraries/SITL/SITL.cpp SIM_WIND_*;
+    SIM_WIND_T 1, WIND_TYPE_NO_LIMIT: full strength down to the ground, where the
+    default square-root profile fades it below SIM_WIND_T_ALT, 60 m)."""
+    if wind is None:
+        return []
+    spd, direction, turb = wind
+    return [f"{k}:{name}={value:g}" for k in range(1, n + 1) for name, value in (
+        ("SIM_WIND_T", 1), ("SIM_WIND_SPD", spd), ("SIM_WIND_DIR", direction),
+        ("SIM_WIND_TURB", turb))]
+
+
 def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
@@ -125,10 +150,11 @@ class UploadFailed(Exception):
 
 def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None,
               speedup: float = 1.0, seed: int = 0, vary: bool = False,
-              params=()) -> dict:
+              params=(), wind=None) -> dict:
     """One flight of ``plan_dir`` on freshly started vehicles (SITL when ``binary``, else
     the emulator, ``vary`` and ``seed`` giving each copter its differences) flown the
-    ``strategy`` way; its summary."""
+    ``strategy`` way, in ``wind`` (SPD, DIR, TURB: SITL's SIM_WIND_* set on each instance,
+    the emulator's wind model); its summary."""
     planned = load_planned_flight(plan_dir)
     if binary:
         from sitl import SitlSwarm
@@ -137,7 +163,8 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
     else:
         from ftlbo_mav.sim.server import Simulator
 
-        swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary)
+        swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary,
+                          **({"wind": wind} if wind else {}))
     with swarm as vehicles:
         # as `ftlbo-mav upload` sends them: mission, and the fence and rally points if any
         assignments = [Assignment(n, i + 1, m, f) for i, (n, m, f) in
@@ -147,7 +174,8 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
         if failed:
             raise UploadFailed("; ".join(f"upload failed: {r.name} -> sysid {r.sysid}: "
                                          f"{r.message}" for r in failed))
-        set_params(vehicles.urls, params)
+        set_params(vehicles.urls, list(params) + (wind_params(wind, len(homes)) if binary
+                                                  else []))
         return fly_once(plan_dir, vehicles.urls, strategy)
 
 
@@ -226,6 +254,11 @@ def main() -> int:
     parser.add_argument("--scenario", type=Path, default=EXAMPLE,
                         help="scenario to fly (default the shipped example); planned with "
                              "the default planner unless a folder of its name holds missions")
+    parser.add_argument("--wind", type=parse_wind, default=None, metavar="SPD,DIR,TURB",
+                        help="wind on every copter: speed m/s, direction it comes from "
+                             "(degrees), turbulence m/s; on SITL its SIM_WIND_SPD/DIR/TURB "
+                             "(and SIM_WIND_T 1, full strength to the ground) set on each "
+                             "instance, on the emulator its wind model")
     args = parser.parse_args()
     scenario = load_scenario(args.scenario)
     homes = scenario_homes(scenario)
@@ -244,7 +277,7 @@ def main() -> int:
                 try:
                     summary = fly_fresh(plan_dir, homes, strategy, binary=binary,
                                         speedup=args.speedup, seed=run, vary=args.vary,
-                                        params=args.params)
+                                        params=args.params, wind=args.wind)
                 except UploadFailed as exc:  # flying without its mission measures nothing
                     print(exc, file=sys.stderr)
                     return 1
@@ -264,7 +297,9 @@ def main() -> int:
     print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "
           f"speedup {args.speedup:g}, {args.runs} runs each"
           + (f"; parameters set: {', '.join(args.params)}" if args.params else "")
-          + ("; per-vehicle variation (--vary)" if args.vary else ""))
+          + ("; per-vehicle variation (--vary)" if args.vary else "")
+          + ("; wind {:g} m/s from {:g} deg, turbulence {:g} m/s".format(*args.wind)
+             if args.wind else ""))
     print("| flight | formation error RMS (median) | worst (max) | legs (median) | smallest "
           "separation on legs | smallest clearance | landing error (max) |")
     print("|---|---|---|---|---|---|---|")

@@ -69,6 +69,7 @@ class WaypointNav:
         self.target = self.origin.copy()
         self.target_vel = np.zeros(3)
         self.target_accel = np.zeros(3)
+        self.track_scaler = 1.0  # _track_scalar_dt
 
     def _plan(self, leg: SCurve, origin: np.ndarray, destination: np.ndarray) -> None:
         leg.calculate_track(origin, destination, self.desired_speed, self.speed_up,
@@ -137,11 +138,31 @@ class WaypointNav:
             self.offset_vel, self.offset_accel, 0.0 if self.paused else self.desired_speed, dt)
         return self.offset_vel / self.desired_speed
 
-    def advance(self, dt: float, position: np.ndarray) -> None:
+    def _track_scale(self, dt: float, position: np.ndarray, velocity: np.ndarray | None) -> float:
+        """advance_wp_target_along_track's _track_scalar_dt: the track's clock slows where
+        the copter falls behind its target (its along-track error and velocity, with a 5%
+        buffer), filtered with a time constant of WPNAV_ACCEL / WPNAV_JERK. On its target
+        (the emulated copter without wind) it stays 1."""
+        if velocity is None:
+            return self.track_scaler
+        speed = float(np.linalg.norm(self.target_vel))
+        wanted = 1.0
+        if speed > 0:
+            direction = self.target_vel / speed
+            track_error = float((self.target - position) @ direction)
+            track_velocity = float(np.asarray(velocity) @ direction)
+            wanted = min(max(0.05 + (track_velocity - self.nav.psc_posxy_p * track_error)
+                             / speed, 0.1), 1.0)
+        tc = self.nav.wp_accel / self.nav.wp_jerk if self.nav.wp_jerk > 0 else 1.0
+        self.track_scaler += (wanted - self.track_scaler) * min(dt / tc, 1.0)
+        return self.track_scaler
+
+    def advance(self, dt: float, position: np.ndarray,
+                velocity: np.ndarray | None = None) -> None:
         scale = self._time_scale(dt)
         done, pos, vel, acc = self.this.advance_target_along_track(
             self.prev, self.next, self.radius, self.nav.corner_accel(), self.fast,
-            dt * scale, self.origin)
+            dt * scale * self._track_scale(dt, position, velocity), self.origin)
         # accel_offset: track direction x _offset_accel x |target_vel| / desired speed
         offset = vel * (self.offset_accel / self.desired_speed)
         vel, acc = vel * scale, acc * scale * scale + offset

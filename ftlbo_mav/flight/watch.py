@@ -23,6 +23,7 @@ from .policy import FaultPolicy, Response
 from .vehicle import FlightAborted, FlightError, FlightVehicle
 
 LOITER_REACHED_M = 2.0  # ArduCopter's default waypoint radius (WPNAV_RADIUS)
+MAX_REPORT_DELAY_S = 0.15  # a position report older than its arrival by more: a stale offset
 
 
 class LeftPlan(Exception):  # noqa: N818 - a signal inside the flight, not an error
@@ -260,15 +261,20 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
     # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
     now = time.monotonic()
-    age = np.array([[now - (s.position_boot_s + s.clock_offset_s
-                            if s.clock_offset_s is not None else s.position_t)] for s in st])
-    positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)
+    arrived = np.array([now - s.position_t for s in st])
+    age = np.array([now - (s.position_boot_s + s.clock_offset_s)
+                    if s.clock_offset_s is not None else a for s, a in zip(st, arrived)])
+    # a report is no fresher than its arrival, and no older than its arrival plus a link's
+    # delay: beyond that the clock offset (the least-delayed report's) has gone stale, the
+    # vehicle's clock running slower than ours (SITL on a loaded machine: a copter seen
+    # 1.6 m behind that was 0.4 m behind, and pauses for all three)
+    age = np.clip(age, arrived, arrived + MAX_REPORT_DELAY_S)
+    positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)[:, None]
     speeds = np.array([s.ground_speed_m_s for s in st])
     # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
     # with a time scale runs faster than ours), carried on between reports (10 Hz) for
     # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
     # last report on our clock
-    arrived = np.array([now - s.position_t for s in st])
     vehicle_now = max(s.position_boot_s + min(a, 0.1) for s, a in zip(st, arrived))
     for i, pause in keeper.update(positions, speeds, vehicle_now, ages_s=arrived).items():
         _send_pause(vehicles[i], pause)

@@ -65,6 +65,7 @@ from .modes import ModeAuto, ModeBrake, ModeGuided, ModeLand, ModeRTL
 from .modes.common import AUTO, FLOWN_MODES, LAND, RTL, STABILIZE
 from .modes.common import text as _text
 from .physics import FlightLimits, VerticalShaper, WaypointNav
+from .wind import Gusts
 
 PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS}
 FENCE_CHECK_S = 1.0 / ap_fence.FENCE_CHECK_HZ
@@ -144,6 +145,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self._phase_before_item = ""
         self.fence = FenceGuard(self.tangent.to_en)  # AC_Fence + AP_Rally
         self._brake_since = 0.0  # when the current mode began (BRAKE's deceleration ramp)
+        self.gusts: Gusts | None = None  # wind (:mod:`.wind`): the copter is off its target
 
     # -- what the vehicle knows about itself
     @property
@@ -460,10 +462,14 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         """AC_WPNav moves the target (the emulated copter is on it); the mode in use then
         checks whether its leg is over (ModeAuto::verify_command, ModeRTL::run)."""
         nav = self.nav
-        nav.advance(dt, self.position)
+        nav.advance(dt, self.position, None if self.gusts is None else self.velocity)
         self.position = nav.target.copy()
-        self.position[2] = max(self.position[2], 0.0)
         self.velocity = nav.target_vel.copy()
+        if self.gusts is not None:  # in wind the copter is off its target
+            airspeed = float(np.linalg.norm(nav.target_vel - self.gusts.wind.velocity_enu()))
+            self.position += self.gusts.step(dt, airspeed)
+            self.velocity += self.gusts.error_vel
+        self.position[2] = max(self.position[2], 0.0)
         if self._phase in ("wp", "land_fly"):
             self._verify_auto_nav(out)
         elif self._phase.startswith("rtl_"):

@@ -24,6 +24,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 from .faults import Faults, FaultyPipe
 from .physics import varied
 from .vehicle import Vehicle, VehicleOptions
+from .wind import Gusts, Wind
 
 TICK_S = 0.02
 MAX_TIME_SCALE = 100.0
@@ -185,7 +186,9 @@ class Simulator:
     the fault decisions. ``time_scale``: the vehicles' clock runs this many times faster
     than the wall clock (flights in tests; link latency stays real). ``vary``: each
     vehicle's flight differs a little, as in a real fleet (a start latency, WPNAV_JERK;
-    :func:`~ftlbo_mav.sim.physics.varied`), drawn from ``seed``; off by default. Use
+    :func:`~ftlbo_mav.sim.physics.varied`), drawn from ``seed``; off by default. ``wind``:
+    a :class:`~ftlbo_mav.sim.wind.Wind` or ``(speed, direction, turbulence)`` as SITL's
+    SIM_WIND_SPD/DIR/TURB, each vehicle meeting its own gusts (drawn from ``seed``). Use
     ``with Simulator(...) as sim:`` (background thread) or
     :meth:`run` (foreground, until interrupted). ``urls`` gives the client connection
     strings; ``udp_url`` the shared link's, when ``udp_out`` is set.
@@ -196,7 +199,7 @@ class Simulator:
                  faults: Faults | Sequence[Faults] | None = None,
                  options: VehicleOptions | Sequence[VehicleOptions] | None = None,
                  signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1,
-                 time_scale: float = 1.0, vary: bool = False):
+                 time_scale: float = 1.0, vary: bool = False, wind=None):
         n = len(homes)
         if not 0 < time_scale <= MAX_TIME_SCALE:
             raise ValueError(f"time_scale must be within (0, {MAX_TIME_SCALE:g}], "
@@ -216,6 +219,7 @@ class Simulator:
             self.options = [replace(o, limits=varied(o.limits, np.random.default_rng(
                 [seed, 0x7A, i]))) for i, o in enumerate(self.options)]
         self.signing_key, self.seed, self.first_sysid = signing_key, seed, first_sysid
+        self.wind = None if wind is None else Wind.parse(wind)
         self.ports: list[int] = []
         self.serial1_ports: list[int] = []
         self.runners: list[VehicleRunner] = []
@@ -255,6 +259,8 @@ class Simulator:
         for i, home in enumerate(self.homes):
             v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
                         boot_time=start)
+            if self.wind is not None and not self.wind.calm:
+                v.autopilot.gusts = Gusts(self.wind, np.random.default_rng([self.seed, 0x57, i]))
             self.runners.append(VehicleRunner(v, faults=self.faults[i], rng=rngs[i], loop=loop,
                                               signing_key=self.signing_key, clock=clock))
         servers = []

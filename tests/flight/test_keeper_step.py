@@ -1,0 +1,53 @@
+"""The keeper's step (flight/watch.py keep_formation): reports brought to one instant."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.flight.vehicle import Status
+from ftlbo_mav.flight.watch import MAX_REPORT_DELAY_S, keep_formation
+
+ROOT = Path(__file__).resolve().parents[2]
+PLANNED = load_planned_flight(ROOT / "missions" / "nha-trang-orchard")
+
+
+class SeenPositions:
+    """A keeper that records what it is given."""
+
+    active, pausing = True, False
+
+    def update(self, positions, speeds, now, ages_s=None):
+        self.positions = positions
+        return {}
+
+    def release(self, now=0.0):
+        return {}
+
+
+def vehicle(i: int, *, clock_offset_s: float, boot_s: float, arrived_ago_s: float):
+    enu = np.asarray(PLANNED.paths[i][0]) + [10.0, 0.0, 0.0]
+    lat, lon, alt = PLANNED.frame.to_lla(enu)
+    s = Status(mode="AUTO", armed=True, lat_deg=float(lat), lon_deg=float(lon),
+               alt_m=float(alt), ground_speed_m_s=5.0, velocity_enu=(5.0, 0.0, 0.0), seq=4,
+               position_t=time.monotonic() - arrived_ago_s, position_boot_s=boot_s,
+               clock_offset_s=clock_offset_s)
+    return SimpleNamespace(status=s, send_pause=lambda _p: None)
+
+
+def test_a_stale_clock_offset_does_not_move_a_copter_along_its_track():
+    """uav2's clock has fallen 0.4 s behind ours since its least-delayed report (a SITL
+    instance on a loaded machine): its report, just arrived, is not 0.4 s old."""
+    now = time.monotonic()
+    fresh = [vehicle(i, clock_offset_s=now - 100.0, boot_s=100.0, arrived_ago_s=0.0)
+             for i in (0, 2)]
+    stale = vehicle(1, clock_offset_s=now - 100.4, boot_s=100.0, arrived_ago_s=0.0)
+    keeper = SeenPositions()
+    assert keep_formation(PLANNED, [fresh[0], stale, fresh[1]], keeper)
+    moved = keeper.positions[:, 0] - (np.asarray(PLANNED.paths)[:, 0, 0] + 10.0)
+    assert moved[1] <= 5.0 * (MAX_REPORT_DELAY_S + 0.05)  # not 5 m/s x 0.4 s
+    assert abs(moved[0]) < 0.1 and abs(moved[2]) < 0.1
