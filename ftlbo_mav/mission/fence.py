@@ -117,6 +117,84 @@ def _densify(path: np.ndarray, step_m: float) -> np.ndarray:
     return np.concatenate(out)
 
 
+def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Mask of ``points`` (n, 2) inside the box ``lo``..``hi`` (2,), edges included."""
+    return np.all((points >= lo) & (points <= hi), axis=1)
+
+
+def _box(axis: np.ndarray, centre: float, half: float) -> slice:
+    """The indices of the sorted ``axis`` within ``half`` of ``centre`` (a hair wider)."""
+    lo, hi = np.searchsorted(axis, [centre - half - 1e-6, centre + half + 1e-6])
+    return slice(int(lo), int(hi) + 1)
+
+
+class _RallyGrid:
+    """The rally search's candidates: a regular grid over the area (inset), those clear of
+    the obstacles, served nearest-first around a goal in growing rings so that a search
+    that stops early never sorts the whole field. The order is that of a stable sort of
+    the whole grid by distance (ties in row-major order)."""
+
+    def __init__(self, *, xs: np.ndarray, ys: np.ndarray, centres: np.ndarray,
+                 radii: np.ndarray, clearance_m: float, step_m: float) -> None:
+        self.xs, self.ys, self.step = xs, ys, step_m
+        clear = np.ones((len(ys), len(xs)), bool)
+        for c, r in zip(centres, radii):  # each obstacle blanks the cells of its box only
+            reach = r + clearance_m
+            ix, iy = _box(xs, c[0], reach), _box(ys, c[1], reach)
+            gx, gy = np.meshgrid(xs[ix], ys[iy])
+            d = np.linalg.norm(np.stack([gx, gy], axis=-1) - c[:2], axis=-1)
+            clear[iy, ix] &= d >= reach
+        self.clear = clear
+
+    def stamp(self, count: np.ndarray, q: np.ndarray, radius_m: float, add: int) -> None:
+        """Add ``add`` to ``count`` (ny, nx) at the cells closer than ``radius_m`` to
+        ``q`` (2,)."""
+        ix, iy = _box(self.xs, q[0], radius_m), _box(self.ys, q[1], radius_m)
+        gx, gy = np.meshgrid(self.xs[ix], self.ys[iy])
+        d = np.linalg.norm(np.stack([gx, gy], axis=-1) - q, axis=-1)
+        count[iy, ix] += add * (d < radius_m)
+
+    def outside_discs(self, centres: np.ndarray, radii: np.ndarray,
+                      tile: int = 16) -> np.ndarray:
+        """(ny, nx) mask: False on the tiles of ``tile`` x ``tile`` cells wholly inside
+        one of the discs ``centres`` (B, 2), ``radii`` (B,) (a hair inside), True
+        elsewhere. A coarse cover of the discs, for a fast first cut."""
+        ny, nx = self.clear.shape
+        x0 = self.xs[::tile]
+        x1 = self.xs[np.minimum(np.arange(tile - 1, nx + tile - 1, tile), nx - 1)]
+        y0 = self.ys[::tile]
+        y1 = self.ys[np.minimum(np.arange(tile - 1, ny + tile - 1, tile), ny - 1)]
+        inside = np.zeros((len(y0), len(x0)), bool)
+        r = radii - 1e-6
+        for c, rr in zip(centres, r):
+            corner_in = np.ones((len(y0), len(x0)), bool)
+            for cx in (x0, x1):
+                for cy in (y0, y1):
+                    corner_in &= (np.hypot(cx[None] - c[0], cy[:, None] - c[1]) < rr)
+            inside |= corner_in
+        return ~np.repeat(np.repeat(inside, tile, axis=0), tile, axis=1)[:ny, :nx]
+
+    def nearest_first(self, goal: np.ndarray, allowed: np.ndarray):
+        """Yield the cells of ``allowed`` (ny, nx) as arrays (C, 2), together
+        nearest-first from ``goal`` (2,)."""
+        xs, ys = self.xs, self.ys
+        if not len(xs) or not len(ys):
+            return
+        far = float(np.hypot(max(abs(xs[0] - goal[0]), abs(xs[-1] - goal[0])),
+                             max(abs(ys[0] - goal[1]), abs(ys[-1] - goal[1])))) + 1.0
+        inner, outer = -1.0, 8.0 * self.step
+        while inner <= far:
+            ix, iy = _box(xs, goal[0], outer), _box(ys, goal[1], outer)
+            jy, jx = np.nonzero(allowed[iy, ix])  # row-major, as the whole grid's order
+            window = np.column_stack([xs[ix][jx], ys[iy][jy]])
+            d = np.linalg.norm(window - goal, axis=1)
+            ring = (d > inner) & (d <= outer) if inner >= 0 else d <= outer
+            d, window = d[ring], window[ring]
+            if len(window):
+                yield window[np.argsort(d, kind="stable")]
+            inner, outer = outer, 2.0 * outer
+
+
 def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarray,
                      clearance_m: float, area_min: np.ndarray, area_max: np.ndarray,
                      settings: FenceSettings) -> list[np.ndarray | None]:
@@ -129,46 +207,135 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
     line to a rally point: from each point of the UAV's path nearer to its rally point
     than to its home (RTL flies to the nearer, RALLY_INCL_HOME 1), straight to it.
     ``paths`` (N, n, 3) ENU metres, row 0 each UAV's home; ``centres`` (K, 2), ``radii``
-    (K,); ``area_min``/``area_max`` (2,) the area's ENU bounding box."""
+    (K,); ``area_min``/``area_max`` (2,) the area's ENU bounding box.
+
+    The search: the homes and chosen rally points are stamped on the grid (a count of
+    the places each cell is too near), so a cell too near one costs a look-up; a cell
+    nearer than home to a path point already too near a place fails at once; the rest
+    come nearest-first in rings (:class:`_RallyGrid`) and are tested exactly in growing
+    batches, each against only what can reach it (the places and line segments whose
+    bounding box, grown by the separation, holds the batch's box). The result is the
+    first candidate in distance order that passes every test, as a search of the whole
+    grid would find it."""
     inset = settings.corner_cut_m + settings.margin_m
     sep = settings.rally_separation_m
     xs = np.arange(area_min[0] + inset, area_max[0] - inset + 1e-9, settings.grid_m)
     ys = np.arange(area_min[1] + inset, area_max[1] - inset + 1e-9, settings.grid_m)
-    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-    if len(centres):
-        d = np.linalg.norm(grid[:, None, :] - centres[None, :, :2], axis=2)
-        grid = grid[np.all(d >= radii[None, :] + clearance_m, axis=1)]
+    grid = _RallyGrid(xs=xs, ys=ys, centres=np.asarray(centres, float).reshape(-1, 2),
+                      radii=np.asarray(radii, float).reshape(-1), clearance_m=clearance_m,
+                      step_m=settings.grid_m)
     flat = [_densify(p[:, :2], 1.0) for p in paths]
     homes = paths[:, 0, :2]
-    chosen: list[np.ndarray | None] = [None] * len(paths)
-    for k in range(len(paths)):
-        goal = paths[k, -1, :2]
-        cand = grid[np.argsort(np.linalg.norm(grid - goal, axis=1), kind="stable")]
+    n = len(paths)
+    chosen: list[np.ndarray | None] = [None] * n
+    # how many homes and rally points each cell is closer than sep to
+    crowd = np.zeros(grid.clear.shape, np.int32)
+    for h in homes:
+        grid.stamp(crowd, h, sep, 1)
+    # the chosen UAVs' return lines so far: segment starts (S, 2), ends (S, 2), boxes
+    line_a, line_b = np.zeros((0, 2)), np.zeros((0, 2))
+    line_lo, line_hi = np.zeros((0, 2)), np.zeros((0, 2))
+    for k in range(n):
         own = flat[k]
         own_home = np.linalg.norm(own - homes[k], axis=1)  # (P,)
-        for chunk in np.array_split(cand, max(1, len(cand) // 512)):
-            ok = np.ones(len(chunk), bool)
-            # this UAV's lines to the candidate: from the path points nearer to it
-            to_cand = np.linalg.norm(own[None] - chunk[:, None], axis=2) < own_home[None]
-            for j in range(len(paths)):
-                if j == k:
-                    continue
-                places = [homes[j]] + ([chosen[j]] if chosen[j] is not None else [])
-                for q in places:
-                    ok &= np.linalg.norm(chunk - q, axis=1) >= sep
-                    d = _segment_distance(q, own[None], chunk[:, None])  # (C, P)
-                    ok &= np.where(to_cand, d, np.inf).min(axis=1) >= sep
-                if chosen[j] is not None:  # the other's lines to its rally point
-                    pts = flat[j]
-                    use = (np.linalg.norm(pts - chosen[j], axis=1)
-                           < np.linalg.norm(pts - homes[j], axis=1))
-                    if use.any():
-                        d = _segment_distance(chunk[:, None], pts[use][None], chosen[j])
-                        ok &= d.min(axis=1) >= sep
-            if ok.any():
-                chosen[k] = chunk[int(np.argmax(ok))]
+        others = np.arange(n) != k
+        places = np.concatenate([homes[others]] + [c[None] for j, c in enumerate(chosen)
+                                                   if c is not None and j != k])
+        blocked, blocked_reach = _blocked_starts(own, own_home, places, sep)
+        grid.stamp(crowd, homes[k], sep, -1)  # its own home is no obstacle to it
+        allowed = grid.clear & (crowd == 0)
+        if len(blocked):
+            allowed &= grid.outside_discs(blocked, blocked_reach)
+        grid.stamp(crowd, homes[k], sep, 1)
+        batch = 32
+        for ring in grid.nearest_first(paths[k, -1, :2], allowed):
+            if len(blocked):  # a return line that starts within sep of a place fails
+                ring = ring[_clear_of_blocked(ring, blocked, blocked_reach)]
+            i = 0
+            while i < len(ring) and chosen[k] is None:
+                chunk = ring[i:i + batch]
+                i += len(chunk)
+                batch = min(4 * batch, 1024)
+                good = _rally_lines_clear(chunk, own=own, own_home=own_home, places=places,
+                                          line_a=line_a, line_b=line_b, line_lo=line_lo,
+                                          line_hi=line_hi, sep=sep)
+                if good.any():
+                    chosen[k] = chunk[int(np.argmax(good))]
+            if chosen[k] is not None:
                 break
+        if chosen[k] is not None:
+            grid.stamp(crowd, chosen[k], sep, 1)
+            use = np.linalg.norm(own - chosen[k], axis=1) < own_home
+            a = own[use]
+            b = np.broadcast_to(chosen[k], a.shape)
+            line_a, line_b = np.concatenate([line_a, a]), np.concatenate([line_b, b])
+            line_lo = np.concatenate([line_lo, np.minimum(a, b) - sep])
+            line_hi = np.concatenate([line_hi, np.maximum(a, b) + sep])
     return chosen
+
+
+def _blocked_starts(own: np.ndarray, own_home: np.ndarray, places: np.ndarray,
+                    sep: float) -> tuple[np.ndarray, np.ndarray]:
+    """The points of the UAV's path ``own`` (P, 2) already within ``sep`` of one of the
+    ``places`` (Q, 2) (a little inside, so that the exact test decides every case at the
+    boundary), with their distances from home ``own_home`` (P,): a candidate nearer to
+    one of them than home is has a return line that starts there, and fails. Only the
+    discs (point, distance) that no other disc kept holds are returned."""
+    gap = np.full(len(own), np.inf)
+    for q in places:
+        gap = np.minimum(gap, np.linalg.norm(own - q, axis=1))
+    near = gap < sep - 1e-6
+    pts, reach = own[near], own_home[near]
+    order = np.argsort(-reach, kind="stable")
+    kept: list[int] = []
+    for i in order:  # the widest first; a disc inside one kept adds nothing
+        if kept and np.any(np.linalg.norm(pts[kept] - pts[i], axis=1) + reach[i]
+                           <= reach[kept]):
+            continue
+        kept.append(int(i))
+    return pts[kept], reach[kept]
+
+
+def _clear_of_blocked(cand: np.ndarray, blocked: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Mask of ``cand`` (C, 2) farther than ``reach`` (B,) from every ``blocked`` (B, 2):
+    from no such point would RTL fly to the candidate (it is not nearer than home)."""
+    keep = np.ones(len(cand), bool)
+    step = max(1, 2_000_000 // max(1, len(blocked)))
+    for i in range(0, len(cand), step):
+        part = cand[i:i + step]
+        d = np.linalg.norm(part[:, None] - blocked[None], axis=2)
+        keep[i:i + step] = ~np.any(d < reach[None] - 1e-6, axis=1)
+    return keep
+
+
+def _rally_lines_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
+                       places: np.ndarray, line_a: np.ndarray, line_b: np.ndarray,
+                       line_lo: np.ndarray, line_hi: np.ndarray, sep: float) -> np.ndarray:
+    """Which candidates ``chunk`` (C, 2) keep ``sep`` between the others' places
+    ``places`` (Q, 2) and their own return lines (from the points of ``own`` (P, 2) nearer
+    to them than ``own_home`` (P,), the distances to the UAV's home), and between
+    themselves and the others' return lines ``line_a``-``line_b`` (S, 2) with their boxes
+    grown by ``sep`` (``line_lo``, ``line_hi``). Returns (C,) bool."""
+    ok = np.ones(len(chunk), bool)
+    lo, hi = chunk.min(axis=0), chunk.max(axis=0)
+    hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
+    if hit.any():
+        d = _segment_distance(chunk[:, None], line_a[hit][None], line_b[hit][None])
+        ok &= d.min(axis=1) >= sep
+    to_cand = np.linalg.norm(own[None] - chunk[:, None], axis=2) < own_home[None]  # (C, P)
+    used = to_cand.any(axis=0)
+    if not used.any():
+        return ok
+    box_lo = np.minimum(own[used].min(axis=0), lo) - sep
+    box_hi = np.maximum(own[used].max(axis=0), hi) + sep
+    pts, to_cand = own[used], to_cand[:, used]
+    for q in places[_near_box(places, box_lo, box_hi)]:
+        live = np.flatnonzero(ok)
+        if not len(live):
+            break
+        d = _segment_distance(q, pts[None], chunk[live, None])  # (C', P')
+        ok[live] &= np.where(to_cand[live], d, np.inf).min(axis=1) >= sep
+    return ok
 
 
 def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> list[UavFence]:
