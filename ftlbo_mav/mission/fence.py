@@ -122,6 +122,44 @@ def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.all((points >= lo) & (points <= hi), axis=1)
 
 
+def _hull(points: np.ndarray) -> np.ndarray:
+    """The convex hull of ``points`` (n, 2), counter-clockwise (Andrew's monotone chain)."""
+    pts = np.unique(points, axis=0)  # sorted by east, then north
+    if len(pts) < 3:
+        return pts
+
+    def half(seq):
+        out: list[np.ndarray] = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def _near_hull(queries: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
+    """Mask of ``queries`` (Q, 2) not farther than ``reach`` (a hair more) from the convex
+    hull of ``points`` (n, 2): no query outside it is within ``reach`` of a segment
+    between two of the points."""
+    lo, hi = points.min(axis=0) - reach - 1e-6, points.max(axis=0) + reach + 1e-6
+    near = _near_box(queries, lo, hi)
+    hull = _hull(points)
+    if len(hull) < 3 or not near.any():
+        return near
+    a, b = hull, np.roll(hull, -1, axis=0)
+    edge = b - a
+    normal = np.column_stack([edge[:, 1], -edge[:, 0]])  # outward for a ccw hull
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    q = queries[near]
+    beyond = ((q[:, None, :] - a[None]) * normal[None]).sum(-1) > reach + 1e-6
+    near[np.flatnonzero(near)[beyond.any(axis=1)]] = False
+    return near
+
+
 def _box(axis: np.ndarray, centre: float, half: float) -> slice:
     """The indices of the sorted ``axis`` within ``half`` of ``centre`` (a hair wider)."""
     lo, hi = np.searchsorted(axis, [centre - half - 1e-6, centre + half + 1e-6])
@@ -256,11 +294,11 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
                 chunk = ring[i:i + batch]
                 i += len(chunk)
                 batch = min(4 * batch, 1024)
-                good = _rally_lines_clear(chunk, own=own, own_home=own_home, places=places,
-                                          line_a=line_a, line_b=line_b, line_lo=line_lo,
-                                          line_hi=line_hi, sep=sep)
-                if good.any():
-                    chosen[k] = chunk[int(np.argmax(good))]
+                first = _first_clear(chunk, own=own, own_home=own_home, places=places,
+                                     line_a=line_a, line_b=line_b, line_lo=line_lo,
+                                     line_hi=line_hi, sep=sep)
+                if first is not None:
+                    chosen[k] = chunk[first]
             if chosen[k] is not None:
                 break
         if chosen[k] is not None:
@@ -308,32 +346,51 @@ def _clear_of_blocked(cand: np.ndarray, blocked: np.ndarray, reach: np.ndarray) 
     return keep
 
 
-def _rally_lines_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
-                       places: np.ndarray, line_a: np.ndarray, line_b: np.ndarray,
-                       line_lo: np.ndarray, line_hi: np.ndarray, sep: float) -> np.ndarray:
-    """Which candidates ``chunk`` (C, 2) keep ``sep`` between the others' places
-    ``places`` (Q, 2) and their own return lines (from the points of ``own`` (P, 2) nearer
-    to them than ``own_home`` (P,), the distances to the UAV's home), and between
-    themselves and the others' return lines ``line_a``-``line_b`` (S, 2) with their boxes
-    grown by ``sep`` (``line_lo``, ``line_hi``). Returns (C,) bool."""
+def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
+                 places: np.ndarray, line_a: np.ndarray, line_b: np.ndarray,
+                 line_lo: np.ndarray, line_hi: np.ndarray, sep: float) -> int | None:
+    """The index of the first of the candidates ``chunk`` (C, 2) that keeps ``sep``
+    between itself and the others' return lines ``line_a``-``line_b`` (S, 2) (their boxes
+    grown by ``sep``: ``line_lo``, ``line_hi``) and between the others' places ``places``
+    (Q, 2) and its own return lines (from the points of ``own`` (P, 2) nearer to it than
+    ``own_home`` (P,), their distances from the UAV's home); None if none does. The
+    second test, the costly one, runs on a few candidates at a time, in order."""
     ok = np.ones(len(chunk), bool)
     lo, hi = chunk.min(axis=0), chunk.max(axis=0)
     hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
     if hit.any():
         d = _segment_distance(chunk[:, None], line_a[hit][None], line_b[hit][None])
         ok &= d.min(axis=1) >= sep
-    to_cand = np.linalg.norm(own[None] - chunk[:, None], axis=2) < own_home[None]  # (C, P)
+    live = np.flatnonzero(ok)
+    i, step = 0, 4
+    while i < len(live):
+        sub = chunk[live[i:i + step]]
+        good = _own_lines_clear(sub, own=own, own_home=own_home, places=places, sep=sep)
+        if good.any():
+            return int(live[i + int(np.argmax(good))])
+        i, step = i + len(sub), 2 * step
+    return None
+
+
+def _own_lines_clear(cand: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
+                     places: np.ndarray, sep: float) -> np.ndarray:
+    """Which candidates ``cand`` (C, 2) have return lines (from the points of ``own``
+    (P, 2) nearer to them than ``own_home`` (P,)) that keep ``sep`` from every one of
+    ``places`` (Q, 2). Returns (C,) bool."""
+    ok = np.ones(len(cand), bool)
+    to_cand = np.linalg.norm(own[None] - cand[:, None], axis=2) < own_home[None]  # (C, P)
     used = to_cand.any(axis=0)
     if not used.any():
         return ok
-    box_lo = np.minimum(own[used].min(axis=0), lo) - sep
-    box_hi = np.maximum(own[used].max(axis=0), hi) + sep
     pts, to_cand = own[used], to_cand[:, used]
-    for q in places[_near_box(places, box_lo, box_hi)]:
+    near = places[_near_hull(places, np.concatenate([pts, cand]), sep)]
+    # the places nearest the candidates first: those most likely to rule them out
+    near = near[np.argsort(np.linalg.norm(near - cand.mean(axis=0), axis=1))]
+    for q in near:
         live = np.flatnonzero(ok)
         if not len(live):
             break
-        d = _segment_distance(q, pts[None], chunk[live, None])  # (C', P')
+        d = _segment_distance(q, pts[None], cand[live, None])  # (C', P')
         ok[live] &= np.where(to_cand[live], d, np.inf).min(axis=1) >= sep
     return ok
 

@@ -93,7 +93,11 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     """One disc per (UAV, cylinder): centre ``c_k - offset_n``, radius ``R_k + clearance``.
 
     ``margin`` (metres) is added to every radius. Duplicates (UAVs stacked at one
-    horizontal offset) and discs inside another disc are dropped: they change nothing.
+    horizontal offset), discs inside another disc and discs whose whole circle lies inside
+    other discs or outside the centroid's rectangle are dropped: they change nothing (a
+    path from outside can enter such a disc only across its circle, through another
+    disc). In a formation of many UAVs that leaves the discs on the rim of each
+    cylinder's blob, which keeps the graph's bitangents few.
     """
     N, K = problem.uav_count, len(problem.radii)
     if K == 0:
@@ -103,14 +107,69 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     radii = np.tile(problem.radii + margin, N)
     cylinder = np.tile(np.arange(K), N)
     uav = np.repeat(np.arange(N), K)
-    dist = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
+    i, j = _touching_pairs(centres, radii)
+    dist = np.hypot(*(centres[j] - centres[i]).T)
     # disc i inside disc j (for equal discs keep the first one)
-    inside = dist + radii[:, None] <= radii[None, :] + _TOL
-    np.fill_diagonal(inside, False)
-    equal = np.triu(inside & inside.T, 1)  # equal discs: drop the later one only
-    drop = (inside & ~inside.T).any(axis=1) | equal.any(axis=0)
+    inside = dist + radii[i] <= radii[j] + _TOL
+    both = dist + radii[j] <= radii[i] + _TOL  # and j inside i: equal discs
+    drop = np.zeros(len(radii), bool)
+    drop[i[inside & ~both]] = True
+    drop[i[inside & both & (i > j)]] = True
     keep = ~drop
-    return Discs(centres[keep], radii[keep], cylinder[keep], uav[keep])
+    discs = Discs(centres[keep], radii[keep], cylinder[keep], uav[keep])
+    lower, upper = centroid_rectangle(problem)
+    covered = np.array([_circle_covered(iv) for iv in _forbidden_intervals(discs, lower,
+                                                                            upper)], bool)
+    if covered.any() and not covered.all():
+        discs = Discs(discs.centres[~covered], discs.radii[~covered],
+                      discs.cylinder[~covered], discs.uav[~covered])
+    return discs
+
+
+def _touching_pairs(centres: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every ordered pair ``(i, j)``, ``i != j``, of discs ``centres (C, 2)``, ``radii (C,)``
+    that touch or overlap (``d <= r_i + r_j``, a hair wider), found through a sort by
+    east, not a ``(C, C)`` matrix."""
+    C = len(radii)
+    if C < 2:
+        return np.zeros(0, int), np.zeros(0, int)
+    order = np.argsort(centres[:, 0], kind="stable")
+    xs = centres[order, 0]
+    reach = radii[order] + radii.max() + 1e-6
+    lo = np.searchsorted(xs, xs - reach, side="left")
+    hi = np.searchsorted(xs, xs + reach, side="right")
+    counts = hi - lo
+    a = np.repeat(np.arange(C), counts)
+    b = lo[a] + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+    i, j = order[a], order[b]
+    keep = i != j
+    i, j = i[keep], j[keep]
+    d = np.hypot(*(centres[j] - centres[i]).T)
+    near = d <= radii[i] + radii[j] + 1e-6
+    return i[near], j[near]
+
+
+def _circle_covered(intervals) -> bool:
+    """Whether the open angular intervals ``(centre, half_width)`` cover the whole
+    circle, each point strictly inside one (overlaps of more than 1e-9 rad)."""
+    if not intervals:
+        return False
+    spans = []
+    for centre, half in intervals:
+        if half >= math.pi:
+            return True
+        a = (centre - half) % _TWO_PI
+        spans.append((a, a + 2 * half))
+    spans.sort()
+    # walk once around from the first span's start, unwrapping the spans that wrap
+    begin, reach = spans[0][0], spans[0][1]
+    for a, b in spans[1:] + [(a + _TWO_PI, b + _TWO_PI) for a, b in spans]:
+        if a >= reach - 1e-9:
+            return False
+        reach = max(reach, b)
+        if reach > begin + _TWO_PI + 1e-9:
+            return True
+    return False
 
 
 def centroid_rectangle(problem: PlanningProblem) -> tuple[np.ndarray, np.ndarray]:
@@ -165,33 +224,34 @@ def _forbidden_intervals(discs: Discs, lower, upper) -> list[list[tuple[float, f
     another disc or outside the rectangle (open intervals)."""
     C = len(discs.radii)
     out: list[list[tuple[float, float]]] = [[] for _ in range(C)]
-    for i in range(C):
-        ci, ri = discs.centres[i], discs.radii[i]
-        for j in range(C):
-            if j == i:
-                continue
-            v = discs.centres[j] - ci
-            d = math.hypot(*v)
-            rj = discs.radii[j]
-            if d >= ri + rj or d + rj <= ri:
-                continue  # apart, or j inside i: j does not cover i's circle
-            if d + ri <= rj:
-                out[i].append((0.0, math.pi))  # i's whole circle inside j
-                continue
-            cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
-            out[i].append((math.atan2(v[1], v[0]), math.acos(min(max(cos_a, -1.0), 1.0))))
+    i, j = _touching_pairs(discs.centres, discs.radii)
+    v = discs.centres[j] - discs.centres[i]
+    d = np.hypot(v[:, 0], v[:, 1])
+    ri, rj = discs.radii[i], discs.radii[j]
+    # apart, or j inside i: j does not cover i's circle
+    cover = ~((d >= ri + rj) | (d + rj <= ri))
+    whole = cover & (d + ri <= rj)  # i's whole circle inside j
+    part = cover & ~whole
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
+    half = np.arccos(np.clip(np.where(part, cos_a, 1.0), -1.0, 1.0))
+    centre = np.arctan2(v[:, 1], v[:, 0])
+    for k in np.flatnonzero(cover):
+        out[i[k]].append((0.0, math.pi) if whole[k] else (float(centre[k]), float(half[k])))
+    for n in range(C):
+        ci, ri_n = discs.centres[n], discs.radii[n]
         for normal_angle, h in (
             (math.pi, ci[0] - lower[0]),
             (0.0, upper[0] - ci[0]),
             (-0.5 * math.pi, ci[1] - lower[1]),
             (0.5 * math.pi, upper[1] - ci[1]),
         ):
-            if h >= ri:
+            if h >= ri_n:
                 continue
-            if h <= -ri:
-                out[i].append((0.0, math.pi))
+            if h <= -ri_n:
+                out[n].append((0.0, math.pi))
                 continue
-            out[i].append((normal_angle, math.acos(h / ri)))
+            out[n].append((normal_angle, math.acos(h / ri_n)))
     return out
 
 
