@@ -164,3 +164,10 @@ def test_the_rally_search_chooses_what_a_plain_search_of_every_cell_chooses():
         goals = case["paths"][:, -1, :2]
         far += sum(p is None or np.linalg.norm(p - g) > 2.0 for p, g in zip(fast, goals))
     assert far  # some UAVs' rally points had to move away from their goals, or found none
+
+
+def test_a_field_without_obstacles_has_a_polygon_and_rally_points_only():
+    bare = replace(PLAN, scenario=replace(PLAN.scenario, obstacles=()))
+    fences = plan_fences(bare)
+    assert [len(f.fence) for f in fences] == [4, 4, 4]
+    assert all(f.exclusion_radii_m == () and len(f.rally) == 1 for f in fences)
