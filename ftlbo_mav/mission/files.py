@@ -209,11 +209,7 @@ def digest(text: str | bytes) -> str:
 def read_mission_text(path: str | Path) -> str:
     """A mission file's text; :class:`MissionFileError` naming the file when unreadable."""
     from ..errors import MissionFileError
+    from ..inputs import read_user_text
 
     path = Path(path)
-    try:
-        return path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise MissionFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise MissionFileError(f"{path}: not a text file") from None
+    return read_user_text(path, error=lambda problem: MissionFileError(f"{path}: {problem}"))

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..formation import PLANES, closest_pair, regular_formation
+from ..inputs import read_user_text
 from ..obstacles import Cylinder, read_obstacle_geojson
 from ..planning.survey import formation_width, lay_lanes
 from .model import (
@@ -53,12 +54,7 @@ def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file. Raises :class:`ScenarioError` on any problem."""
     path = Path(path)
     source = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(source, "", "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(source, "", f"cannot read: {exc}") from None
+    text = read_user_text(path, error=lambda problem: ScenarioError(source, "", problem))
     return parse_scenario(text, source=source, base_dir=path.parent)
 
 
@@ -66,6 +62,7 @@ def parse_scenario(
     text: str, *, source: str = "<scenario>", base_dir: Path | None = None
 ) -> Scenario:
     """Parse scenario TOML text; see :func:`load_scenario`."""
+    text = text.removeprefix("\ufeff")  # a byte-order mark, as Windows editors write
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
