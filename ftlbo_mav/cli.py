@@ -21,6 +21,7 @@ from .planning.planner import AUTO_TARGET
 from .planning.planner import plan as plan_scenario
 from .scenario import AUTO, load_scenario
 from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINTS, MIN_STUDENTS
+from .scenario.reader import scenario_inputs
 
 
 class _Group(click.Group):
@@ -136,7 +137,8 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
                    "UAV's path inside the area", err=True)
     # the output folder is checked (a temporary one made beside it) before any planning;
     # everything is moved into it at the end, or nothing (a failure, Ctrl-C)
-    with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json") as out:
+    with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json",
+                      inputs=scenario_inputs(scenario)) as out:
         result = _plan_with_progress(scn, seed=seed, iterations=iterations, students=students,
                                      waypoints=waypoints, algorithm=algorithm, quiet=quiet)
         files = plan_files(result, allow_infeasible=allow_infeasible, formats=formats,
@@ -292,8 +294,13 @@ def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, 
         raise click.BadParameter(
             f"unknown algorithm {bad[0]!r}; known: {', '.join(known)}" if bad
             else "give at least one algorithm", param_hint="--algorithms")
+    twice = sorted({a for a in names if names.count(a) > 1})
+    if twice:
+        raise click.BadParameter(f"{twice[0]!r} is given twice: name each algorithm once",
+                                 param_hint="--algorithms")
     scn = load_scenario(scenario)
-    with OutputFolder(out_dir) as out:  # checked before the runs, written after them
+    # checked before the runs, written after them
+    with OutputFolder(out_dir, inputs=scenario_inputs(scenario)) as out:
         with click.progressbar(length=runs * len(names), label="comparing", file=sys.stderr,
                                hidden=quiet) as bar:
             result = compare(scn, algorithms=names, runs=runs, processes=processes,

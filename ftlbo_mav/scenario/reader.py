@@ -400,3 +400,13 @@ def _check_point(s: Scenario, key: str, point, enu: np.ndarray) -> None:
                     f"puts UAV {n} {dist[k]:.2f} m from the axis of obstacles[{k}] "
                     f"(radius {radii[k]:g} m + clearance {s.clearance_m:g} m)",
                 )
+
+
+def scenario_inputs(path: str | Path) -> list[Path]:
+    """The files a scenario is read from: itself and its ``obstacles_file``, if any (for
+    a command that must not write over its inputs). Call after :func:`load_scenario`."""
+    path = Path(path)
+    data = tomllib.loads(read_user_text(path, error=lambda p: ScenarioError(str(path), "", p)
+                                        ).removeprefix("\ufeff"))
+    extra = data.get("obstacles_file")
+    return [path] + ([path.parent / extra] if isinstance(extra, str) and extra else [])
