@@ -110,6 +110,12 @@ class SitlSwarm:
     def _connect(self, *, timeout_s: float) -> list:
         """Links to every instance, tried for ``timeout_s``; an instance that has exited
         meanwhile is named at once (a binary that fails to start), not after the wait."""
+        grace = time.monotonic() + 0.3  # a binary that cannot start exits within this
+        for p in self.processes:
+            try:
+                p.wait(timeout=max(0.0, grace - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                pass
         deadline = time.monotonic() + timeout_s
         while True:
             self.check_running()
