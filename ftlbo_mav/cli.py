@@ -66,9 +66,12 @@ def _terminate(_signum, _frame) -> None:
 
 def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
     """``--formats geojson,kml,plan`` or ``all`` -> a tuple of FORMATS names."""
-    if not value:
+    if value is None:
         return ()
     names = [v.strip().lower() for v in value.split(",") if v.strip()]
+    if not names:
+        raise click.BadParameter(f"names no format; give a comma-separated list of "
+                                 f"{', '.join(FORMATS)}, or all (or leave --formats out)")
     if names == ["all"]:
         return FORMATS
     unknown = [n for n in names if n not in FORMATS]

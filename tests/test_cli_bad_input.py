@@ -190,3 +190,23 @@ def test_compare_refuses_an_algorithm_named_twice(tmp_path):
                 str(tmp_path / "out"), "--algorithms", "ftlbo,ga,ftlbo", "--runs", "1"),
             "'ftlbo' is given twice")
     assert not (tmp_path / "out").exists()
+
+
+def test_fly_reads_the_plan_json_values_before_any_vehicle(tmp_path):
+    folder = _edited_plan(tmp_path, _set("obstacles.0.radius", -3.0))
+    refused(run("fly", str(folder), "--sysid", "1..3", "--connect", "udpout:127.0.0.1:9"),
+            "obstacles[0].radius")
+
+
+@pytest.mark.parametrize("output, words", [("/dev/zero", "not a regular file"),
+                                           ("missing/x.waypoints", "does not exist")])
+def test_download_checks_where_it_writes_before_the_vehicle(tmp_path, output, words):
+    target = output if output.startswith("/") else str(tmp_path / output)
+    refused(run("download", "--sysid", "1", "--connect", "udpout:127.0.0.1:9", "-o", target),
+            words, "no vehicle was contacted")
+
+
+def test_formats_that_name_nothing(tmp_path):
+    example = str(ROOT / "missions" / "nha-trang-orchard.toml")
+    refused(run("plan", example, "-o", str(tmp_path / "out"), "--formats", ",,"),
+            "names no format")
