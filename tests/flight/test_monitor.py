@@ -1,5 +1,6 @@
 import io
 import time
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -59,3 +60,17 @@ def test_without_a_plan_only_the_vehicles():
     monitor.vehicles = _vehicles(planned)
     lines = monitor.lines()
     assert len(lines) == 3 and "slot" not in lines[0]
+
+
+def test_a_swarm_larger_than_the_screen_gets_a_summary_that_fits():
+    planned = load_planned_flight(EXAMPLE.with_suffix(""))
+    monitor = Monitor(planned)
+    monitor.vehicles = _vehicles(planned, shift=(0.6, 0.0, 0.0))
+    monitor.vehicles[2].status = replace(monitor.vehicles[2].status,
+                                         heartbeat_t=time.monotonic() - 10.0)
+    assert monitor.lines(max_lines=4) == monitor.lines()  # a line each and the group's fit
+    lines = monitor.lines(max_lines=3)
+    assert len(lines) <= 4 and lines[0].startswith("3 vehicles: AUTO 3; 3 armed")
+    assert "NO HEARTBEAT: uav3" in lines
+    assert any(line.startswith("farthest from their slots: uav2 0.40 m") for line in lines)
+    assert lines[-1].startswith("formation error 0.28 m RMS")
