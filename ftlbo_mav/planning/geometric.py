@@ -367,8 +367,17 @@ class _Graph:
         seg_q.append(np.array([-2]))
         t_disc = np.concatenate(t_disc) if t_disc else np.zeros(0, int)
         t_angle = np.concatenate(t_angle) if t_angle else np.zeros(0)
-        t_point = _on_circle(discs, t_disc, t_angle) if len(t_disc) else np.zeros((0, 2))
         seg_p, seg_q = np.concatenate(seg_p), np.concatenate(seg_q)
+        if len(t_disc):  # ends deep inside another disc: no segment from them is clear
+            buried = np.append(_buried(discs, t_disc, t_angle), [False, False])
+            alive = ~buried[seg_p] & ~buried[seg_q]  # keys -1, -2: start and goal
+            seg_p, seg_q = seg_p[alive], seg_q[alive]
+        # the points of the tangents still in question only (the rest stay at 0, unused)
+        t_point = np.zeros((len(t_disc), 2))
+        if len(t_disc):
+            wanted = np.unique(np.concatenate([seg_p, seg_q]))
+            wanted = wanted[wanted >= 0]
+            t_point[wanted] = _on_circle(discs, t_disc[wanted], t_angle[wanted])
 
         def coords(keys):
             out = t_point[np.maximum(keys, 0)] if len(t_point) else np.zeros((len(keys), 2))
@@ -379,9 +388,6 @@ class _Graph:
 
         p, q = coords(seg_p), coords(seg_q)
         ok = _in_rectangle(p, lower, upper) & _in_rectangle(q, lower, upper)
-        if len(t_disc):  # ends deep inside another disc: no segment from them is clear
-            buried = np.append(_buried(discs, t_disc, t_angle), [False, False])
-            ok &= ~buried[seg_p] & ~buried[seg_q]  # keys -1, -2: start and goal
         ok[ok] = segments_clear(p[ok], q[ok], discs)
         seg_p, seg_q, p, q = seg_p[ok], seg_q[ok], p[ok], q[ok]
 
