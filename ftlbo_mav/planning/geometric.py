@@ -149,6 +149,24 @@ def _touching_pairs(centres: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray,
     return i[near], j[near]
 
 
+def _neighbours(discs: Discs, count: int = 6) -> np.ndarray:
+    """Per disc, up to ``count`` of the discs that touch it, nearest first, then -1:
+    ``(C + 1, count)``, the last row (index -1) all -1."""
+    C = len(discs.radii)
+    out = np.full((C + 1, count), -1)
+    i, j = _touching_pairs(discs.centres, discs.radii)
+    if not len(i):
+        return out
+    d = np.hypot(*(discs.centres[j] - discs.centres[i]).T)
+    order = np.lexsort((d, i))
+    i, j = i[order], j[order]
+    start = np.searchsorted(i, i, side="left")
+    rank = np.arange(len(i)) - start
+    keep = rank < count
+    out[i[keep], rank[keep]] = j[keep]
+    return out
+
+
 def _circle_covered(intervals) -> bool:
     """Whether the open angular intervals ``(centre, half_width)`` cover the whole
     circle, each point strictly inside one (overlaps of more than 1e-9 rad)."""
@@ -178,11 +196,30 @@ def centroid_rectangle(problem: PlanningProblem) -> tuple[np.ndarray, np.ndarray
     return lower[0, :2], upper[0, :2]
 
 
-def segments_clear(p: np.ndarray, q: np.ndarray, discs: Discs) -> np.ndarray:
-    """For segments ``p -> q`` (each ``(E, 2)``): True where no disc interior is entered."""
+def segments_clear(p: np.ndarray, q: np.ndarray, discs: Discs, *,
+                   first: np.ndarray | None = None) -> np.ndarray:
+    """For segments ``p -> q`` (each ``(E, 2)``): True where no disc interior is entered.
+
+    ``first`` (E, m), optional: per segment the discs most likely to block it (-1 for
+    none), tested before the others; the same test, so the same answer, sooner."""
     clear = np.ones(len(p), bool)
     C = len(discs.radii)
     if C == 0 or len(p) == 0:
+        return clear
+    if first is not None and first.size and len(p) * C > _EDGE_CHUNK:
+        for col in first.T:  # one candidate blocker per segment at a time
+            has = np.flatnonzero(clear & (col >= 0))
+            if not len(has):
+                continue
+            k = col[has]
+            a, ab = p[has], q[has] - p[has]
+            ac = discs.centres[k] - a
+            seg2 = np.maximum((ab * ab).sum(-1), 1e-18)
+            t = np.clip((ac * ab).sum(-1) / seg2, 0.0, 1.0)
+            d = np.hypot(*(ac - t[:, None] * ab).T)
+            clear[has[d < discs.radii[k] * (1 - _TOL) - _TOL]] = False
+        rest = np.flatnonzero(clear)
+        clear[rest] = segments_clear(p[rest], q[rest], discs)
         return clear
     if len(p) * C <= _EDGE_CHUNK:  # small: every segment against every disc at once
         a, b = p[:, None, :], q[:, None, :]
@@ -388,7 +425,11 @@ class _Graph:
 
         p, q = coords(seg_p), coords(seg_q)
         ok = _in_rectangle(p, lower, upper) & _in_rectangle(q, lower, upper)
-        ok[ok] = segments_clear(p[ok], q[ok], discs)
+        # a segment from a disc's circle is most often blocked by that disc's neighbours
+        near = _neighbours(discs)
+        ends = np.concatenate([t_disc, [-1, -1]])  # keys -1, -2: start and goal
+        first = np.concatenate([near[ends[seg_p]], near[ends[seg_q]]], axis=1)
+        ok[ok] = segments_clear(p[ok], q[ok], discs, first=first[ok])
         seg_p, seg_q, p, q = seg_p[ok], seg_q[ok], p[ok], q[ok]
 
         # Nodes: 0 start, 1 goal, then every tangent point used by a valid segment.
