@@ -50,24 +50,26 @@ class Monitor:
         """The live view: one line per vehicle, one for the group. With more vehicles than
         ``max_lines`` allows, a summary instead (:meth:`_summary`): the states counted,
         and the vehicles that need a look (no heartbeat, farthest from their slots)."""
-        out = []
         pos = self.positions()
         slots = slot_errors(pos, self.planned.offsets) if pos is not None else None
         if max_lines is not None and len(self.vehicles) + 1 > max_lines:
-            return self._summary(pos, slots, max(max_lines, 4))
-        for n, v in enumerate(self.vehicles):
-            s = v.status
-            total = len(self.planned.missions[n]) - 1 if self.planned else None
-            item = "-" if s.seq < 0 else f"{s.seq}/{total}" if total else str(s.seq)
-            slot = f"slot {slots[n]:5.2f} m" if slots is not None else ""
-            age = time.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
-            stale = "  NO HEARTBEAT" if age > 3.0 else ""
-            out.append(f"{v.name:>5} sysid {v.sysid:<3} {s.mode:<9} "
-                       f"{'ARMED' if s.armed else 'disarmed':<8} alt {s.alt_m:5.1f} m  "
-                       f"item {item:<6} {slot}{stale}")
+            return self._summary(pos, slots, max(max_lines, 5))
+        out = [self._vehicle_line(n, slots) for n in range(len(self.vehicles))]
         if pos is not None:
             out.append(self._group_line(pos, slots))
         return out
+
+    def _vehicle_line(self, n: int, slots) -> str:
+        v = self.vehicles[n]
+        s = v.status
+        total = len(self.planned.missions[n]) - 1 if self.planned else None
+        item = "-" if s.seq < 0 else f"{s.seq}/{total}" if total else str(s.seq)
+        slot = f"slot {slots[n]:5.2f} m" if slots is not None else ""
+        age = time.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
+        stale = "  NO HEARTBEAT" if age > 3.0 else ""
+        return (f"{v.name:>5} sysid {v.sysid:<3} {s.mode:<9} "
+                f"{'ARMED' if s.armed else 'disarmed':<8} alt {s.alt_m:5.1f} m  "
+                f"item {item:<6} {slot}{stale}")
 
     def _group_line(self, pos: np.ndarray, slots: np.ndarray) -> str:
         err = float(np.sqrt(np.mean(slots**2)))
@@ -97,13 +99,14 @@ class Monitor:
             shown = ", ".join(stale[:8]) + (f" and {len(stale) - 8} more" if len(stale) > 8
                                             else "")
             out.append(f"NO HEARTBEAT: {shown}")
-        if slots is not None:
-            room = max_lines - len(out) - 1
-            worst = np.argsort(-slots, kind="stable")[:max(room, 1)]
-            out.append("farthest from their slots: " + ", ".join(
-                f"{self.vehicles[n].name} {slots[n]:.2f} m" for n in worst))
+        if slots is not None:  # the vehicles farthest from their slots, a line each
+            room = max_lines - len(out) - 2
+            if room >= 1:
+                worst = np.argsort(-slots, kind="stable")[:room]
+                out.append(f"farthest from their slots ({len(worst)} of {len(st)}):")
+                out += [self._vehicle_line(int(n), slots) for n in worst]
             out.append(self._group_line(pos, slots))
-        return out[:max_lines]
+        return out
 
 
 class LiveView:
