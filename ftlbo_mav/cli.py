@@ -152,8 +152,7 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
             files = {**files, **figure_files(result)}
         paths = out.write_all(files)
     click.echo(format_summary(result))
-    for path in paths:
-        click.echo(f"  wrote {path}")
+    _say_written(paths)
     if not result.feasible:
         for line in result.violations:
             click.echo(f"  violation: {line}", err=True)
@@ -161,6 +160,23 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
             click.echo("no mission files written: the best plan is infeasible "
                        "(see plan.json; --allow-infeasible writes them anyway)", err=True)
         sys.exit(1)
+
+
+def _say_written(paths, *, listed: int = 24) -> None:
+    """A line per file written; past ``listed`` (a large swarm), one line per kind."""
+    if len(paths) <= listed:
+        for path in paths:
+            click.echo(f"  wrote {path}")
+        return
+    kinds: dict[str, list] = {}
+    for path in paths:
+        kind = path.suffix if path.name.startswith("uav") else path.name
+        kinds.setdefault(kind, []).append(path)
+    folder = paths[0].parent
+    for kind, group in kinds.items():
+        what = (f"{len(group)} files uav1{kind} .. uav{len(group)}{kind}" if len(group) > 1
+                else group[0].name)
+        click.echo(f"  wrote {what} in {folder}")
 
 
 def _plan_with_progress(scn, *, seed, iterations, students, waypoints, algorithm, quiet):
