@@ -90,7 +90,7 @@ def test_the_qgc_plan_carries_the_fence_and_the_rally_point():
 def _rally_reference(*, paths, centres, radii, clearance_m, area_min, area_max, settings):
     """The rally search written plainly (every grid cell, every test, no pruning): the
     fast search must choose the same points."""
-    from ftlbo_mav.mission.fence import _densify, _segment_distance
+    from ftlbo_mav.mission.rally import _densify, _segment_distance
 
     inset = settings.corner_cut_m + settings.margin_m
     sep = settings.rally_separation_m
@@ -135,7 +135,7 @@ def _same_points(a, b):
 
 
 def test_the_rally_search_chooses_what_a_plain_search_of_every_cell_chooses():
-    from ftlbo_mav.mission.fence import rally_points_enu
+    from ftlbo_mav.mission.rally import rally_points_enu
 
     rng = np.random.default_rng(3)
     cases = []
