@@ -105,7 +105,7 @@ def growth(rows: list[dict], key: str) -> None:
     for before, row in zip(rows, rows[1:]):
         if before["seconds"] > 0 and before[key] > 0:
             row["growth"] = (f"x{row['seconds'] / before['seconds']:.1f} time for "
-                             f"x{row[key] / before[key]:g} {key}")
+                             f"x{row[key] / before[key]:.2g} {key}")
 
 
 def table(headers: list[str], rows: list[list]) -> str:
@@ -119,12 +119,34 @@ def table(headers: list[str], rows: list[list]) -> str:
 GOALS = {10: 1.5, 50: 5.0, 200: 30.0}
 
 
+def report(uav_rows: list[dict], obstacle_rows: list[dict]) -> str:
+    """The two tables as printed (also from a saved JSON: ``--show PATH``)."""
+    def show(rows, goals):
+        return [[r["uavs"], r["obstacles"], f"{r['side_m']:g} m", f"{r['seconds']:.2f}"]
+                + ([f"<= {GOALS[r['uavs']]:g}" if r["uavs"] in GOALS else ""] if goals else [])
+                + ["yes" if r["feasible"] else "no", r["files"], r.get("growth", "")]
+                for r in rows]
+
+    head = ["UAVs", "trees", "field", "plan s"]
+    tail = ["feasible", "files", "growth"]
+    return ("\nwhole `plan` process against the number of UAVs (20 trees)\n"
+            + table(head + ["goal s"] + tail, show(uav_rows, True))
+            + "\n\nagainst the number of trees (50 UAVs, 400 m field)\n"
+            + table(head + tail, show(obstacle_rows, False)))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="one repeat, fewer rows")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", default="scale-benchmark.json", help="output JSON path")
+    parser.add_argument("--show", metavar="JSON", help="print the tables of a saved run")
     args = parser.parse_args()
+    if args.show:
+        doc = json.loads(Path(args.show).read_text())
+        print(f"load average {doc['load']}; median of {doc['repeats']} runs")
+        print(report(doc["uavs"], doc["obstacles"]))
+        return
     repeats = 1 if args.quick else args.repeats
     load = "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
     print(f"load average {load}; {os.cpu_count()} cores; median of {repeats} runs")
@@ -146,17 +168,7 @@ def main() -> None:
         print(f"  {obstacles} obstacles: {row['seconds']:.2f} s", flush=True)
     growth([r for r in obstacle_rows if r["obstacles"]], "obstacles")
 
-    def show(rows):
-        return [[r["uavs"], r["obstacles"], f"{r['side_m']:g} m", f"{r['seconds']:.2f}",
-                 (f"<= {GOALS[r['uavs']]:g}" if r["uavs"] in GOALS and r is not None else ""),
-                 "yes" if r["feasible"] else "no", r["files"], r.get("growth", "")]
-                for r in rows]
-
-    headers = ["UAVs", "trees", "field", "plan s", "goal s", "feasible", "files", "growth"]
-    print("\nwhole `plan` process against the number of UAVs (20 trees)")
-    print(table(headers, show(uav_rows)))
-    print("\nagainst the number of trees (50 UAVs, 400 m field)")
-    print(table(headers, show(obstacle_rows)))
+    print(report(uav_rows, obstacle_rows))
     Path(args.json).write_text(json.dumps({"load": load, "repeats": repeats, "uavs": uav_rows,
                                            "obstacles": obstacle_rows}, indent=1))
 
