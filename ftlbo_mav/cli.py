@@ -21,6 +21,7 @@ from .planning.planner import AUTO_TARGET
 from .planning.planner import plan as plan_scenario
 from .scenario import AUTO, load_scenario
 from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINTS, MIN_STUDENTS
+from .scenario.reader import scenario_inputs
 
 
 class _Group(click.Group):
@@ -65,9 +66,12 @@ def _terminate(_signum, _frame) -> None:
 
 def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
     """``--formats geojson,kml,plan`` or ``all`` -> a tuple of FORMATS names."""
-    if not value:
+    if value is None:
         return ()
     names = [v.strip().lower() for v in value.split(",") if v.strip()]
+    if not names:
+        raise click.BadParameter(f"names no format; give a comma-separated list of "
+                                 f"{', '.join(FORMATS)}, or all (or leave --formats out)")
     if names == ["all"]:
         return FORMATS
     unknown = [n for n in names if n not in FORMATS]
@@ -136,7 +140,8 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
                    "UAV's path inside the area", err=True)
     # the output folder is checked (a temporary one made beside it) before any planning;
     # everything is moved into it at the end, or nothing (a failure, Ctrl-C)
-    with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json") as out:
+    with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json",
+                      inputs=scenario_inputs(scenario)) as out:
         result = _plan_with_progress(scn, seed=seed, iterations=iterations, students=students,
                                      waypoints=waypoints, algorithm=algorithm, quiet=quiet)
         files = plan_files(result, allow_infeasible=allow_infeasible, formats=formats,
@@ -147,8 +152,7 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
             files = {**files, **figure_files(result)}
         paths = out.write_all(files)
     click.echo(format_summary(result))
-    for path in paths:
-        click.echo(f"  wrote {path}")
+    _say_written(paths)
     if not result.feasible:
         for line in result.violations:
             click.echo(f"  violation: {line}", err=True)
@@ -156,6 +160,23 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
             click.echo("no mission files written: the best plan is infeasible "
                        "(see plan.json; --allow-infeasible writes them anyway)", err=True)
         sys.exit(1)
+
+
+def _say_written(paths, *, listed: int = 24) -> None:
+    """A line per file written; past ``listed`` (a large swarm), one line per kind."""
+    if len(paths) <= listed:
+        for path in paths:
+            click.echo(f"  wrote {path}")
+        return
+    kinds: dict[str, list] = {}
+    for path in paths:
+        kind = path.suffix if path.name.startswith("uav") else path.name
+        kinds.setdefault(kind, []).append(path)
+    folder = paths[0].parent
+    for kind, group in kinds.items():
+        what = (f"{len(group)} files uav1{kind} .. uav{len(group)}{kind}" if len(group) > 1
+                else group[0].name)
+        click.echo(f"  wrote {what} in {folder}")
 
 
 def _plan_with_progress(scn, *, seed, iterations, students, waypoints, algorithm, quiet):
@@ -306,8 +327,13 @@ def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, 
         raise click.BadParameter(
             f"unknown algorithm {bad[0]!r}; known: {', '.join(known)}" if bad
             else "give at least one algorithm", param_hint="--algorithms")
+    twice = sorted({a for a in names if names.count(a) > 1})
+    if twice:
+        raise click.BadParameter(f"{twice[0]!r} is given twice: name each algorithm once",
+                                 param_hint="--algorithms")
     scn = load_scenario(scenario)
-    with OutputFolder(out_dir) as out:  # checked before the runs, written after them
+    # checked before the runs, written after them
+    with OutputFolder(out_dir, inputs=scenario_inputs(scenario)) as out:
         with click.progressbar(length=runs * len(names), label="comparing", file=sys.stderr,
                                hidden=quiet) as bar:
             result = compare(scn, algorithms=names, runs=runs, processes=processes,

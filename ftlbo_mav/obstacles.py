@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import ScenarioError
+from .inputs import read_user_text
 
 if TYPE_CHECKING:
     from .geo import LocalFrame
@@ -98,10 +99,7 @@ def parse_obstacle_geojson(text: str, *, frame: LocalFrame, source: str) -> tupl
         raise ScenarioError(source, "", "must be a GeoJSON FeatureCollection")
     crs = doc.get("crs")
     if crs is not None:
-        name = crs.get("properties", {}).get("name") if isinstance(crs, dict) else None
-        if name not in _WGS84_CRS:
-            raise ScenarioError(
-                source, "crs", f"must be WGS84 longitude/latitude (CRS84), got {name!r}")
+        _check_crs(crs, source)
     if doc.get("type") == "FeatureCollection":
         features = doc.get("features")
         if not isinstance(features, list):
@@ -163,6 +161,27 @@ def parse_obstacle_geojson(text: str, *, frame: LocalFrame, source: str) -> tupl
     return tuple(cylinders)
 
 
+def _check_crs(crs, source: str) -> None:
+    """A GeoJSON 2008 ``crs`` member: ``{"type": "name", "properties": {"name": ...}}``
+    naming WGS84 longitude/latitude; anything else names what it got."""
+    want = "WGS84 longitude/latitude, as {\"type\": \"name\", \"properties\": {\"name\": " \
+           "\"urn:ogc:def:crs:OGC:1.3:CRS84\"}} (or leave crs out: RFC 7946 GeoJSON is WGS84)"
+    if isinstance(crs, str):
+        if crs in _WGS84_CRS:
+            return
+        raise ScenarioError(source, "crs", f"is the string {crs!r}: must be {want}")
+    if not isinstance(crs, dict):
+        raise ScenarioError(source, "crs", f"must be an object naming {want}, got {crs!r}")
+    props = crs.get("properties")
+    if not isinstance(props, dict):
+        raise ScenarioError(source, "crs.properties",
+                            f"must be an object with a name, got {props!r}: crs must be {want}")
+    name = props.get("name")
+    if name not in _WGS84_CRS:
+        raise ScenarioError(source, "crs", f"must be {want}, got the name {name!r} (reproject "
+                                           "the layer to EPSG:4326)")
+
+
 def _read_position(value, error, what: str) -> tuple[float, float]:
     if (
         not isinstance(value, list)
@@ -179,10 +198,5 @@ def _read_position(value, error, what: str) -> tuple[float, float]:
 def read_obstacle_geojson(path: str | Path, *, frame: LocalFrame) -> tuple[Cylinder, ...]:
     """Read a GeoJSON obstacle file; see :func:`parse_obstacle_geojson`."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(str(path), "", "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(str(path), "", f"cannot read: {exc}") from None
+    text = read_user_text(path, error=lambda problem: ScenarioError(str(path), "", problem))
     return parse_obstacle_geojson(text, frame=frame, source=str(path))

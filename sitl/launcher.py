@@ -15,6 +15,7 @@ import shutil
 import signal
 import subprocess
 import tempfile
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Self
@@ -62,6 +63,11 @@ class SitlSwarm:
         env_defaults = os.environ.get("ARDUPILOT_SITL_DEFAULTS", "")
         self.defaults = [Path(p) for p in defaults] + [
             Path(p) for p in env_defaults.split(",") if p]
+        for path in self.defaults:  # SITL would wait, not say, on a defaults file it lacks
+            if not path.is_file():
+                where = "--defaults" if path in [Path(p) for p in defaults] else \
+                    "ARDUPILOT_SITL_DEFAULTS"
+                raise BadInput(f"{path}: no such defaults file ({where})")
         self.model, self.speedup = model, speedup
         self.ready_timeout_s = ready_timeout_s
         self._workdir = Path(workdir) if workdir else None
@@ -88,11 +94,7 @@ class SitlSwarm:
                         stdin=subprocess.DEVNULL, start_new_session=True))
                 finally:
                     log.close()
-            try:
-                links = open_links(self.urls, connect_timeout_s=30.0)
-            except LinkError:
-                self.check_running()  # a SITL that died says so, not "cannot connect"
-                raise
+            links = self._connect(timeout_s=30.0)
             try:
                 wait_ready(links, list(range(1, len(self.homes) + 1)),
                            timeout_s=self.ready_timeout_s)
@@ -104,6 +106,25 @@ class SitlSwarm:
             self.__exit__(None, None, None)
             raise
         return self
+
+    def _connect(self, *, timeout_s: float) -> list:
+        """Links to every instance, tried for ``timeout_s``; an instance that has exited
+        meanwhile is named at once (a binary that fails to start), not after the wait."""
+        grace = time.monotonic() + 0.3  # a binary that cannot start exits within this
+        for p in self.processes:
+            try:
+                p.wait(timeout=max(0.0, grace - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                pass
+        deadline = time.monotonic() + timeout_s
+        while True:
+            self.check_running()
+            try:
+                return open_links(self.urls, connect_timeout_s=1.0)
+            except LinkError:
+                if time.monotonic() >= deadline:
+                    self.check_running()  # a SITL that died says so, not "cannot connect"
+                    raise
 
     def check_running(self) -> None:
         """:class:`LinkError` naming every instance whose process has exited."""

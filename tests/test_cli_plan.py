@@ -86,3 +86,18 @@ def test_shipped_example_missions_match_their_plan(example_path):
         flown = [(i.lat_deg, i.lon_deg, i.alt_m) for i in items if i.command == 16][1:]
         listed = [(p["lat"], p["lon"], p["alt"]) for p in uav["waypoints"]]
         assert np.allclose(flown, listed, atol=1e-6)
+
+
+def test_a_large_swarm_says_what_it_wrote_in_a_line_per_kind(capsys, tmp_path):
+    from pathlib import Path
+
+    from ftlbo_mav.cli import _say_written
+
+    paths = [tmp_path / f"uav{n}{s}" for s in (".waypoints", ".fence") for n in range(1, 51)]
+    _say_written(paths + [tmp_path / "plan.json"])
+    assert capsys.readouterr().out.splitlines() == [
+        f"  wrote 50 files uav1.waypoints .. uav50.waypoints in {tmp_path}",
+        f"  wrote 50 files uav1.fence .. uav50.fence in {tmp_path}",
+        f"  wrote plan.json in {tmp_path}"]
+    _say_written([Path("a/uav1.waypoints")])
+    assert capsys.readouterr().out == "  wrote a/uav1.waypoints\n"

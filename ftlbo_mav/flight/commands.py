@@ -122,12 +122,27 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
         click.echo(f"formation keeper off: {keeper['off_reason']}")
     elif keeper and keeper["enabled"]:
         waited = {n: v for n, v in keeper["vehicles"].items() if v["pauses"]}
-        click.echo("formation keeper: " + ("; ".join(
-            f"{n} waited {v['pauses']}x ({v['seconds_paused']:.1f} s paused, largest lead "
-            f"{v['largest_lead_m']:+.2f} m)" for n, v in waited.items())
-            if waited else "no vehicle needed to wait") + (
+        click.echo("formation keeper: " + (_keeper_line(waited) if waited
+                                           else "no vehicle needed to wait") + (
             f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else ""))
     click.echo(f"flight log, summary and report in {out_dir}/")
+
+
+def _keeper_line(waited: dict, *, listed: int = 6) -> str:
+    """Each waiting vehicle's pauses; past ``listed`` vehicles, the ranges and the ones
+    that waited longest (summary.json keeps every vehicle)."""
+    def one(n, v):
+        return (f"{n} waited {v['pauses']}x ({v['seconds_paused']:.1f} s paused, largest "
+                f"lead {v['largest_lead_m']:+.2f} m)")
+
+    if len(waited) <= listed:
+        return "; ".join(one(n, v) for n, v in waited.items())
+    pauses = [v["pauses"] for v in waited.values()]
+    paused = [v["seconds_paused"] for v in waited.values()]
+    longest = sorted(waited.items(), key=lambda nv: -nv[1]["seconds_paused"])[:3]
+    return (f"{len(waited)} vehicles waited {min(pauses)}-{max(pauses)}x "
+            f"({min(paused):.1f}-{max(paused):.1f} s paused); longest: "
+            + "; ".join(one(n, v) for n, v in longest) + " (every vehicle in summary.json)")
 
 
 @click.command(name="fly")

@@ -7,6 +7,7 @@ renders a few lines per vehicle plus one for the group.
 
 from __future__ import annotations
 
+import shutil
 import threading
 import time
 
@@ -45,27 +46,66 @@ class Monitor:
                                          lon_deg=[s.lon_deg for s in st],
                                          alt_m=[s.alt_m for s in st])
 
-    def lines(self) -> list[str]:
-        """The live view: one line per vehicle, one for the group."""
-        out = []
+    def lines(self, max_lines: int | None = None) -> list[str]:
+        """The live view: one line per vehicle, one for the group. With more vehicles than
+        ``max_lines`` allows, a summary instead (:meth:`_summary`): the states counted,
+        and the vehicles that need a look (no heartbeat, farthest from their slots)."""
         pos = self.positions()
         slots = slot_errors(pos, self.planned.offsets) if pos is not None else None
-        for n, v in enumerate(self.vehicles):
-            s = v.status
-            total = len(self.planned.missions[n]) - 1 if self.planned else None
-            item = "-" if s.seq < 0 else f"{s.seq}/{total}" if total else str(s.seq)
-            slot = f"slot {slots[n]:5.2f} m" if slots is not None else ""
-            age = time.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
-            stale = "  NO HEARTBEAT" if age > 3.0 else ""
-            out.append(f"{v.name:>5} sysid {v.sysid:<3} {s.mode:<9} "
-                       f"{'ARMED' if s.armed else 'disarmed':<8} alt {s.alt_m:5.1f} m  "
-                       f"item {item:<6} {slot}{stale}")
+        if max_lines is not None and len(self.vehicles) + 1 > max_lines:
+            return self._summary(pos, slots, max(max_lines, 5))
+        out = [self._vehicle_line(n, slots) for n in range(len(self.vehicles))]
         if pos is not None:
-            err = float(np.sqrt(np.mean(slots**2)))
-            sep = float(min_separation(pos))
-            clear = float(min_clearance(pos, self.planned.centres, self.planned.radii))
-            out.append(f"formation error {err:.2f} m RMS   smallest separation {sep:.2f} m   "
-                       f"smallest clearance {clear:.2f} m")
+            out.append(self._group_line(pos, slots))
+        return out
+
+    def _vehicle_line(self, n: int, slots) -> str:
+        v = self.vehicles[n]
+        s = v.status
+        total = len(self.planned.missions[n]) - 1 if self.planned else None
+        item = "-" if s.seq < 0 else f"{s.seq}/{total}" if total else str(s.seq)
+        slot = f"slot {slots[n]:5.2f} m" if slots is not None else ""
+        age = time.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
+        stale = "  NO HEARTBEAT" if age > 3.0 else ""
+        return (f"{v.name:>5} sysid {v.sysid:<3} {s.mode:<9} "
+                f"{'ARMED' if s.armed else 'disarmed':<8} alt {s.alt_m:5.1f} m  "
+                f"item {item:<6} {slot}{stale}")
+
+    def _group_line(self, pos: np.ndarray, slots: np.ndarray) -> str:
+        err = float(np.sqrt(np.mean(slots**2)))
+        sep = float(min_separation(pos))
+        clear = float(min_clearance(pos, self.planned.centres, self.planned.radii))
+        return (f"formation error {err:.2f} m RMS   smallest separation {sep:.2f} m   "
+                f"smallest clearance {clear:.2f} m")
+
+    def _summary(self, pos, slots, max_lines: int) -> list[str]:
+        """At most ``max_lines`` lines for a swarm too large for a line each."""
+        st = [v.status for v in self.vehicles]
+        now = time.monotonic()
+        modes: dict[str, int] = {}
+        for s in st:
+            modes[s.mode] = modes.get(s.mode, 0) + 1
+        armed = sum(bool(s.armed) for s in st)
+        alts = [s.alt_m for s in st if s.alt_m is not None]
+        items = [s.seq for s in st if s.seq >= 0]
+        head = (f"{len(st)} vehicles: " + ", ".join(f"{m} {c}" for m, c in sorted(modes.items()))
+                + f"; {armed} armed"
+                + (f"; alt {min(alts):.1f}..{max(alts):.1f} m" if alts else "")
+                + (f"; items {min(items)}..{max(items)}" if items else ""))
+        out = [head]
+        stale = [v.name for v, s in zip(self.vehicles, st)
+                 if not s.heartbeat_t or now - s.heartbeat_t > 3.0]
+        if stale:
+            shown = ", ".join(stale[:8]) + (f" and {len(stale) - 8} more" if len(stale) > 8
+                                            else "")
+            out.append(f"NO HEARTBEAT: {shown}")
+        if slots is not None:  # the vehicles farthest from their slots, a line each
+            room = max_lines - len(out) - 2
+            if room >= 1:
+                worst = np.argsort(-slots, kind="stable")[:room]
+                out.append(f"farthest from their slots ({len(worst)} of {len(st)}):")
+                out += [self._vehicle_line(int(n), slots) for n in worst]
+            out.append(self._group_line(pos, slots))
         return out
 
 
@@ -95,7 +135,9 @@ class LiveView:
         if not force and now < self._next:
             return
         self._next = now + self.period_s
-        lines = self.monitor.lines()
+        # a terminal shows what fits on its screen; a log gets every vehicle
+        height = shutil.get_terminal_size((80, 24)).lines - 1 if self.tty else None
+        lines = self.monitor.lines(max_lines=height)
         self._clear()
         self.stream.write("\n".join(lines) + "\n")
         self.stream.flush()

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
-from ..mission.export import check_plan_folder, read_plan_json
+from ..mission.export import check_plan_folder, plan_from_document, read_plan_json
 from ..mission.fence_files import FenceSet, read_fence_set
 from ..mission.items import CMD_NAV_TAKEOFF, MissionItem
 from ..mission.waypoints import read_waypoints
@@ -59,6 +59,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
     folder = Path(folder)
     try:
         doc, doc_path = read_plan_json(folder)
+        plan_from_document(doc, source=doc_path)  # its values checked, as `plot` does
     except MissionFileError as exc:
         raise PlanFolderError(str(exc)) from None
     try:

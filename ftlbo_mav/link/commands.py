@@ -6,6 +6,7 @@ Registered on the main group in :mod:`ftlbo_mav.cli` (the emulator's ``sim`` com
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 import threading
@@ -38,6 +39,20 @@ from .swarm import Assignment, ProgressEvent, upload_swarm
 def _urls(values: tuple[str, ...]) -> list[str]:
     """``--connect`` values; one value may also hold several, separated by spaces."""
     return [u for v in values for u in v.split()]
+
+
+def _check_output_file(path: Path) -> None:
+    """:class:`BadInput` when ``path`` cannot be a file written here: it is a folder, a
+    device or a FIFO, or its folder is missing or a file."""
+    if path.exists() and not path.is_file():
+        raise BadInput(f"{path}: not a regular file (a folder, a device or a FIFO); give a "
+                       ".waypoints file to write; no vehicle was contacted")
+    parent = path.parent
+    if not parent.is_dir():
+        raise BadInput(f"{path}: its folder {parent} does not exist; no vehicle was contacted")
+    if not os.access(parent, os.W_OK):
+        raise BadInput(f"{path}: its folder {parent} is not writable; no vehicle was "
+                       "contacted")
 
 
 def _timing(timeout: float, retries: int, ready_timeout: float) -> Timing:
@@ -202,6 +217,7 @@ def download(sysid, connect, output, no_fence, timeout, retries, ready_timeout,
     """Save the mission a vehicle holds as a Mission Planner .waypoints file, and its
     fence, rally points and fence parameters beside it (.fence, .rally, .parm)."""
     key = load_key(signing_key) if signing_key else None
+    _check_output_file(output)  # before the vehicle: a download with nowhere to go is lost
     url = connect or default_urls_for([sysid])[0]
     links = open_links([url], signing_key=key, connect_timeout_s=discover_timeout)
     try:

@@ -9,6 +9,7 @@ router's UDP output). :func:`discover` finds which link each requested id speaks
 
 from __future__ import annotations
 
+import os
 import queue
 import re
 import threading
@@ -83,6 +84,7 @@ def check_url(url: str, *, option: str = "--connect") -> str:
     Serial ports and files pass unchanged."""
     m = _NETWORK_URL.fullmatch(url.strip())
     if not m:
+        _check_other_url(url, option)
         return url
     kind, host, port = m.groups()
     listens = kind in ("tcpin", "udpin", "udp", "wsserver")
@@ -92,6 +94,36 @@ def check_url(url: str, *, option: str = "--connect") -> str:
         raise BadInput(f"{option} {url}: port {port!r} is not a port number "
                        f"({0 if listens else 1}..65535)")
     return url
+
+
+_EXAMPLES = ("tcp:HOST:PORT, udpin:0.0.0.0:PORT, udpout:HOST:PORT or a serial device "
+             "with its baud rate (/dev/ttyUSB0,57600)")
+_SERIAL = re.compile(r"(/dev/[^,:]+|COM\d+)(,\d+)?")
+
+
+def _check_other_url(url: str, option: str) -> None:
+    """What is not ``KIND:HOST:PORT``: a serial device, or what pymavlink would read as
+    something else (a bare ``HOST:PORT`` is UDP to it; an existing file is a log to
+    replay, or under ``/bin/`` a program to run), named as the mistake it is."""
+    text = url.strip()
+    if _SERIAL.fullmatch(text):
+        return
+    scheme, colon, rest = text.partition(":")
+    if colon:
+        if scheme and ":" not in rest:
+            if not rest.isdigit():
+                raise BadInput(f"{option} {url}: {scheme!r} is not a kind of link (tcp, "
+                               f"udpin, udpout, ...) and {rest!r} not a port; expected "
+                               f"{_EXAMPLES}")
+            if not 1 <= int(rest) <= 65535:
+                raise BadInput(f"{option} {url}: port {rest} is not a port number (1..65535)")
+            return  # HOST:PORT, UDP as pymavlink reads it
+        raise BadInput(f"{option} {url}: not a connection string; expected {_EXAMPLES}")
+    if os.path.exists(text) and not text.startswith("/dev/"):
+        raise BadInput(f"{option} {url}: is a file, not a link to a vehicle; expected "
+                       f"{_EXAMPLES}")
+    if not text.startswith("/dev/") and not re.fullmatch(r"COM\d+", text):
+        raise BadInput(f"{option} {url}: not a connection string; expected {_EXAMPLES}")
 
 
 def default_urls(count: int) -> list[str]:

@@ -33,12 +33,11 @@ def key_from_text(text: str) -> bytes:
 
 
 def load_key(path: str | Path) -> bytes:
+    from ..inputs import read_user_text
+
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SigningKeyError(f"{path}: cannot read the signing key: "
-                              f"{getattr(exc, 'strerror', None) or exc}") from None
+    text = read_user_text(path, limit_bytes=1 << 20, error=lambda problem: SigningKeyError(
+        f"{path}: cannot read the signing key: {problem}"))
     try:
         return key_from_text(text)
     except ValueError:

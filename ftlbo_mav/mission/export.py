@@ -18,10 +18,12 @@ import numpy as np
 
 from ..ardupilot.navigation import vehicle_params
 from ..errors import MissionFileError
+from ..inputs import read_user_text
 from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
 from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
+from ..scenario.model import MAX_ALTITUDE_M, MAX_OFFSET_M, MAX_RADIUS_M
 from .fence import UavFence, plan_fences
 from .files import OutputFolder, digest, read_mission_text
 from .geodetic import GeodeticPlan, geodetic_view
@@ -411,6 +413,7 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
             f"{source}: not a plan.json this version of ftlbo-mav can read (missing or bad "
             f"{exc}); plan again with `ftlbo-mav plan`"
         ) from None
+    _check_plan_values(scenario, settings, legs, doc, source)
     ends = sum(leg.waypoints + 1 for leg in legs) + 1
     if len(centroid_enu) != ends or uav_paths.shape != (len(uavs), len(centroid_enu), 3):
         raise MissionFileError(f"{source}: the paths do not have the legs' waypoints + via "
@@ -445,6 +448,59 @@ def _holds(doc: dict, points: int, source: str) -> np.ndarray | None:
     return np.array(holds, float)
 
 
+def _check_plan_values(scenario: Scenario, settings: PlannerSettings, legs, doc: dict,
+                       source: str) -> None:
+    """The values of a plan.json that a scenario file could not have held: every latitude
+    and longitude a position, the area with an extent, the band, clearance and radii
+    positive, offsets finite, the waypoint count the legs'. :class:`MissionFileError`
+    naming the field; a plan folder edited by hand is read as carefully as a scenario."""
+
+    def bad(field: str, problem: str) -> MissionFileError:
+        return MissionFileError(f"{source}: {field}: {problem}; plan again with "
+                                "`ftlbo-mav plan`")
+
+    def position(field: str, lat, lon, alt=0.0) -> None:
+        if not all(math.isfinite(v) for v in (lat, lon, alt)):
+            raise bad(field, f"({lat}, {lon}, {alt}) is not a finite position")
+        if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+            raise bad(field, f"latitude {lat:g}, longitude {lon:g} is not a position on Earth")
+        if abs(alt) > MAX_ALTITUDE_M:
+            raise bad(field, f"altitude {alt:g} m is beyond {MAX_ALTITUDE_M:g} m")
+
+    a, b = scenario.corner_a, scenario.corner_b
+    position("area.corner_a", a.lat_deg, a.lon_deg)
+    position("area.corner_b", b.lat_deg, b.lon_deg)
+    if a.lat_deg == b.lat_deg or a.lon_deg == b.lon_deg:
+        raise bad("area", "the corners must differ in both latitude and longitude (the area "
+                          "has no extent)")
+    lo, hi = scenario.min_altitude_m, scenario.max_altitude_m
+    if not (math.isfinite(lo) and math.isfinite(hi) and 0.0 < lo < hi <= MAX_ALTITUDE_M):
+        raise bad("area", f"the altitude band {lo:g}..{hi:g} m is not 0 < min < max")
+    if not (math.isfinite(scenario.clearance_m) and scenario.clearance_m >= 0.0):
+        raise bad("clearance", f"{scenario.clearance_m:g} m must be >= 0")
+    for i, o in enumerate(scenario.obstacles):
+        position(f"obstacles[{i}]", o.lat_deg, o.lon_deg)
+        if not (math.isfinite(o.radius_m) and 0.0 < o.radius_m <= MAX_RADIUS_M):
+            raise bad(f"obstacles[{i}].radius", f"{o.radius_m:g} m must be > 0")
+    for i, row in enumerate(scenario.offsets):
+        if len(row) != 3 or not all(math.isfinite(v) and abs(v) <= MAX_OFFSET_M for v in row):
+            raise bad(f"uavs[{i}].offset", f"{list(row)} is not [east, north, up] in metres "
+                                           f"within {MAX_OFFSET_M:g}")
+    for i, v in enumerate(scenario.via):
+        position(f"via[{i}]", v.lat_deg, v.lon_deg, v.alt_m)
+    for i, p in enumerate(doc["centroid"]):
+        position(f"centroid[{i}]", float(p["lat"]), float(p["lon"]), float(p["alt"]))
+    for n, u in enumerate(doc["uavs"]):
+        for i, p in enumerate(u["waypoints"]):
+            position(f"uavs[{n}].waypoints[{i}]", float(p["lat"]), float(p["lon"]),
+                     float(p["alt"]))
+    if settings.waypoints != AUTO:
+        for k, leg in enumerate(legs):
+            if leg.waypoints != settings.waypoints:
+                raise bad(f"legs[{k}].waypoints", f"{leg.waypoints} differs from the plan's "
+                                                  f"waypoints = {settings.waypoints}")
+
+
 def _cost_terms(doc: dict) -> CostTerms:
     return CostTerms(*(_infinite(doc[k]) for k in CostTerms._fields))
 
@@ -464,11 +520,12 @@ def read_plan_json(folder: str | Path) -> tuple[dict, str]:
     def not_finite(name: str):
         raise ValueError(f"{name} is not a finite number")
 
+    if not path.exists():
+        raise MissionFileError(f"{path}: no such file (run `ftlbo-mav plan` first)")
+    text = read_user_text(path, error=lambda problem: MissionFileError(f"{path}: {problem}"))
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"), parse_constant=not_finite)
-    except FileNotFoundError:
-        raise MissionFileError(f"{path}: no such file (run `ftlbo-mav plan` first)") from None
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:
+        doc = json.loads(text, parse_constant=not_finite)
+    except (ValueError, RecursionError) as exc:
         raise MissionFileError(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}"
                                ) from None
     if not isinstance(doc, dict):

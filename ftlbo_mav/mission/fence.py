@@ -27,7 +27,7 @@ the area by ``corner_cut_m + margin_m``, at least ``rally_separation_m`` from th
 UAVs' homes and rally points and from their return lines to their rally points (the
 straight lines RTL flies from each point of their paths that is nearer their rally point
 than their home), while its own such lines keep that distance from the other UAVs'
-homes and rally points (:func:`rally_points_enu`). Its altitude is the goal's, in whole
+homes and rally points (:func:`~.rally.rally_points_enu`). Its altitude is the goal's, in whole
 metres (AP_Rally keeps an int16 of metres).
 """
 
@@ -48,6 +48,7 @@ from .items import (
     FRAME_GLOBAL_RELATIVE_ALT,
     MissionItem,
 )
+from .rally import rally_points_enu
 
 if TYPE_CHECKING:
     from ..planning.planner import Plan
@@ -100,77 +101,6 @@ def fence_params(max_altitude_m: float, settings: FenceSettings) -> dict[str, fl
             "FENCE_MARGIN": settings.margin_m}
 
 
-def _segment_distance(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distances from points ``q`` (..., 2) to segments ``a``-``b`` (..., 2), broadcast."""
-    ab = b - a
-    denom = np.maximum((ab * ab).sum(-1), 1e-12)
-    t = np.clip(((q - a) * ab).sum(-1) / denom, 0.0, 1.0)
-    return np.linalg.norm(a + t[..., None] * ab - q, axis=-1)
-
-
-def _densify(path: np.ndarray, step_m: float) -> np.ndarray:
-    """Points along a polyline ``(n, 2)`` at most ``step_m`` apart, ends included."""
-    out = [path[:1]]
-    for a, b in zip(path[:-1], path[1:]):
-        k = max(1, math.ceil(float(np.linalg.norm(b - a)) / step_m))
-        out.append(a + (b - a) * (np.arange(1, k + 1) / k)[:, None])
-    return np.concatenate(out)
-
-
-def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarray,
-                     clearance_m: float, area_min: np.ndarray, area_max: np.ndarray,
-                     settings: FenceSettings) -> list[np.ndarray | None]:
-    """One rally point (east, north) per UAV, or None where none fits (module notes).
-
-    Chosen in UAV order, each the candidate nearest its goal that is clear of the
-    obstacles, inside the area, ``rally_separation_m`` from the homes and rally points
-    of the others, from the others' return lines to their rally points, and whose own
-    return lines keep that distance from the others' homes and rally points. A return
-    line to a rally point: from each point of the UAV's path nearer to its rally point
-    than to its home (RTL flies to the nearer, RALLY_INCL_HOME 1), straight to it.
-    ``paths`` (N, n, 3) ENU metres, row 0 each UAV's home; ``centres`` (K, 2), ``radii``
-    (K,); ``area_min``/``area_max`` (2,) the area's ENU bounding box."""
-    inset = settings.corner_cut_m + settings.margin_m
-    sep = settings.rally_separation_m
-    xs = np.arange(area_min[0] + inset, area_max[0] - inset + 1e-9, settings.grid_m)
-    ys = np.arange(area_min[1] + inset, area_max[1] - inset + 1e-9, settings.grid_m)
-    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-    if len(centres):
-        d = np.linalg.norm(grid[:, None, :] - centres[None, :, :2], axis=2)
-        grid = grid[np.all(d >= radii[None, :] + clearance_m, axis=1)]
-    flat = [_densify(p[:, :2], 1.0) for p in paths]
-    homes = paths[:, 0, :2]
-    chosen: list[np.ndarray | None] = [None] * len(paths)
-    for k in range(len(paths)):
-        goal = paths[k, -1, :2]
-        cand = grid[np.argsort(np.linalg.norm(grid - goal, axis=1), kind="stable")]
-        own = flat[k]
-        own_home = np.linalg.norm(own - homes[k], axis=1)  # (P,)
-        for chunk in np.array_split(cand, max(1, len(cand) // 512)):
-            ok = np.ones(len(chunk), bool)
-            # this UAV's lines to the candidate: from the path points nearer to it
-            to_cand = np.linalg.norm(own[None] - chunk[:, None], axis=2) < own_home[None]
-            for j in range(len(paths)):
-                if j == k:
-                    continue
-                places = [homes[j]] + ([chosen[j]] if chosen[j] is not None else [])
-                for q in places:
-                    ok &= np.linalg.norm(chunk - q, axis=1) >= sep
-                    d = _segment_distance(q, own[None], chunk[:, None])  # (C, P)
-                    ok &= np.where(to_cand, d, np.inf).min(axis=1) >= sep
-                if chosen[j] is not None:  # the other's lines to its rally point
-                    pts = flat[j]
-                    use = (np.linalg.norm(pts - chosen[j], axis=1)
-                           < np.linalg.norm(pts - homes[j], axis=1))
-                    if use.any():
-                        d = _segment_distance(chunk[:, None], pts[use][None], chosen[j])
-                        ok &= d.min(axis=1) >= sep
-            if ok.any():
-                chosen[k] = chunk[int(np.argmax(ok))]
-                break
-    return chosen
-
-
 def _predicted_cut(plan: Plan, lo: np.ndarray, hi: np.ndarray,
                    settings: FenceSettings) -> float:
     """How far outside the area the flown path may go: the predicted paths' furthest
@@ -194,7 +124,7 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
     s = plan.scenario
     frame = s.frame
     centres, radii = s.obstacles_enu()
-    centres = np.asarray(centres, float).reshape(len(radii), -1)[:, :2]
+    centres = np.asarray(centres, float).reshape(-1, 2)  # (K, 2), K = 0 included
     centres = np.column_stack([centres, np.zeros(len(centres))])
     radii = np.asarray(radii, float).reshape(-1)
     corners = frame.to_enu(lat_deg=[s.corner_a.lat_deg, s.corner_b.lat_deg],

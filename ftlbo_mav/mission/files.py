@@ -104,9 +104,11 @@ class OutputFolder:
     """
 
     def __init__(self, target: str | Path, *, replaces: Iterable[str] = (),
-                 last: str | None = None):
+                 last: str | None = None, inputs: Iterable[str | Path] = ()):
         self.target = Path(target)
         self.replaces = [re.compile(p) for p in replaces]
+        # the files this command reads: never overwritten, never removed as an old output
+        self.inputs = [Path(p) for p in inputs if Path(p).is_file()]
         self.last = last
         self.names: list[str] = []
         self._tmp: Path | None = None
@@ -117,6 +119,13 @@ class OutputFolder:
         try:
             if t.exists() and not t.is_dir():
                 raise OutputError(f"{t}: is a file, not a folder; nothing was written")
+            for path in self.inputs:
+                if (t.is_dir() and os.path.samefile(path.parent, t)
+                        and any(p.fullmatch(path.name) for p in self.replaces)):
+                    raise OutputError(f"{path}: an input of this command, in the output "
+                                      f"folder {t} under a name the command writes; give "
+                                      "another output folder (or rename the input); "
+                                      "nothing was written")
             self._created = _make_parents(t.parent)
             self._tmp = Path(tempfile.mkdtemp(prefix=f".{t.name[:100]}.", suffix=".tmp",
                                               dir=t.parent))
@@ -134,6 +143,11 @@ class OutputFolder:
         if Path(name).name != name:
             raise ValueError(f"{name!r}: a file name, not a path")
         path = self._tmp / name
+        final = self.target / name
+        for source in self.inputs:
+            if final.exists() and os.path.samefile(final, source):
+                raise OutputError(f"{final}: is an input of this command; give another "
+                                  "output folder; nothing was written")
         try:
             if isinstance(data, bytes):
                 path.write_bytes(data)
@@ -209,11 +223,7 @@ def digest(text: str | bytes) -> str:
 def read_mission_text(path: str | Path) -> str:
     """A mission file's text; :class:`MissionFileError` naming the file when unreadable."""
     from ..errors import MissionFileError
+    from ..inputs import read_user_text
 
     path = Path(path)
-    try:
-        return path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise MissionFileError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise MissionFileError(f"{path}: not a text file") from None
+    return read_user_text(path, error=lambda problem: MissionFileError(f"{path}: {problem}"))

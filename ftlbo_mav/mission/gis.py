@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -200,10 +201,15 @@ def _kml_coords(rows) -> str:
     return " ".join(f"{lon:.9f},{lat:.9f},{alt:.4f}" for lat, lon, alt in rows)
 
 
+# What XML 1.0 cannot hold at all, escaped or not (its Char production): C0 controls
+# but tab, newline and return; surrogates; U+FFFE and U+FFFF
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
 def _sub(parent: ET.Element, tag: str, text: str | None = None, **attrib: str) -> ET.Element:
     el = ET.SubElement(parent, f"{{{KML_NS}}}{tag}", attrib)
     if text is not None:
-        el.text = text
+        el.text = _NOT_XML.sub("\ufffd", text)  # a name's control character: well-formed
     return el
 
 

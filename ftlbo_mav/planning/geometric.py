@@ -93,7 +93,11 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     """One disc per (UAV, cylinder): centre ``c_k - offset_n``, radius ``R_k + clearance``.
 
     ``margin`` (metres) is added to every radius. Duplicates (UAVs stacked at one
-    horizontal offset) and discs inside another disc are dropped: they change nothing.
+    horizontal offset), discs inside another disc and discs whose whole circle lies inside
+    other discs or outside the centroid's rectangle are dropped: they change nothing (a
+    path from outside can enter such a disc only across its circle, through another
+    disc). In a formation of many UAVs that leaves the discs on the rim of each
+    cylinder's blob, which keeps the graph's bitangents few.
     """
     N, K = problem.uav_count, len(problem.radii)
     if K == 0:
@@ -103,14 +107,87 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     radii = np.tile(problem.radii + margin, N)
     cylinder = np.tile(np.arange(K), N)
     uav = np.repeat(np.arange(N), K)
-    dist = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
+    i, j = _touching_pairs(centres, radii)
+    dist = np.hypot(*(centres[j] - centres[i]).T)
     # disc i inside disc j (for equal discs keep the first one)
-    inside = dist + radii[:, None] <= radii[None, :] + _TOL
-    np.fill_diagonal(inside, False)
-    equal = np.triu(inside & inside.T, 1)  # equal discs: drop the later one only
-    drop = (inside & ~inside.T).any(axis=1) | equal.any(axis=0)
+    inside = dist + radii[i] <= radii[j] + _TOL
+    both = dist + radii[j] <= radii[i] + _TOL  # and j inside i: equal discs
+    drop = np.zeros(len(radii), bool)
+    drop[i[inside & ~both]] = True
+    drop[i[inside & both & (i > j)]] = True
     keep = ~drop
-    return Discs(centres[keep], radii[keep], cylinder[keep], uav[keep])
+    discs = Discs(centres[keep], radii[keep], cylinder[keep], uav[keep])
+    lower, upper = centroid_rectangle(problem)
+    covered = np.array([_circle_covered(iv) for iv in _forbidden_intervals(discs, lower,
+                                                                            upper)], bool)
+    if covered.any() and not covered.all():
+        discs = Discs(discs.centres[~covered], discs.radii[~covered],
+                      discs.cylinder[~covered], discs.uav[~covered])
+    return discs
+
+
+def _touching_pairs(centres: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every ordered pair ``(i, j)``, ``i != j``, of discs ``centres (C, 2)``, ``radii (C,)``
+    that touch or overlap (``d <= r_i + r_j``, a hair wider), found through a sort by
+    east, not a ``(C, C)`` matrix."""
+    C = len(radii)
+    if C < 2:
+        return np.zeros(0, int), np.zeros(0, int)
+    order = np.argsort(centres[:, 0], kind="stable")
+    xs = centres[order, 0]
+    reach = radii[order] + radii.max() + 1e-6
+    lo = np.searchsorted(xs, xs - reach, side="left")
+    hi = np.searchsorted(xs, xs + reach, side="right")
+    counts = hi - lo
+    a = np.repeat(np.arange(C), counts)
+    b = lo[a] + (np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts))
+    i, j = order[a], order[b]
+    keep = i != j
+    i, j = i[keep], j[keep]
+    d = np.hypot(*(centres[j] - centres[i]).T)
+    near = d <= radii[i] + radii[j] + 1e-6
+    return i[near], j[near]
+
+
+def _neighbours(discs: Discs, count: int = 6) -> np.ndarray:
+    """Per disc, up to ``count`` of the discs that touch it, nearest first, then -1:
+    ``(C + 1, count)``, the last row (index -1) all -1."""
+    C = len(discs.radii)
+    out = np.full((C + 1, count), -1)
+    i, j = _touching_pairs(discs.centres, discs.radii)
+    if not len(i):
+        return out
+    d = np.hypot(*(discs.centres[j] - discs.centres[i]).T)
+    order = np.lexsort((d, i))
+    i, j = i[order], j[order]
+    start = np.searchsorted(i, i, side="left")
+    rank = np.arange(len(i)) - start
+    keep = rank < count
+    out[i[keep], rank[keep]] = j[keep]
+    return out
+
+
+def _circle_covered(intervals) -> bool:
+    """Whether the open angular intervals ``(centre, half_width)`` cover the whole
+    circle, each point strictly inside one (overlaps of more than 1e-9 rad)."""
+    if not intervals:
+        return False
+    spans = []
+    for centre, half in intervals:
+        if half >= math.pi:
+            return True
+        a = (centre - half) % _TWO_PI
+        spans.append((a, a + 2 * half))
+    spans.sort()
+    # walk once around from the first span's start, unwrapping the spans that wrap
+    begin, reach = spans[0][0], spans[0][1]
+    for a, b in spans[1:] + [(a + _TWO_PI, b + _TWO_PI) for a, b in spans]:
+        if a >= reach - 1e-9:
+            return False
+        reach = max(reach, b)
+        if reach > begin + _TWO_PI + 1e-9:
+            return True
+    return False
 
 
 def centroid_rectangle(problem: PlanningProblem) -> tuple[np.ndarray, np.ndarray]:
@@ -119,11 +196,30 @@ def centroid_rectangle(problem: PlanningProblem) -> tuple[np.ndarray, np.ndarray
     return lower[0, :2], upper[0, :2]
 
 
-def segments_clear(p: np.ndarray, q: np.ndarray, discs: Discs) -> np.ndarray:
-    """For segments ``p -> q`` (each ``(E, 2)``): True where no disc interior is entered."""
+def segments_clear(p: np.ndarray, q: np.ndarray, discs: Discs, *,
+                   first: np.ndarray | None = None) -> np.ndarray:
+    """For segments ``p -> q`` (each ``(E, 2)``): True where no disc interior is entered.
+
+    ``first`` (E, m), optional: per segment the discs most likely to block it (-1 for
+    none), tested before the others; the same test, so the same answer, sooner."""
     clear = np.ones(len(p), bool)
     C = len(discs.radii)
     if C == 0 or len(p) == 0:
+        return clear
+    if first is not None and first.size and len(p) * C > _EDGE_CHUNK:
+        for col in first.T:  # one candidate blocker per segment at a time
+            has = np.flatnonzero(clear & (col >= 0))
+            if not len(has):
+                continue
+            k = col[has]
+            a, ab = p[has], q[has] - p[has]
+            ac = discs.centres[k] - a
+            seg2 = np.maximum((ab * ab).sum(-1), 1e-18)
+            t = np.clip((ac * ab).sum(-1) / seg2, 0.0, 1.0)
+            d = np.hypot(*(ac - t[:, None] * ab).T)
+            clear[has[d < discs.radii[k] * (1 - _TOL) - _TOL]] = False
+        rest = np.flatnonzero(clear)
+        clear[rest] = segments_clear(p[rest], q[rest], discs)
         return clear
     if len(p) * C <= _EDGE_CHUNK:  # small: every segment against every disc at once
         a, b = p[:, None, :], q[:, None, :]
@@ -165,34 +261,66 @@ def _forbidden_intervals(discs: Discs, lower, upper) -> list[list[tuple[float, f
     another disc or outside the rectangle (open intervals)."""
     C = len(discs.radii)
     out: list[list[tuple[float, float]]] = [[] for _ in range(C)]
-    for i in range(C):
-        ci, ri = discs.centres[i], discs.radii[i]
-        for j in range(C):
-            if j == i:
-                continue
-            v = discs.centres[j] - ci
-            d = math.hypot(*v)
-            rj = discs.radii[j]
-            if d >= ri + rj or d + rj <= ri:
-                continue  # apart, or j inside i: j does not cover i's circle
-            if d + ri <= rj:
-                out[i].append((0.0, math.pi))  # i's whole circle inside j
-                continue
-            cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
-            out[i].append((math.atan2(v[1], v[0]), math.acos(min(max(cos_a, -1.0), 1.0))))
+    for i, centre, half in zip(*_covered_arcs(discs)):
+        out[i].append((float(centre), float(half)))
+    for n in range(C):
+        ci, ri_n = discs.centres[n], discs.radii[n]
         for normal_angle, h in (
             (math.pi, ci[0] - lower[0]),
             (0.0, upper[0] - ci[0]),
             (-0.5 * math.pi, ci[1] - lower[1]),
             (0.5 * math.pi, upper[1] - ci[1]),
         ):
-            if h >= ri:
+            if h >= ri_n:
                 continue
-            if h <= -ri:
-                out[i].append((0.0, math.pi))
+            if h <= -ri_n:
+                out[n].append((0.0, math.pi))
                 continue
-            out[i].append((normal_angle, math.acos(h / ri)))
+            out[n].append((normal_angle, math.acos(h / ri_n)))
     return out
+
+
+def _covered_arcs(discs: Discs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The arcs of each disc's circle inside another disc (open): ``disc (A,)``,
+    ``centre (A,)`` angle and ``half (A,)`` width, ``half = pi`` for a whole circle."""
+    i, j = _touching_pairs(discs.centres, discs.radii)
+    v = discs.centres[j] - discs.centres[i]
+    d = np.hypot(v[:, 0], v[:, 1])
+    ri, rj = discs.radii[i], discs.radii[j]
+    # apart, or j inside i: j does not cover i's circle
+    cover = ~((d >= ri + rj) | (d + rj <= ri))
+    whole = cover & (d + ri <= rj)  # i's whole circle inside j
+    part = cover & ~whole
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
+    half = np.arccos(np.clip(np.where(part, cos_a, 1.0), -1.0, 1.0))
+    centre = np.where(whole, 0.0, np.arctan2(v[:, 1], v[:, 0]))
+    half = np.where(whole, math.pi, half)
+    return i[cover], centre[cover], half[cover]
+
+
+def _buried(discs: Discs, disc: np.ndarray, angle: np.ndarray, *, bins: int = 64,
+            margin: float = 1e-3) -> np.ndarray:
+    """Which tangent points ``(disc, angle)`` (T,) lie well inside another disc: those in
+    an angular bin (``bins`` per circle) wholly inside a covered arc shrunk by ``margin``
+    radians at both ends. Every segment from such a point enters that disc; a quick
+    first cut before :func:`segments_clear`, never a verdict on a point near an edge."""
+    C = len(discs.radii)
+    idx, centre, half = _covered_arcs(discs)
+    width = _TWO_PI / bins
+    begin = (centre - half + margin) % _TWO_PI
+    first = np.ceil(begin / width).astype(int)
+    last = np.floor((begin + 2 * (half - margin)) / width).astype(int) - 1  # inclusive
+    whole = half >= math.pi
+    first[whole], last[whole] = 0, bins - 1
+    ok = last >= first
+    diff = np.zeros((C, 2 * bins + 1), int)
+    np.add.at(diff, (idx[ok], first[ok]), 1)
+    np.add.at(diff, (idx[ok], np.minimum(last[ok] + 1, 2 * bins)), -1)
+    run = np.cumsum(diff, axis=1)
+    marked = (run[:, :bins] + run[:, bins:2 * bins]) > 0
+    k = np.floor((angle % _TWO_PI) / width).astype(int) % bins
+    return marked[disc, k]
 
 
 def _arc_free(start: float, sweep: float, intervals) -> bool:
@@ -276,8 +404,17 @@ class _Graph:
         seg_q.append(np.array([-2]))
         t_disc = np.concatenate(t_disc) if t_disc else np.zeros(0, int)
         t_angle = np.concatenate(t_angle) if t_angle else np.zeros(0)
-        t_point = _on_circle(discs, t_disc, t_angle) if len(t_disc) else np.zeros((0, 2))
         seg_p, seg_q = np.concatenate(seg_p), np.concatenate(seg_q)
+        if len(t_disc):  # ends deep inside another disc: no segment from them is clear
+            buried = np.append(_buried(discs, t_disc, t_angle), [False, False])
+            alive = ~buried[seg_p] & ~buried[seg_q]  # keys -1, -2: start and goal
+            seg_p, seg_q = seg_p[alive], seg_q[alive]
+        # the points of the tangents still in question only (the rest stay at 0, unused)
+        t_point = np.zeros((len(t_disc), 2))
+        if len(t_disc):
+            wanted = np.unique(np.concatenate([seg_p, seg_q]))
+            wanted = wanted[wanted >= 0]
+            t_point[wanted] = _on_circle(discs, t_disc[wanted], t_angle[wanted])
 
         def coords(keys):
             out = t_point[np.maximum(keys, 0)] if len(t_point) else np.zeros((len(keys), 2))
@@ -288,7 +425,11 @@ class _Graph:
 
         p, q = coords(seg_p), coords(seg_q)
         ok = _in_rectangle(p, lower, upper) & _in_rectangle(q, lower, upper)
-        ok[ok] = segments_clear(p[ok], q[ok], discs)
+        # a segment from a disc's circle is most often blocked by that disc's neighbours
+        near = _neighbours(discs)
+        ends = np.concatenate([t_disc, [-1, -1]])  # keys -1, -2: start and goal
+        first = np.concatenate([near[ends[seg_p]], near[ends[seg_q]]], axis=1)
+        ok[ok] = segments_clear(p[ok], q[ok], discs, first=first[ok])
         seg_p, seg_q, p, q = seg_p[ok], seg_q[ok], p[ok], q[ok]
 
         # Nodes: 0 start, 1 goal, then every tangent point used by a valid segment.

@@ -18,6 +18,7 @@ import numpy as np
 from ..ardupilot.navigation import VEHICLE_PARAMS, vehicle_navigation
 from ..errors import ScenarioError
 from ..formation import PLANES, closest_pair, regular_formation
+from ..inputs import read_user_text
 from ..obstacles import Cylinder, read_obstacle_geojson
 from ..planning.survey import formation_width, lay_lanes
 from .model import (
@@ -54,12 +55,7 @@ def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file. Raises :class:`ScenarioError` on any problem."""
     path = Path(path)
     source = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(source, "", "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(source, "", f"cannot read: {exc}") from None
+    text = read_user_text(path, error=lambda problem: ScenarioError(source, "", problem))
     return parse_scenario(text, source=source, base_dir=path.parent)
 
 
@@ -67,6 +63,7 @@ def parse_scenario(
     text: str, *, source: str = "<scenario>", base_dir: Path | None = None
 ) -> Scenario:
     """Parse scenario TOML text; see :func:`load_scenario`."""
+    text = text.removeprefix("\ufeff")  # a byte-order mark, as Windows editors write
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -420,3 +417,13 @@ def _check_point(s: Scenario, key: str, point, enu: np.ndarray) -> None:
                     f"puts UAV {n} {dist[k]:.2f} m from the axis of obstacles[{k}] "
                     f"(radius {radii[k]:g} m + clearance {s.clearance_m:g} m)",
                 )
+
+
+def scenario_inputs(path: str | Path) -> list[Path]:
+    """The files a scenario is read from: itself and its ``obstacles_file``, if any (for
+    a command that must not write over its inputs). Call after :func:`load_scenario`."""
+    path = Path(path)
+    data = tomllib.loads(read_user_text(path, error=lambda p: ScenarioError(str(path), "", p)
+                                        ).removeprefix("\ufeff"))
+    extra = data.get("obstacles_file")
+    return [path] + ([path.parent / extra] if isinstance(extra, str) and extra else [])

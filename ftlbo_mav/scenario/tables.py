@@ -54,6 +54,11 @@ class Table:
         value = self.raw(key, default)
         if not isinstance(value, str):
             raise self.error(key, f"must be a string, got {_kind(value)}")
+        bad = next((c for c in value if (ord(c) < 0x20 and c not in "\t\n\r")
+                    or 0x7F <= ord(c) < 0xA0 or 0xD800 <= ord(c) < 0xE000), None)
+        if bad is not None:
+            raise self.error(key, f"holds the control character U+{ord(bad):04X}: "
+                                  "names and paths are printable text")
         if choices is not None and value not in choices:
             raise self.error(key, f"must be one of {', '.join(choices)}; got {value!r}")
         return value

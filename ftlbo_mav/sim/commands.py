@@ -88,6 +88,10 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
     else:
         homes = default_homes(count or 3)
     n = len(homes)
+    if base_port and base_port + 10 * (n - 1) > 65535:
+        raise BadInput(f"--base-port {base_port}: {n} vehicles listen on base-port + 10*i, up "
+                       f"to {base_port + 10 * (n - 1)}, beyond 65535 (at most "
+                       f"{65535 - 10 * (n - 1)} for {n}; 0: any free ports)")
     for option, ids in (("--silent", silent), ("--mute", mute)):
         if any(s > n for s in ids):
             raise BadInput(f"{option} {max(ids)}: the vehicles are system ids 1..{n}")

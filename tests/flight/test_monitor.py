@@ -1,5 +1,6 @@
 import io
 import time
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -59,3 +60,31 @@ def test_without_a_plan_only_the_vehicles():
     monitor.vehicles = _vehicles(planned)
     lines = monitor.lines()
     assert len(lines) == 3 and "slot" not in lines[0]
+
+
+def test_a_swarm_larger_than_the_screen_gets_a_summary_that_fits():
+    planned = load_planned_flight(EXAMPLE.with_suffix(""))
+    monitor = Monitor(planned)
+    monitor.vehicles = _vehicles(planned, shift=(0.6, 0.0, 0.0))
+    monitor.vehicles[2].status = replace(monitor.vehicles[2].status,
+                                         heartbeat_t=time.monotonic() - 10.0)
+    assert monitor.lines(max_lines=4) == monitor.lines()  # a line each and the group's fit
+    lines = monitor.lines(max_lines=3)  # too few: the summary, at least 5 lines
+    assert len(lines) == 5 and lines[0].startswith("3 vehicles: AUTO 3; 3 armed")
+    assert lines[1] == "NO HEARTBEAT: uav3"
+    assert lines[2] == "farthest from their slots (1 of 3):"
+    assert lines[3].split()[0] == "uav2" and "slot  0.40 m" in lines[3]
+    assert lines[-1].startswith("formation error 0.28 m RMS")
+
+
+def test_the_keeper_summary_of_a_large_swarm_is_one_short_line():
+    from ftlbo_mav.flight.commands import _keeper_line
+
+    waited = {f"uav{i}": {"pauses": i % 4 + 1, "seconds_paused": 0.1 * i,
+                          "largest_lead_m": -0.01 * i} for i in range(1, 51)}
+    line = _keeper_line(waited)
+    assert line.startswith("50 vehicles waited 1-4x (0.1-5.0 s paused); longest: uav50 ")
+    assert line.count("waited") == 4 and len(line) < 300
+    few = _keeper_line(dict(list(waited.items())[:2]))
+    assert few == ("uav1 waited 2x (0.1 s paused, largest lead -0.01 m); "
+                   "uav2 waited 3x (0.2 s paused, largest lead -0.02 m)")

@@ -112,3 +112,37 @@ def test_a_sitl_that_has_died_is_named_never_ready(tmp_path):
     finally:
         swarm.__exit__(None, None, None)
     assert all(p.poll() is not None for p in procs)  # every process stopped by __exit__
+
+
+def test_a_scenario_that_does_not_parse_or_a_missing_defaults_file_exits_2(tmp_path):
+    """Issue 21: named in one line, nothing started."""
+    import subprocess
+
+    broken = tmp_path / "broken.toml"
+    broken.write_text("x = [\n")
+    for args in (["--scenario", str(broken), "--binary", sys.executable],
+                 ["--defaults", str(tmp_path / "missing.parm"), "--binary", sys.executable]):
+        proc = subprocess.run([sys.executable, "-m", "sitl", *args], cwd=ROOT,
+                              capture_output=True, text=True, timeout=60,
+                              env={"PATH": "/usr/bin:/bin"})
+        assert proc.returncode == 2, proc.stderr
+        (line,) = proc.stderr.strip().splitlines()
+        assert line.startswith("error: ") and ("malformed TOML" in line
+                                               or "no such defaults file" in line)
+
+
+def test_a_binary_that_exits_at_once_is_named_at_once(tmp_path):
+    """Issue 21: not after the connect timeout (it waited 30 s, then said "cannot
+    connect")."""
+    import time
+
+    from ftlbo_mav.link.endpoints import LinkError
+
+    binary = tmp_path / "arducopter"
+    binary.write_text("#!/bin/sh\nexit 3\n")
+    binary.chmod(0o755)
+    t0 = time.monotonic()
+    with pytest.raises(LinkError, match=r"instance 0 \(sysid 1\) exited with code 3"):
+        with SitlSwarm(binary=binary, homes=default_homes(1), workdir=tmp_path / "run"):
+            pass
+    assert time.monotonic() - t0 < 10.0

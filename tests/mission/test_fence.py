@@ -85,3 +85,89 @@ def test_the_qgc_plan_carries_the_fence_and_the_rally_point():
     (point,) = doc["rallyPoints"]["points"]
     assert point == [FENCES[0].rally[0].lat_deg, FENCES[0].rally[0].lon_deg, 6.0]
     json.dumps(doc)
+
+
+def _rally_reference(*, paths, centres, radii, clearance_m, area_min, area_max, settings):
+    """The rally search written plainly (every grid cell, every test, no pruning): the
+    fast search must choose the same points."""
+    from ftlbo_mav.mission.rally import _densify, _segment_distance
+
+    inset = settings.corner_cut_m + settings.margin_m
+    sep = settings.rally_separation_m
+    xs = np.arange(area_min[0] + inset, area_max[0] - inset + 1e-9, settings.grid_m)
+    ys = np.arange(area_min[1] + inset, area_max[1] - inset + 1e-9, settings.grid_m)
+    grid = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+    if len(centres):
+        d = np.linalg.norm(grid[:, None, :] - centres[None, :, :2], axis=2)
+        grid = grid[np.all(d >= radii[None, :] + clearance_m, axis=1)]
+    flat = [_densify(p[:, :2], 1.0) for p in paths]
+    homes = paths[:, 0, :2]
+    chosen = [None] * len(paths)
+    for k in range(len(paths)):
+        cand = grid[np.argsort(np.linalg.norm(grid - paths[k, -1, :2], axis=1), kind="stable")]
+        own = flat[k]
+        own_home = np.linalg.norm(own - homes[k], axis=1)
+        ok = np.ones(len(cand), bool)
+        to_cand = np.linalg.norm(own[None] - cand[:, None], axis=2) < own_home[None]
+        for j in range(len(paths)):
+            if j == k:
+                continue
+            for q in [homes[j]] + ([chosen[j]] if chosen[j] is not None else []):
+                ok &= np.linalg.norm(cand - q, axis=1) >= sep
+                d = _segment_distance(q, own[None], cand[:, None])
+                ok &= np.where(to_cand, d, np.inf).min(axis=1) >= sep
+            if chosen[j] is not None:
+                pts = flat[j]
+                use = (np.linalg.norm(pts - chosen[j], axis=1)
+                       < np.linalg.norm(pts - homes[j], axis=1))
+                if use.any():
+                    d = _segment_distance(cand[:, None], pts[use][None], chosen[j])
+                    ok &= d.min(axis=1) >= sep
+        if ok.any():
+            chosen[k] = cand[int(np.argmax(ok))]
+    return chosen
+
+
+def _same_points(a, b):
+    return len(a) == len(b) and all(
+        (x is None and y is None) or (x is not None and y is not None and np.array_equal(x, y))
+        for x, y in zip(a, b))
+
+
+def test_the_rally_search_chooses_what_a_plain_search_of_every_cell_chooses():
+    from ftlbo_mav.mission.rally import rally_points_enu
+
+    rng = np.random.default_rng(3)
+    cases = []
+    centres, radii = PLAN.scenario.obstacles_enu()
+    lo, hi = PLAN.scenario.area_bounds_enu()
+    cases.append(dict(paths=np.asarray(PLAN.uav_paths, float),
+                      centres=np.asarray(centres, float).reshape(len(radii), -1)[:, :2],
+                      radii=np.asarray(radii, float), clearance_m=1.0, area_min=lo[:2],
+                      area_max=hi[:2]))
+    for n in (4, 7):  # formations crowding their goals, crossing paths, a tree or two
+        home = rng.uniform(2, 8, 2) + 3.0 * np.column_stack([np.arange(n) % 3, np.arange(n) // 3])
+        goal = home + rng.uniform(12, 18, 2) + rng.normal(0, 1.0, (n, 2))
+        middle = (home + goal) / 2 + rng.normal(0, 2.0, (n, 2))
+        paths = np.stack([home, middle, goal], axis=1)
+        paths = np.concatenate([paths, np.full((n, 3, 1), 4.0)], axis=2)
+        cases.append(dict(paths=paths, centres=rng.uniform(5, 25, (2, 2)),
+                          radii=rng.uniform(0.5, 1.5, 2), clearance_m=0.5,
+                          area_min=np.zeros(2), area_max=np.array([32.0, 30.0])))
+    wide = FenceSettings(rally_separation_m=3.5, grid_m=0.7)
+    far = 0
+    crowded = FenceSettings(rally_separation_m=9.0, grid_m=1.0)  # no room for some
+    for case, settings in [(cases[0], FenceSettings(grid_m=1.5)), (cases[2], crowded)] + [
+            (c, s) for c in cases[1:] for s in (FenceSettings(), wide)]:
+        fast = rally_points_enu(**case, settings=settings)
+        assert _same_points(fast, _rally_reference(**case, settings=settings))
+        goals = case["paths"][:, -1, :2]
+        far += sum(p is None or np.linalg.norm(p - g) > 2.0 for p, g in zip(fast, goals))
+    assert far  # some UAVs' rally points had to move away from their goals, or found none
+
+
+def test_a_field_without_obstacles_has_a_polygon_and_rally_points_only():
+    bare = replace(PLAN, scenario=replace(PLAN.scenario, obstacles=()))
+    fences = plan_fences(bare)
+    assert [len(f.fence) for f in fences] == [4, 4, 4]
+    assert all(f.exclusion_radii_m == () and len(f.rally) == 1 for f in fences)

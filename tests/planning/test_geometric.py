@@ -238,3 +238,43 @@ def test_no_clear_grid_path_is_shorter_than_the_bound(seed):
     else:
         assert bound <= grid + 1e-9  # a clear path shorter than the bound: a missed gap
         assert grid < 1.05 * bound  # and the bound is not far too low
+
+
+def _all_discs(problem: PlanningProblem):
+    """Every (UAV, cylinder) disc, none dropped."""
+    from ftlbo_mav.planning.geometric import Discs
+
+    N, K = problem.uav_count, len(problem.radii)
+    centres = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(-1, 2)
+    return Discs(centres, np.tile(problem.radii, N), np.tile(np.arange(K), N),
+                 np.repeat(np.arange(N), K))
+
+
+def test_a_large_formation_keeps_only_the_rim_of_each_blob_and_the_same_route():
+    """Issue 21: discs whose circle lies inside other discs change nothing; dropping them
+    keeps 200-UAV graphs small. The route is the one over every disc."""
+    from ftlbo_mav.planning.geometric import _Graph, centroid_rectangle
+
+    i = np.arange(24)
+    offsets = np.column_stack([(i % 6) * 2.0 - 5.0, (i // 6) * 2.0 - 3.0, np.zeros(24)])
+    rng = np.random.default_rng(5)
+    problem = field(offsets=offsets, centres=rng.uniform(-12, 12, (3, 2)),
+                    radii=rng.uniform(1.5, 2.5, 3), start=np.array([-22.0, -1.0, 4.0]),
+                    goal=np.array([22.0, 1.0, 4.0]))
+    kept, every = formation_discs(problem), _all_discs(problem)
+    assert len(kept.radii) < 0.75 * len(every.radii)  # the inner discs went
+    lower, upper = centroid_rectangle(problem)
+    angles = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    ring = np.column_stack([np.cos(angles), np.sin(angles)])
+    kept_set = {(round(c[0], 9), round(c[1], 9)) for c in kept.centres}
+    for c, r in zip(every.centres, every.radii):
+        pts = c + r * ring
+        others = np.hypot(*(pts[:, None] - every.centres[None]).transpose(2, 0, 1))
+        inside = (others < every.radii[None] - 1e-9).sum(axis=1)  # its own: on, not in
+        outside = ~np.all((pts >= lower) & (pts <= upper), axis=1)
+        covered = np.all((inside > 0) | outside)
+        assert ((round(c[0], 9), round(c[1], 9)) not in kept_set) == covered
+    graph = _Graph(problem, every)
+    dist, _, _ = graph.dijkstra(0)
+    route = shortest_route(problem)
+    assert route is not None and route.length == pytest.approx(dist[1], rel=1e-9)

@@ -1,0 +1,177 @@
+"""Swarm size: the whole ``ftlbo-mav plan`` process, every default output written, as the
+number of UAVs and of obstacles grows.
+
+Plain ``python benchmarks/scale.py`` (``--quick``: one repeat, fewer rows). Each row is a
+scenario written here (``scenario_text``): a square field, the formation a grid of UAVs
+3 m apart (rows of 10), the start near one corner and the goal near the opposite one,
+trees of 2-4 m radius scattered by a seeded generator (none on the start's or the goal's
+formation). Each is planned by a fresh ``python -m ftlbo_mav plan SCENARIO -o DIR -q``
+(waypoints, fences, rally points, fence.parm, plan.json: what a user gets), timed from
+process start to exit, the median over the repeats. Printed: wall seconds, how the time
+grows against the row before (x time for x UAVs or obstacles), whether the plan is
+feasible, and the load average at the start, since the machine is shared.
+
+The goals (issue 21): 10 UAVs <= 1.5 s, 50 UAVs <= 5 s, 200 UAVs <= 30 s on a 2-core
+machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+LAT0, LON0 = 12.2331044, 109.1144313  # the example's south-west corner
+M_PER_DEG_LAT = 110_574.0
+
+
+def grid_offsets(count: int, spacing_m: float = 3.0, per_row: int = 10) -> np.ndarray:
+    """``count`` UAVs in rows of ``per_row`` across the east axis, ``spacing_m`` apart,
+    centred: (count, 3) metres ENU."""
+    i = np.arange(count)
+    east = (i % per_row) * spacing_m
+    north = (i // per_row) * spacing_m
+    offsets = np.column_stack([east, north, np.zeros(count)])
+    offsets[:, :2] -= offsets[:, :2].mean(axis=0)
+    return offsets
+
+
+def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) -> str:
+    """A scenario TOML: ``uavs`` in a grid formation crossing a ``side_m`` square field
+    diagonally among ``obstacles`` trees (seeded)."""
+    offsets = grid_offsets(uavs)
+    half = np.abs(offsets[:, :2]).max(axis=0) + 6.0  # the formation's half size, spare
+    m_lon = M_PER_DEG_LAT * np.cos(np.radians(LAT0))
+    start = half
+    goal = np.array([side_m, side_m]) - half
+    rng = np.random.default_rng(seed)
+    trees = []
+    while len(trees) < obstacles:
+        centre = rng.uniform(0.0, side_m, 2)
+        radius = float(rng.uniform(2.0, 4.0))
+        if all(np.all(np.abs(centre - p) > h + radius + 2.0) for p, h in
+               ((start, half), (goal, half))):
+            trees.append((centre, radius))
+
+    def ll(e: float, n: float) -> tuple[float, float]:
+        return LAT0 + n / M_PER_DEG_LAT, LON0 + e / m_lon
+
+    lines = [f'name = "{uavs} UAVs, {obstacles} trees, {side_m:g} m field"',
+             "[area]", f"corner_a = [{LAT0}, {LON0}]",
+             "corner_b = [{:.7f}, {:.7f}]".format(*ll(side_m, side_m)),
+             "min_altitude = 2.0", "max_altitude = 7.0",
+             "[start]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*ll(*start)),
+             "[goal]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*ll(*goal)),
+             "[formation]",
+             "offsets = [" + ", ".join(f"[{e:.2f}, {n:.2f}, 0.0]" for e, n, _ in offsets) + "]",
+             "clearance = 1.0"]
+    for centre, radius in trees:
+        lines += ["[[obstacles]]", "lat = {:.7f}\nlon = {:.7f}".format(*ll(*centre)),
+                  f"radius = {radius:.2f}"]
+    return "\n".join(lines) + "\n"
+
+
+def run_plan(text: str, repeats: int) -> dict:
+    """Time ``python -m ftlbo_mav plan`` on the scenario ``text``: median wall seconds."""
+    times, feasible, files, last = [], None, 0, ""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "scenario.toml"
+        path.write_text(text)
+        for r in range(repeats):
+            out = Path(tmp) / f"out{r}"
+            t0 = time.perf_counter()
+            proc = subprocess.run([sys.executable, "-m", "ftlbo_mav", "plan", str(path), "-o",
+                                   str(out), "-q"], capture_output=True, text=True, cwd=ROOT)
+            times.append(time.perf_counter() - t0)
+            last = (proc.stdout + proc.stderr).strip().splitlines()
+            feasible = proc.returncode == 0 and "feasible;" in proc.stdout
+            files = len(list(out.iterdir())) if out.is_dir() else 0
+            if proc.returncode not in (0, 1):
+                raise SystemExit(f"plan failed ({proc.returncode}): {last[-1] if last else ''}")
+    return {"seconds": statistics.median(times), "runs": [round(t, 3) for t in times],
+            "feasible": bool(feasible), "files": files}
+
+
+def growth(rows: list[dict], key: str) -> None:
+    for before, row in zip(rows, rows[1:]):
+        if before["seconds"] > 0 and before[key] > 0:
+            row["growth"] = (f"x{row['seconds'] / before['seconds']:.1f} time for "
+                             f"x{row[key] / before[key]:.2g} {key}")
+
+
+def table(headers: list[str], rows: list[list]) -> str:
+    cells = [[str(h) for h in headers]] + [[str(c) for c in r] for r in rows]
+    widths = [max(len(row[i]) for row in cells) for i in range(len(headers))]
+    lines = ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+GOALS = {10: 1.5, 50: 5.0, 200: 30.0}
+
+
+def report(uav_rows: list[dict], obstacle_rows: list[dict]) -> str:
+    """The two tables as printed (also from a saved JSON: ``--show PATH``)."""
+    def show(rows, goals):
+        return [[r["uavs"], r["obstacles"], f"{r['side_m']:g} m", f"{r['seconds']:.2f}"]
+                + ([f"<= {GOALS[r['uavs']]:g}" if r["uavs"] in GOALS else ""] if goals else [])
+                + ["yes" if r["feasible"] else "no", r["files"], r.get("growth", "")]
+                for r in rows]
+
+    head = ["UAVs", "trees", "field", "plan s"]
+    tail = ["feasible", "files", "growth"]
+    return ("\nwhole `plan` process against the number of UAVs (20 trees)\n"
+            + table(head + ["goal s"] + tail, show(uav_rows, True))
+            + "\n\nagainst the number of trees (50 UAVs, 400 m field)\n"
+            + table(head + tail, show(obstacle_rows, False)))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="one repeat, fewer rows")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--json", default="scale-benchmark.json", help="output JSON path")
+    parser.add_argument("--show", metavar="JSON", help="print the tables of a saved run")
+    args = parser.parse_args()
+    if args.show:
+        doc = json.loads(Path(args.show).read_text())
+        print(f"load average {doc['load']}; median of {doc['repeats']} runs")
+        print(report(doc["uavs"], doc["obstacles"]))
+        return
+    repeats = 1 if args.quick else args.repeats
+    load = "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
+    print(f"load average {load}; {os.cpu_count()} cores; median of {repeats} runs")
+
+    uav_rows = []
+    for uavs, side in ((3, 100.0), (10, 100.0), (50, 400.0), (200, 400.0)):
+        row = {"uavs": uavs, "obstacles": 20, "side_m": side}
+        row.update(run_plan(scenario_text(uavs=uavs, obstacles=20, side_m=side), repeats))
+        uav_rows.append(row)
+        print(f"  {uavs} UAVs: {row['seconds']:.2f} s", flush=True)
+    growth(uav_rows, "uavs")
+    obstacle_rows = []
+    counts = (0, 20, 80) if args.quick else (0, 20, 80, 320)
+    for obstacles in counts:
+        row = {"uavs": 50, "obstacles": obstacles, "side_m": 400.0}
+        row.update(run_plan(scenario_text(uavs=50, obstacles=obstacles, side_m=400.0),
+                            repeats))
+        obstacle_rows.append(row)
+        print(f"  {obstacles} obstacles: {row['seconds']:.2f} s", flush=True)
+    growth([r for r in obstacle_rows if r["obstacles"]], "obstacles")
+
+    print(report(uav_rows, obstacle_rows))
+    Path(args.json).write_text(json.dumps({"load": load, "repeats": repeats, "uavs": uav_rows,
+                                           "obstacles": obstacle_rows}, indent=1))
+
+
+if __name__ == "__main__":
+    main()

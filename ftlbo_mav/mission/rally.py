@@ -1,0 +1,313 @@
+"""The rally-point search: one rally point per UAV, where RTL goes when it is nearer
+than home (pure; the rules are in :mod:`.fence`'s notes and :func:`rally_points_enu`)."""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+import numpy as np
+
+
+class RallySettings(Protocol):
+    """What the search reads of :class:`~.fence.FenceSettings` (metres)."""
+
+    corner_cut_m: float
+    margin_m: float
+    rally_separation_m: float
+    grid_m: float
+
+
+def _segment_distance(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distances from points ``q`` (..., 2) to segments ``a``-``b`` (..., 2), broadcast."""
+    ab = b - a
+    denom = np.maximum((ab * ab).sum(-1), 1e-12)
+    t = np.clip(((q - a) * ab).sum(-1) / denom, 0.0, 1.0)
+    return np.linalg.norm(a + t[..., None] * ab - q, axis=-1)
+
+
+def _densify(path: np.ndarray, step_m: float) -> np.ndarray:
+    """Points along a polyline ``(n, 2)`` at most ``step_m`` apart, ends included."""
+    out = [path[:1]]
+    for a, b in zip(path[:-1], path[1:]):
+        k = max(1, math.ceil(float(np.linalg.norm(b - a)) / step_m))
+        out.append(a + (b - a) * (np.arange(1, k + 1) / k)[:, None])
+    return np.concatenate(out)
+
+
+def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Mask of ``points`` (n, 2) inside the box ``lo``..``hi`` (2,), edges included."""
+    return np.all((points >= lo) & (points <= hi), axis=1)
+
+
+def _hull(points: np.ndarray) -> np.ndarray:
+    """The convex hull of ``points`` (n, 2), counter-clockwise (Andrew's monotone chain)."""
+    pts = np.unique(points, axis=0)  # sorted by east, then north
+    if len(pts) < 3:
+        return pts
+
+    def half(seq):
+        out: list[np.ndarray] = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def _near_hull(queries: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
+    """Mask of ``queries`` (Q, 2) not farther than ``reach`` (a hair more) from the convex
+    hull of ``points`` (n, 2): no query outside it is within ``reach`` of a segment
+    between two of the points."""
+    lo, hi = points.min(axis=0) - reach - 1e-6, points.max(axis=0) + reach + 1e-6
+    near = _near_box(queries, lo, hi)
+    hull = _hull(points)
+    if len(hull) < 3 or not near.any():
+        return near
+    a, b = hull, np.roll(hull, -1, axis=0)
+    edge = b - a
+    normal = np.column_stack([edge[:, 1], -edge[:, 0]])  # outward for a ccw hull
+    normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
+    q = queries[near]
+    beyond = ((q[:, None, :] - a[None]) * normal[None]).sum(-1) > reach + 1e-6
+    near[np.flatnonzero(near)[beyond.any(axis=1)]] = False
+    return near
+
+
+def _box(axis: np.ndarray, centre: float, half: float) -> slice:
+    """The indices of the sorted ``axis`` within ``half`` of ``centre`` (a hair wider)."""
+    lo, hi = np.searchsorted(axis, [centre - half - 1e-6, centre + half + 1e-6])
+    return slice(int(lo), int(hi) + 1)
+
+
+class _RallyGrid:
+    """The rally search's candidates: a regular grid over the area (inset), those clear of
+    the obstacles, served nearest-first around a goal in growing rings so that a search
+    that stops early never sorts the whole field. The order is that of a stable sort of
+    the whole grid by distance (ties in row-major order)."""
+
+    def __init__(self, *, xs: np.ndarray, ys: np.ndarray, centres: np.ndarray,
+                 radii: np.ndarray, clearance_m: float, step_m: float) -> None:
+        self.xs, self.ys, self.step = xs, ys, step_m
+        clear = np.ones((len(ys), len(xs)), bool)
+        for c, r in zip(centres, radii):  # each obstacle blanks the cells of its box only
+            reach = r + clearance_m
+            ix, iy = _box(xs, c[0], reach), _box(ys, c[1], reach)
+            gx, gy = np.meshgrid(xs[ix], ys[iy])
+            d = np.linalg.norm(np.stack([gx, gy], axis=-1) - c[:2], axis=-1)
+            clear[iy, ix] &= d >= reach
+        self.clear = clear
+
+    def stamp(self, count: np.ndarray, q: np.ndarray, radius_m: float, add: int) -> None:
+        """Add ``add`` to ``count`` (ny, nx) at the cells closer than ``radius_m`` to
+        ``q`` (2,)."""
+        ix, iy = _box(self.xs, q[0], radius_m), _box(self.ys, q[1], radius_m)
+        gx, gy = np.meshgrid(self.xs[ix], self.ys[iy])
+        d = np.linalg.norm(np.stack([gx, gy], axis=-1) - q, axis=-1)
+        count[iy, ix] += add * (d < radius_m)
+
+    def outside_discs(self, centres: np.ndarray, radii: np.ndarray,
+                      tile: int = 16) -> np.ndarray:
+        """(ny, nx) mask: False on the tiles of ``tile`` x ``tile`` cells wholly inside
+        one of the discs ``centres`` (B, 2), ``radii`` (B,) (a hair inside), True
+        elsewhere. A coarse cover of the discs, for a fast first cut."""
+        ny, nx = self.clear.shape
+        x0 = self.xs[::tile]
+        x1 = self.xs[np.minimum(np.arange(tile - 1, nx + tile - 1, tile), nx - 1)]
+        y0 = self.ys[::tile]
+        y1 = self.ys[np.minimum(np.arange(tile - 1, ny + tile - 1, tile), ny - 1)]
+        inside = np.zeros((len(y0), len(x0)), bool)
+        r = radii - 1e-6
+        for c, rr in zip(centres, r):
+            corner_in = np.ones((len(y0), len(x0)), bool)
+            for cx in (x0, x1):
+                for cy in (y0, y1):
+                    corner_in &= (np.hypot(cx[None] - c[0], cy[:, None] - c[1]) < rr)
+            inside |= corner_in
+        return ~np.repeat(np.repeat(inside, tile, axis=0), tile, axis=1)[:ny, :nx]
+
+    def nearest_first(self, goal: np.ndarray, allowed: np.ndarray):
+        """Yield the cells of ``allowed`` (ny, nx) as arrays (C, 2), together
+        nearest-first from ``goal`` (2,)."""
+        xs, ys = self.xs, self.ys
+        if not len(xs) or not len(ys):
+            return
+        far = float(np.hypot(max(abs(xs[0] - goal[0]), abs(xs[-1] - goal[0])),
+                             max(abs(ys[0] - goal[1]), abs(ys[-1] - goal[1])))) + 1.0
+        inner, outer = -1.0, 8.0 * self.step
+        while inner <= far:
+            ix, iy = _box(xs, goal[0], outer), _box(ys, goal[1], outer)
+            jy, jx = np.nonzero(allowed[iy, ix])  # row-major, as the whole grid's order
+            window = np.column_stack([xs[ix][jx], ys[iy][jy]])
+            d = np.linalg.norm(window - goal, axis=1)
+            ring = (d > inner) & (d <= outer) if inner >= 0 else d <= outer
+            d, window = d[ring], window[ring]
+            if len(window):
+                yield window[np.argsort(d, kind="stable")]
+            inner, outer = outer, 2.0 * outer
+
+
+def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarray,
+                     clearance_m: float, area_min: np.ndarray, area_max: np.ndarray,
+                     settings: RallySettings) -> list[np.ndarray | None]:
+    """One rally point (east, north) per UAV, or None where none fits (module notes).
+
+    Chosen in UAV order, each the candidate nearest its goal that is clear of the
+    obstacles, inside the area, ``rally_separation_m`` from the homes and rally points
+    of the others, from the others' return lines to their rally points, and whose own
+    return lines keep that distance from the others' homes and rally points. A return
+    line to a rally point: from each point of the UAV's path nearer to its rally point
+    than to its home (RTL flies to the nearer, RALLY_INCL_HOME 1), straight to it.
+    ``paths`` (N, n, 3) ENU metres, row 0 each UAV's home; ``centres`` (K, 2), ``radii``
+    (K,); ``area_min``/``area_max`` (2,) the area's ENU bounding box.
+
+    The search: the homes and chosen rally points are stamped on the grid (a count of
+    the places each cell is too near), so a cell too near one costs a look-up; a cell
+    nearer than home to a path point already too near a place fails at once; the rest
+    come nearest-first in rings (:class:`_RallyGrid`) and are tested exactly in growing
+    batches, each against only what can reach it (the places and line segments whose
+    bounding box, grown by the separation, holds the batch's box). The result is the
+    first candidate in distance order that passes every test, as a search of the whole
+    grid would find it."""
+    inset = settings.corner_cut_m + settings.margin_m
+    sep = settings.rally_separation_m
+    xs = np.arange(area_min[0] + inset, area_max[0] - inset + 1e-9, settings.grid_m)
+    ys = np.arange(area_min[1] + inset, area_max[1] - inset + 1e-9, settings.grid_m)
+    grid = _RallyGrid(xs=xs, ys=ys, centres=np.asarray(centres, float).reshape(-1, 2),
+                      radii=np.asarray(radii, float).reshape(-1), clearance_m=clearance_m,
+                      step_m=settings.grid_m)
+    flat = [_densify(p[:, :2], 1.0) for p in paths]
+    homes = paths[:, 0, :2]
+    n = len(paths)
+    chosen: list[np.ndarray | None] = [None] * n
+    # how many homes and rally points each cell is closer than sep to
+    crowd = np.zeros(grid.clear.shape, np.int32)
+    for h in homes:
+        grid.stamp(crowd, h, sep, 1)
+    # the chosen UAVs' return lines so far: segment starts (S, 2), ends (S, 2), boxes
+    line_a, line_b = np.zeros((0, 2)), np.zeros((0, 2))
+    line_lo, line_hi = np.zeros((0, 2)), np.zeros((0, 2))
+    for k in range(n):
+        own = flat[k]
+        own_home = np.linalg.norm(own - homes[k], axis=1)  # (P,)
+        others = np.arange(n) != k
+        places = np.concatenate([homes[others]] + [c[None] for j, c in enumerate(chosen)
+                                                   if c is not None and j != k])
+        blocked, blocked_reach = _blocked_starts(own, own_home, places, sep)
+        grid.stamp(crowd, homes[k], sep, -1)  # its own home is no obstacle to it
+        allowed = grid.clear & (crowd == 0)
+        if len(blocked):
+            allowed &= grid.outside_discs(blocked, blocked_reach)
+        grid.stamp(crowd, homes[k], sep, 1)
+        batch = 32
+        for ring in grid.nearest_first(paths[k, -1, :2], allowed):
+            if len(blocked):  # a return line that starts within sep of a place fails
+                ring = ring[_clear_of_blocked(ring, blocked, blocked_reach)]
+            i = 0
+            while i < len(ring) and chosen[k] is None:
+                chunk = ring[i:i + batch]
+                i += len(chunk)
+                batch = min(4 * batch, 1024)
+                first = _first_clear(chunk, own=own, own_home=own_home, places=places,
+                                     line_a=line_a, line_b=line_b, line_lo=line_lo,
+                                     line_hi=line_hi, sep=sep)
+                if first is not None:
+                    chosen[k] = chunk[first]
+            if chosen[k] is not None:
+                break
+        if chosen[k] is not None:
+            grid.stamp(crowd, chosen[k], sep, 1)
+            use = np.linalg.norm(own - chosen[k], axis=1) < own_home
+            a = own[use]
+            b = np.broadcast_to(chosen[k], a.shape)
+            line_a, line_b = np.concatenate([line_a, a]), np.concatenate([line_b, b])
+            line_lo = np.concatenate([line_lo, np.minimum(a, b) - sep])
+            line_hi = np.concatenate([line_hi, np.maximum(a, b) + sep])
+    return chosen
+
+
+def _blocked_starts(own: np.ndarray, own_home: np.ndarray, places: np.ndarray,
+                    sep: float) -> tuple[np.ndarray, np.ndarray]:
+    """The points of the UAV's path ``own`` (P, 2) already within ``sep`` of one of the
+    ``places`` (Q, 2) (a little inside, so that the exact test decides every case at the
+    boundary), with their distances from home ``own_home`` (P,): a candidate nearer to
+    one of them than home is has a return line that starts there, and fails. Only the
+    discs (point, distance) that no other disc kept holds are returned."""
+    gap = np.full(len(own), np.inf)
+    for q in places:
+        gap = np.minimum(gap, np.linalg.norm(own - q, axis=1))
+    near = gap < sep - 1e-6
+    pts, reach = own[near], own_home[near]
+    order = np.argsort(-reach, kind="stable")
+    kept: list[int] = []
+    for i in order:  # the widest first; a disc inside one kept adds nothing
+        if kept and np.any(np.linalg.norm(pts[kept] - pts[i], axis=1) + reach[i]
+                           <= reach[kept]):
+            continue
+        kept.append(int(i))
+    return pts[kept], reach[kept]
+
+
+def _clear_of_blocked(cand: np.ndarray, blocked: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Mask of ``cand`` (C, 2) farther than ``reach`` (B,) from every ``blocked`` (B, 2):
+    from no such point would RTL fly to the candidate (it is not nearer than home)."""
+    keep = np.ones(len(cand), bool)
+    step = max(1, 2_000_000 // max(1, len(blocked)))
+    for i in range(0, len(cand), step):
+        part = cand[i:i + step]
+        d = np.linalg.norm(part[:, None] - blocked[None], axis=2)
+        keep[i:i + step] = ~np.any(d < reach[None] - 1e-6, axis=1)
+    return keep
+
+
+def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
+                 places: np.ndarray, line_a: np.ndarray, line_b: np.ndarray,
+                 line_lo: np.ndarray, line_hi: np.ndarray, sep: float) -> int | None:
+    """The index of the first of the candidates ``chunk`` (C, 2) that keeps ``sep``
+    between itself and the others' return lines ``line_a``-``line_b`` (S, 2) (their boxes
+    grown by ``sep``: ``line_lo``, ``line_hi``) and between the others' places ``places``
+    (Q, 2) and its own return lines (from the points of ``own`` (P, 2) nearer to it than
+    ``own_home`` (P,), their distances from the UAV's home); None if none does. The
+    second test, the costly one, runs on a few candidates at a time, in order."""
+    ok = np.ones(len(chunk), bool)
+    lo, hi = chunk.min(axis=0), chunk.max(axis=0)
+    hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
+    if hit.any():
+        d = _segment_distance(chunk[:, None], line_a[hit][None], line_b[hit][None])
+        ok &= d.min(axis=1) >= sep
+    live = np.flatnonzero(ok)
+    i, step = 0, 4
+    while i < len(live):
+        sub = chunk[live[i:i + step]]
+        good = _own_lines_clear(sub, own=own, own_home=own_home, places=places, sep=sep)
+        if good.any():
+            return int(live[i + int(np.argmax(good))])
+        i, step = i + len(sub), 2 * step
+    return None
+
+
+def _own_lines_clear(cand: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
+                     places: np.ndarray, sep: float) -> np.ndarray:
+    """Which candidates ``cand`` (C, 2) have return lines (from the points of ``own``
+    (P, 2) nearer to them than ``own_home`` (P,)) that keep ``sep`` from every one of
+    ``places`` (Q, 2). Returns (C,) bool."""
+    ok = np.ones(len(cand), bool)
+    to_cand = np.linalg.norm(own[None] - cand[:, None], axis=2) < own_home[None]  # (C, P)
+    used = to_cand.any(axis=0)
+    if not used.any():
+        return ok
+    pts, to_cand = own[used], to_cand[:, used]
+    near = places[_near_hull(places, np.concatenate([pts, cand]), sep)]
+    # the places nearest the candidates first: those most likely to rule them out
+    near = near[np.argsort(np.linalg.norm(near - cand.mean(axis=0), axis=1))]
+    for q in near:
+        live = np.flatnonzero(ok)
+        if not len(live):
+            break
+        d = _segment_distance(q, pts[None], cand[live, None])  # (C', P')
+        ok[live] &= np.where(to_cand[live], d, np.inf).min(axis=1) >= sep
+    return ok
