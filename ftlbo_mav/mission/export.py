@@ -48,6 +48,10 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
     missions = []
     settings = plan.scenario.mission
     view = geodetic if geodetic is not None else geodetic_view(plan)
+    survey = plan.scenario.survey
+    camera = ()
+    if survey is not None and survey.trigger_distance_m is not None:
+        camera = tuple((a, b, survey.trigger_distance_m) for a, b in lane_points(plan))
     for n, lla in enumerate(view.uav_paths):
         items = build_mission(
             home=(float(lla[0, 0]), float(lla[0, 1])),
@@ -55,10 +59,24 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
             path=[tuple(map(float, row)) for row in lla],
             end_action=settings.end_action,
             speed_m_s=settings.speed_m_s,
+            camera=camera,
         )
         offset = tuple(float(v) for v in plan.problem.offsets[n])
         missions.append(UavMission(f"uav{n + 1}", offset, tuple(items)))
     return missions
+
+
+def lane_points(plan: Plan) -> list[tuple[int, int]]:
+    """Each survey lane's entry and exit as indices into the plan's paths (the lanes'
+    ends are the last via points, two a lane; a leg of ``m`` waypoints adds ``m + 1``
+    points after its start)."""
+    survey = plan.scenario.survey
+    if survey is None or not survey.lanes:
+        return []
+    starts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs])  # route point -> index
+    first = len(plan.scenario.via) - 2 * len(survey.lanes) + 1  # route index of lane 1's entry
+    return [(int(starts[first + 2 * k]), int(starts[first + 2 * k + 1]))
+            for k in range(len(survey.lanes))]
 
 
 def _finite(value: float) -> float | None:

@@ -23,6 +23,7 @@ CMD_NAV_RETURN_TO_LAUNCH = 20
 CMD_NAV_LAND = 21
 CMD_NAV_TAKEOFF = 22
 CMD_DO_CHANGE_SPEED = 178
+CMD_DO_SET_CAM_TRIGG_DIST = 206
 # fence and rally items (mission_type FENCE / RALLY; their storage: ardupilot/fence.py)
 CMD_FENCE_POLYGON_VERTEX_INCLUSION = 5001
 CMD_FENCE_CIRCLE_EXCLUSION = 5004
@@ -35,6 +36,7 @@ COMMAND_NAMES = {
     CMD_NAV_LAND: "LAND",
     CMD_NAV_TAKEOFF: "TAKEOFF",
     CMD_DO_CHANGE_SPEED: "DO_CHANGE_SPEED",
+    CMD_DO_SET_CAM_TRIGG_DIST: "DO_SET_CAM_TRIGG_DIST",
     CMD_FENCE_POLYGON_VERTEX_INCLUSION: "FENCE_POLYGON_VERTEX_INCLUSION",
     CMD_FENCE_CIRCLE_EXCLUSION: "FENCE_CIRCLE_EXCLUSION",
     CMD_RALLY_POINT: "RALLY_POINT",
@@ -101,6 +103,7 @@ def build_mission(
     path: Sequence[tuple[float, float, float]],
     end_action: str = "land",
     speed_m_s: float | None = None,
+    camera: Sequence[tuple[int, int, float]] = (),
 ) -> list[MissionItem]:
     """The mission of one UAV.
 
@@ -123,10 +126,16 @@ def build_mission(
         # writes them as 0 (ArduPilot wiki, "Mission Commands": NAV_TAKEOFF).
         dict(command=CMD_NAV_TAKEOFF, alt_m=takeoff_alt_m),
     ]
-    items += [
-        dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt)
-        for lat, lon, alt in path
-    ]
+    after: dict[int, list[dict]] = {}
+    for entry, exit_, distance in camera:
+        if not 0 < entry < exit_ < len(path):
+            raise ValueError(f"a lane from path point {entry} to {exit_} is not in the path")
+        after.setdefault(entry, []).append(dict(
+            command=CMD_DO_SET_CAM_TRIGG_DIST, param1=float(distance), param3=1.0))
+        after.setdefault(exit_, []).append(dict(command=CMD_DO_SET_CAM_TRIGG_DIST))
+    for k, (lat, lon, alt) in enumerate(path):
+        items.append(dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt))
+        items += after.get(k, [])
     if speed_m_s is not None:
         # After the start point, before the first leg: a mission started there (fly's
         # synchronized start) runs it as it begins, and ModeAuto::init would forget a
