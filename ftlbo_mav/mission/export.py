@@ -20,13 +20,23 @@ from ..errors import MissionFileError
 from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
-from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
+from ..scenario import (
+    AUTO,
+    Camera,
+    Cylinder,
+    GeoPoint,
+    PlannerSettings,
+    Scenario,
+    Survey,
+    ViaPoint,
+)
 from .fence import UavFence, plan_fences
 from .files import OutputFolder, digest, read_mission_text
 from .geodetic import GeodeticPlan, geodetic_view
 from .gis import render_geojson, render_kml
 from .items import UavMission, build_mission  # UavMission re-exported: it lived here
 from .params_file import FENCE_PARAMS_FILE, render_params
+from .photos import UavPhotos, camera_document, plan_photos
 from .qgc_plan import render_plan
 from .waypoints import render_waypoints
 
@@ -118,16 +128,20 @@ def _leg_document(leg: Leg, first: int) -> dict:
 def plan_document(
     plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None,
     digests: dict[str, str] | None = None, fences: list[UavFence] | None = None,
+    photos: list[UavPhotos] | None = None,
 ) -> dict:
     """The ``plan.json`` content. ``written``: whether the mission files were written;
     ``digests``: their SHA-256 by UAV name (:func:`~.files.digest` of the text written).
 
     Totals at the top (cost, bound, evaluations, seconds: sums over the legs), one entry
-    per leg in ``legs`` (``first_point``: index of the leg's start in ``centroid``)."""
+    per leg in ``legs`` (``first_point``: index of the leg's start in ``centroid``).
+    ``photos``: the survey's (:func:`~.photos.plan_photos`, computed here when not given)."""
     s, sc = plan.settings, plan.scenario
     view = geodetic if geodetic is not None else geodetic_view(plan)
     firsts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs[:-1]])
     survey = sc.survey
+    if photos is None:
+        photos = plan_photos(plan, missions)
     return {
         "scenario": plan.scenario.name or plan.scenario.source,
         "algorithm": s.algorithm,
@@ -164,7 +178,10 @@ def plan_document(
             "heading": survey.heading_deg,
             "margin": survey.margin_m,
             "alt": survey.alt_m,
+            "lane_count": len(survey.lanes),
+            "lane_spacing": _round(survey.lane_spacing_m, 4),
             "lanes": [[[a.lat_deg, a.lon_deg], [b.lat_deg, b.lon_deg]] for a, b in survey.lanes],
+            "camera": camera_document(plan, photos),
         },
         "legs": [_leg_document(leg, int(f)) for leg, f in zip(plan.legs, firsts)],
         "centroid": _points(view.centroid),
@@ -176,6 +193,7 @@ def plan_document(
                 "mission_file": f"{m.name}.waypoints" if written else None,
                 "mission_sha256": (digests or {}).get(m.name) if written else None,
                 **_fence_document(m.name, fences, n, written),
+                **({"photos": photos[n].count} if photos else {}),
             }
             for n, (m, path) in enumerate(zip(missions, view.uav_paths))
         ],
@@ -211,6 +229,7 @@ def plan_files(
     missions = plan_missions(plan, geodetic=view)
     write_missions = plan.feasible or allow_infeasible
     fences = plan_fences(plan) if fence else []
+    photos = plan_photos(plan, missions)
     files: dict[str, str] = {}
     if write_missions:
         for n, m in enumerate(missions):
@@ -226,13 +245,15 @@ def plan_files(
         if fences:
             files[FENCE_PARAMS_FILE] = render_params(fences[0].params)
     if "geojson" in formats:
-        files["plan.geojson"] = render_geojson(plan, missions, geodetic=view, fences=fences)
+        files["plan.geojson"] = render_geojson(plan, missions, geodetic=view, fences=fences,
+                                               photos=photos)
     if "kml" in formats:
-        files["plan.kml"] = render_kml(plan, missions, geodetic=view, fences=fences)
+        files["plan.kml"] = render_kml(plan, missions, geodetic=view, fences=fences,
+                                       photos=photos)
     digests = {m.name: digest(files[f"{m.name}.waypoints"])
                for m in missions if write_missions}
     doc = plan_document(plan, missions, written=write_missions, geodetic=view, digests=digests,
-                        fences=fences)
+                        fences=fences, photos=photos)
     files["plan.json"] = json.dumps(doc, indent=2) + "\n"
     return files
 
@@ -318,12 +339,18 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
                     for v in doc.get("via", []))
         survey = doc.get("survey")
         if survey is not None:
+            camera = survey.get("camera")
+            lane_spacing = survey.get("lane_spacing")
             survey = Survey(
                 spacing_m=float(survey["spacing"]), heading_deg=float(survey["heading"]),
                 margin_m=float(survey["margin"]), alt_m=float(survey["alt"]),
                 lanes=tuple((GeoPoint(*map(float, a), float(survey["alt"])),
                              GeoPoint(*map(float, b), float(survey["alt"])))
-                            for a, b in survey["lanes"]))
+                            for a, b in survey["lanes"]),
+                lane_spacing_m=None if lane_spacing is None else float(lane_spacing),
+                camera=None if camera is None else _camera_from_document(camera),
+                trigger_distance_m=None if camera is None else float(
+                    camera["trigger_distance"]))
         scenario = Scenario(
             corner_a=GeoPoint(*map(float, area["corner_a"])),
             corner_b=GeoPoint(*map(float, area["corner_b"])),
@@ -412,6 +439,17 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         lower_bound_length=bound,
         legs=tuple(legs),
     )
+
+
+def _camera_from_document(doc: dict) -> Camera:
+    gsd = doc.get("gsd_cm")
+    return Camera(
+        sensor_width_mm=float(doc["sensor_width_mm"]),
+        sensor_height_mm=float(doc["sensor_height_mm"]),
+        focal_length_mm=float(doc["focal_length_mm"]), image_width_px=int(doc["image_width_px"]),
+        image_height_px=int(doc["image_height_px"]), front_overlap=float(doc["front_overlap"]),
+        side_overlap=float(doc["side_overlap"]), landscape=bool(doc["landscape"]),
+        gsd_cm=None if gsd is None else float(gsd))
 
 
 def _cost_terms(doc: dict) -> CostTerms:

@@ -176,7 +176,7 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
     s = plan.scenario
     frame = s.frame
     centres, radii = s.obstacles_enu()
-    centres = np.asarray(centres, float).reshape(len(radii), -1)[:, :2]
+    centres = np.asarray(centres, float).reshape(-1, 2)  # (K, 2), also for K = 0
     centres = np.column_stack([centres, np.zeros(len(centres))])
     radii = np.asarray(radii, float).reshape(-1)
     corners = frame.to_enu(lat_deg=[s.corner_a.lat_deg, s.corner_b.lat_deg],

@@ -112,3 +112,37 @@ def coverage(photos: Sequence[UavPhotos], *, lower: np.ndarray, upper: np.ndarra
             a, b = rel @ u / (u @ u), rel @ v / (v @ v)
             covered |= (a >= 0) & (a <= 1) & (b >= 0) & (b <= 1)
     return float(covered.mean()) if len(grid) else 0.0
+
+
+def plan_photos(plan, missions: Sequence) -> list[UavPhotos]:
+    """Each UAV's photos from its mission (``missions``: the plan's
+    :class:`~.items.UavMission` list); empty without a ``[camera]``."""
+    survey = plan.scenario.survey
+    if survey is None or survey.camera is None:
+        return []
+    return [mission_photos(m.name, m.items, frame=plan.scenario.frame, camera=survey.camera,
+                           heading_deg=survey.heading_deg) for m in missions]
+
+
+def camera_document(plan, photos: Sequence[UavPhotos]) -> dict | None:
+    """plan.json's ``survey.camera``: the table as read, then per UAV its altitude,
+    footprint (across x along the lanes, metres), ground sample distance (cm/px) and the
+    photos its mission takes."""
+    survey = plan.scenario.survey
+    if survey is None or survey.camera is None:
+        return None
+    cam = survey.camera
+    alts = survey.alt_m + plan.scenario.offsets_m[:, 2]
+    width, length = cam.footprint(np.maximum(alts, 0.0))
+    gsd = cam.gsd(np.maximum(alts, 0.0))
+    return {
+        "sensor_width_mm": cam.sensor_width_mm, "sensor_height_mm": cam.sensor_height_mm,
+        "focal_length_mm": cam.focal_length_mm, "image_width_px": cam.image_width_px,
+        "image_height_px": cam.image_height_px, "front_overlap": cam.front_overlap,
+        "side_overlap": cam.side_overlap, "landscape": cam.landscape, "gsd_cm": cam.gsd_cm,
+        "trigger_distance": round(float(survey.trigger_distance_m), 4),
+        "uavs": [{"name": p.name, "alt": round(float(a), 4),
+                  "footprint": [round(float(w), 4), round(float(h), 4)],
+                  "gsd_cm": round(float(g), 4), "photos": p.count}
+                 for p, a, w, h, g in zip(photos, alts, width, length, gsd)],
+    }
