@@ -28,6 +28,7 @@ from ftlbo_mav.errors import FtlboError
 from ftlbo_mav.link.codec import from_wire, to_wire
 from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
 from ftlbo_mav.link.mission_protocol import Timing, download_mission, upload_mission
+from ftlbo_mav.mission.files import digest, read_mission_text
 
 from .launcher import SitlSwarm
 
@@ -138,7 +139,8 @@ def record_survey(link, sysid: int, *, timing: Timing, timeout_s: float = 330.0)
     finally:
         v.close()
         link.taps.remove(watch)
-    return {"mission_file": str(SURVEY_UAV1.relative_to(ROOT)), "landed": done,
+    return {"mission_file": str(SURVEY_UAV1.relative_to(ROOT)),
+            "mission_sha256": digest(read_mission_text(SURVEY_UAV1)), "landed": done,
             "params": params, "camera_feedback": feedback, "mission_item_reached": reached,
             "statustext": texts,
             "global_position_int": {"fields": ["t", "time_boot_ms", "lat_e7", "lon_e7",
