@@ -26,9 +26,33 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from .navigation import INT8, REAL32, ParamDefault
 
 UPDATE_HZ = 50.0
 """AP_Camera::update's rate (Copter's scheduler table)."""
+
+_PARAMS = "libraries/AP_Camera/AP_Camera_Params.cpp"
+CAMERA_PARAM_DEFAULTS = {
+    "CAM1_TYPE": ParamDefault(0.0, INT8, _PARAMS + " (0: none, 1: servo, 2: relay, ...)"),
+    "CAM1_TRIGG_DIST": ParamDefault(0.0, REAL32, _PARAMS + " (m; DO_SET_CAM_TRIGG_DIST sets "
+                                                 "it)"),
+}
+"""The camera parameters the emulator knows. ArduPilot makes its camera backends at boot
+from CAMx_TYPE; the emulator, which has no reboot, counts it from when it is set."""
+
+
+def feedback_message(*, time_usec: int, image: int, lat_e7: int, lon_e7: int, alt_msl_m: float,
+                     alt_rel_m: float, roll_deg: float = 0.0, pitch_deg: float = 0.0,
+                     yaw_deg: float = 0.0):
+    """CAMERA_FEEDBACK as AP_Camera_Backend::send_camera_feedback fills it: target system
+    0, camera id 0 (the first instance), the image index, the position and attitude at
+    the photo, focal length 0, flags CAMERA_FEEDBACK_PHOTO, completed captures 0 (the
+    feedback-pin count: no pin)."""
+    return R.MAVLink_camera_feedback_message(
+        time_usec, 0, 0, image, lat_e7, lon_e7, alt_msl_m, alt_rel_m, roll_deg, pitch_deg,
+        yaw_deg, 0.0, R.CAMERA_FEEDBACK_PHOTO, 0)
 
 
 def trigger_item_params(distance_m: float, *, at_once: bool) -> tuple[float, float, float, float]:
