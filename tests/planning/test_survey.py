@@ -221,4 +221,8 @@ def test_the_shipped_survey_has_lanes_trees_and_the_papers_triangle():
     assert s.offsets == ((0.0, 0.0, 2.0), (3.0, 0.0, -1.0), (-3.0, 0.0, -1.0))
     assert s.planner.waypoints == AUTO
     assert len(s.via) == 2 * len(s.survey.lanes)
-    assert s.start == s.goal  # a loop
+    # an odd number of lanes: from the south-west corner to the north-east one, where
+    # the last lane ends
+    assert len(s.survey.lanes) % 2 == 1
+    route = s.route_enu()
+    assert np.hypot(*(route[-1, :2] - route[-2, :2])) < 2.0
