@@ -152,6 +152,8 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
             files = {**files, **figure_files(result)}
         paths = out.write_all(files)
     click.echo(format_summary(result))
+    for line in format_survey(result):
+        click.echo(line)
     _say_written(paths)
     if not result.feasible:
         for line in result.violations:
@@ -247,6 +249,33 @@ def _flown(result) -> str:
                            (result.replans, "re-plan")) if n]
     return (f"; flown path (predicted): clearance {p.clearance.min():.2f} m"
             + (f" ({', '.join(did)})" if did else ""))
+
+
+def format_survey(result) -> list[str]:
+    """The survey in a line or three: how many lanes at what spacing; with a camera, each
+    UAV's footprint and ground sample distance, the trigger distance and the photos."""
+    survey = result.scenario.survey
+    if survey is None:
+        return []
+    from .mission.export import plan_missions
+    from .mission.photos import camera_document, plan_photos
+
+    spacing = survey.lane_spacing_m if survey.lane_spacing_m is not None else survey.spacing_m
+    lines = [f"survey: {len(survey.lanes)} lane{'s' if len(survey.lanes) != 1 else ''} "
+             f"{spacing:.2f} m apart (at most {survey.spacing_m:.2f} m), heading "
+             f"{survey.heading_deg:g} deg, margin {survey.margin_m:.2f} m, at {survey.alt_m:.2f} m"]
+    if survey.camera is None:
+        return lines
+    doc = camera_document(result, plan_photos(result, plan_missions(result)))
+    for u in doc["uavs"]:
+        lines.append(f"camera {u['name']}: at {u['alt']:.2f} m a footprint "
+                     f"{u['footprint'][0]:.2f} x {u['footprint'][1]:.2f} m (across x along), "
+                     f"GSD {u['gsd_cm']:.2f} cm/px, {u['photos']} photos")
+    lines.append(f"camera: a photo every {doc['trigger_distance']:.2f} m along each lane "
+                 f"(front overlap {survey.camera.front_overlap:g}, side overlap "
+                 f"{survey.camera.side_overlap:g}); "
+                 f"{sum(u['photos'] for u in doc['uavs'])} photos in all")
+    return lines
 
 
 def format_leg(index: int, count: int, leg) -> str:

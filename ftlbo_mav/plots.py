@@ -3,7 +3,7 @@
 - ``plan-3d.png``: the centroid's and every UAV's path among the obstacle cylinders, the
   formation drawn at each waypoint (figures 3-4);
 - ``plan-ground.png``: the projection on the ground, x-y (figure 5), with the survey's
-  lanes and the via points;
+  lanes, the via points and, with a ``[camera]``, every photo's footprint;
 - ``plan-vertical.png``: the projections on the vertical planes, x-z and y-z (figure 6);
 - ``convergence.png``: the best cost per iteration (figure 8, for one plan).
 
@@ -22,10 +22,12 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Circle, Patch, Rectangle
+from matplotlib.patches import Circle, Patch, Polygon, Rectangle
 
+from .mission.export import plan_missions
 from .mission.files import OutputFolder
 from .mission.gis import OBSTACLE_COLOUR, uav_colour
+from .mission.photos import UavPhotos, plan_photos
 from .planning.planner import Plan
 
 DPI = 110
@@ -49,6 +51,8 @@ def _title(plan: Plan, what: str) -> str:
 
 
 LANE_STYLE = dict(color="#1f5fbf", linewidth=7, alpha=0.18, solid_capstyle="butt")
+PHOTO_ALPHA = 0.06
+"""Each footprint's fill: overlapping photos add up to a darker shade."""
 VIA_STYLE = dict(color="#1f5fbf", marker="D", markersize=6, linestyle="none")
 
 
@@ -84,7 +88,14 @@ def _closed(points: np.ndarray) -> np.ndarray:
     return np.vstack([points, points[:1]]) if len(points) > 2 else points
 
 
-def _legend_handles(plan: Plan, *, ground: bool) -> list:
+def _photos(plan: Plan) -> list[UavPhotos]:
+    """The survey's photos, from the missions the plan writes (none without a camera)."""
+    if plan.scenario.survey is None or plan.scenario.survey.camera is None:
+        return []
+    return plan_photos(plan, plan_missions(plan))
+
+
+def _legend_handles(plan: Plan, *, ground: bool, photos: list[UavPhotos] = ()) -> list:
     handles = [Line2D([], [], label="centroid", **CENTROID_STYLE)]
     handles += [
         Line2D([], [], color=uav_colour(n), linewidth=2, marker="o", markersize=4,
@@ -101,8 +112,12 @@ def _legend_handles(plan: Plan, *, ground: bool) -> list:
         handles.append(Line2D([], [], label="via point", **VIA_STYLE))
     if plan.scenario.survey is not None:
         sv = plan.scenario.survey
+        apart = sv.lane_spacing_m if sv.lane_spacing_m is not None else sv.spacing_m
         handles.append(Line2D([], [], label=f"survey lane ({len(sv.lanes)}, "
-                              f"{sv.spacing_m:g} m apart)", **LANE_STYLE))
+                              f"{apart:.2f} m apart)", **LANE_STYLE))
+    for n, uav in enumerate(photos):
+        handles.append(Patch(facecolor=uav_colour(n), alpha=PHOTO_ALPHA * 3,
+                             label=f"{uav.name} photo footprints ({uav.count})"))
     handles += [
         Line2D([], [], color="green", marker="^", linestyle="none", markersize=9, label="start"),
         Line2D([], [], color="#c00000", marker="s", linestyle="none", markersize=8, label="goal"),
@@ -227,6 +242,14 @@ def figure_ground(plan: Plan) -> Figure:
         ax.plot(lane[:, 0], lane[:, 1], zorder=1, **LANE_STYLE)
         ax.annotate(f"lane {k + 1}", lane[0, :2], textcoords="offset points", xytext=(3, 3),
                     fontsize=8, color=LANE_STYLE["color"], zorder=6)
+    photos = _photos(plan)
+    for n, uav in enumerate(photos):
+        for corners in uav.corners:
+            ax.add_patch(Polygon(corners, closed=True, facecolor=uav_colour(n),
+                                 alpha=PHOTO_ALPHA, edgecolor="none", zorder=1))
+        if uav.count:
+            ax.plot(uav.positions[:, 0], uav.positions[:, 1], linestyle="none", marker=".",
+                    markersize=2.5, color=uav_colour(n), zorder=2)
     _paths_2d(ax, plan, 0, 1)
     ax.set_xlim(view_lo[0], view_hi[0])
     ax.set_ylim(view_lo[1], view_hi[1])
@@ -235,8 +258,8 @@ def figure_ground(plan: Plan) -> Figure:
     ax.set_ylabel("north (m)")
     ax.grid(True, linewidth=0.4, alpha=0.5)
     ax.set_title(_title(plan, "ground projection (x-y)"), color=_status_colour(plan))
-    fig.legend(handles=_legend_handles(plan, ground=True), loc="outside right upper",
-               fontsize=8)
+    fig.legend(handles=_legend_handles(plan, ground=True, photos=photos),
+               loc="outside right upper", fontsize=8)
     return fig
 
 

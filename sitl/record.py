@@ -11,6 +11,10 @@ and writes, in ``DIR``:
   recording did (GUIDED takeoff, hover, current item 2, AUTO): every MISSION_ITEM_REACHED
   and GLOBAL_POSITION_INT row, times in seconds since AUTO.
 
+With ``--camera`` it records ``camera.json`` instead (:mod:`sitl.camera`): camera
+trigger items stored and read back, and a photo survey flown with a camera configured,
+every CAMERA_FEEDBACK.
+
 Then ``FTLBO_RECORDINGS=DIR python -m pytest tests/ardupilot tests/conformance`` holds the
 storage model (and the emulator) to the new recording, so a newer ArduPilot is checked the
 way 4.5.6 was. The version string the vehicle reports goes into each file's ``about``.
@@ -142,8 +146,23 @@ def main(argv: list[str] | None = None) -> int:
                         help="defaults .parm file (e.g. ArduPilot's copter.parm)")
     parser.add_argument("--flight", action="store_true",
                         help="also fly the example's uav1 mission (about two minutes)")
+    parser.add_argument("--camera", action="store_true",
+                        help="instead: camera trigger items and a photo survey flight "
+                             "(camera.json, sitl/camera.py; about five minutes)")
     args = parser.parse_args(argv)
     timing = Timing()
+    if args.camera:
+        from .camera import record_camera
+
+        try:
+            doc = record_camera(args.binary, args.defaults, args.out)
+        except (FtlboError, ValueError, OSError) as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "camera.json").write_text(json.dumps(doc, indent=1) + "\n")
+        print(f"wrote {args.out / 'camera.json'}", file=sys.stderr)
+        return 0
     try:
         with SitlSwarm(binary=args.binary, homes=[HOME], defaults=args.defaults) as swarm:
             links = open_links(swarm.urls, connect_timeout_s=30.0)

@@ -158,6 +158,7 @@ SLOTS: dict[int, tuple[Slot, Slot, Slot, Slot]] = {
     R.MAV_CMD_DO_GO_AROUND: (_drop, _drop, _drop, _drop),
     R.MAV_CMD_DO_SET_ROI: _P1,
     R.MAV_CMD_DO_MOUNT_CONTROL: (_keep, _keep, _keep, _drop),
+    # Cam_Trigg_Distance: float meters, uint8 trigger (recorded: camera.json)
     R.MAV_CMD_DO_SET_CAM_TRIGG_DIST: (_keep, _drop, u8, _drop),
     R.MAV_CMD_DO_FENCE_ENABLE: _P1,
     R.MAV_CMD_DO_AUX_FUNCTION: (u16, u8, _drop, _drop),

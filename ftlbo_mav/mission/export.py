@@ -22,7 +22,16 @@ from ..inputs import read_user_text
 from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
 from ..planning.problem import problem_from_scenario
-from ..scenario import AUTO, Cylinder, GeoPoint, PlannerSettings, Scenario, Survey, ViaPoint
+from ..scenario import (
+    AUTO,
+    Camera,
+    Cylinder,
+    GeoPoint,
+    PlannerSettings,
+    Scenario,
+    Survey,
+    ViaPoint,
+)
 from ..scenario.model import MAX_ALTITUDE_M, MAX_OFFSET_M, MAX_RADIUS_M
 from .fence import UavFence, plan_fences
 from .files import OutputFolder, digest, read_mission_text
@@ -30,6 +39,7 @@ from .geodetic import GeodeticPlan, geodetic_view
 from .gis import render_geojson, render_kml
 from .items import UavMission, build_mission  # UavMission re-exported: it lived here
 from .params_file import FENCE_PARAMS_FILE, render_params
+from .photos import UavPhotos, camera_document, plan_photos
 from .qgc_plan import render_plan
 from .waypoints import render_waypoints
 
@@ -51,6 +61,10 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
     missions = []
     settings = plan.scenario.mission
     view = geodetic if geodetic is not None else geodetic_view(plan)
+    survey = plan.scenario.survey
+    camera = ()
+    if survey is not None and survey.trigger_distance_m is not None:
+        camera = tuple((a, b, survey.trigger_distance_m) for a, b in lane_points(plan))
     for n, lla in enumerate(view.uav_paths):
         items = build_mission(
             home=(float(lla[0, 0]), float(lla[0, 1])),
@@ -59,10 +73,24 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
             end_action=settings.end_action,
             speed_m_s=settings.speed_m_s,
             holds_s=None if plan.holds_s is None else [float(h) for h in plan.holds_s],
+            camera=camera,
         )
         offset = tuple(float(v) for v in plan.problem.offsets[n])
         missions.append(UavMission(f"uav{n + 1}", offset, tuple(items)))
     return missions
+
+
+def lane_points(plan: Plan) -> list[tuple[int, int]]:
+    """Each survey lane's entry and exit as indices into the plan's paths (the lanes'
+    ends are the last via points, two a lane; a leg of ``m`` waypoints adds ``m + 1``
+    points after its start)."""
+    survey = plan.scenario.survey
+    if survey is None or not survey.lanes:
+        return []
+    starts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs])  # route point -> index
+    first = len(plan.scenario.via) - 2 * len(survey.lanes) + 1  # route index of lane 1's entry
+    return [(int(starts[first + 2 * k]), int(starts[first + 2 * k + 1]))
+            for k in range(len(survey.lanes))]
 
 
 def _finite(value: float) -> float | None:
@@ -104,16 +132,20 @@ def _leg_document(leg: Leg, first: int) -> dict:
 def plan_document(
     plan: Plan, missions: list[UavMission], *, written: bool, geodetic: GeodeticPlan | None = None,
     digests: dict[str, str] | None = None, fences: list[UavFence] | None = None,
+    photos: list[UavPhotos] | None = None,
 ) -> dict:
     """The ``plan.json`` content. ``written``: whether the mission files were written;
     ``digests``: their SHA-256 by UAV name (:func:`~.files.digest` of the text written).
 
     Totals at the top (cost, bound, evaluations, seconds: sums over the legs), one entry
-    per leg in ``legs`` (``first_point``: index of the leg's start in ``centroid``)."""
+    per leg in ``legs`` (``first_point``: index of the leg's start in ``centroid``).
+    ``photos``: the survey's (:func:`~.photos.plan_photos`, computed here when not given)."""
     s, sc = plan.settings, plan.scenario
     view = geodetic if geodetic is not None else geodetic_view(plan)
     firsts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs[:-1]])
     survey = sc.survey
+    if photos is None:
+        photos = plan_photos(plan, missions)
     return {
         "scenario": plan.scenario.name or plan.scenario.source,
         "algorithm": s.algorithm,
@@ -152,7 +184,10 @@ def plan_document(
             "heading": survey.heading_deg,
             "margin": survey.margin_m,
             "alt": survey.alt_m,
+            "lane_count": len(survey.lanes),
+            "lane_spacing": _round(survey.lane_spacing_m, 4),
             "lanes": [[[a.lat_deg, a.lon_deg], [b.lat_deg, b.lon_deg]] for a, b in survey.lanes],
+            "camera": camera_document(plan, photos),
         },
         "legs": [_leg_document(leg, int(f)) for leg, f in zip(plan.legs, firsts)],
         "centroid": _points(view.centroid),
@@ -165,6 +200,7 @@ def plan_document(
                 "mission_sha256": (digests or {}).get(m.name) if written else None,
                 **_uav_predicted(plan, n),
                 **_fence_document(m.name, fences, n, written),
+                **({"photos": photos[n].count} if photos else {}),
             }
             for n, (m, path) in enumerate(zip(missions, view.uav_paths))
         ],
@@ -232,6 +268,7 @@ def plan_files(
     missions = plan_missions(plan, geodetic=view)
     write_missions = plan.feasible or allow_infeasible
     fences = plan_fences(plan) if fence else []
+    photos = plan_photos(plan, missions)
     files: dict[str, str] = {}
     if write_missions:
         for n, m in enumerate(missions):
@@ -247,13 +284,15 @@ def plan_files(
         if fences:
             files[FENCE_PARAMS_FILE] = render_params(fences[0].params)
     if "geojson" in formats:
-        files["plan.geojson"] = render_geojson(plan, missions, geodetic=view, fences=fences)
+        files["plan.geojson"] = render_geojson(plan, missions, geodetic=view, fences=fences,
+                                               photos=photos)
     if "kml" in formats:
-        files["plan.kml"] = render_kml(plan, missions, geodetic=view, fences=fences)
+        files["plan.kml"] = render_kml(plan, missions, geodetic=view, fences=fences,
+                                       photos=photos)
     digests = {m.name: digest(files[f"{m.name}.waypoints"])
                for m in missions if write_missions}
     doc = plan_document(plan, missions, written=write_missions, geodetic=view, digests=digests,
-                        fences=fences)
+                        fences=fences, photos=photos)
     files["plan.json"] = json.dumps(doc, indent=2) + "\n"
     return files
 
@@ -339,12 +378,18 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
                     for v in doc.get("via", []))
         survey = doc.get("survey")
         if survey is not None:
+            camera = survey.get("camera")
+            lane_spacing = survey.get("lane_spacing")
             survey = Survey(
                 spacing_m=float(survey["spacing"]), heading_deg=float(survey["heading"]),
                 margin_m=float(survey["margin"]), alt_m=float(survey["alt"]),
                 lanes=tuple((GeoPoint(*map(float, a), float(survey["alt"])),
                              GeoPoint(*map(float, b), float(survey["alt"])))
-                            for a, b in survey["lanes"]))
+                            for a, b in survey["lanes"]),
+                lane_spacing_m=None if lane_spacing is None else float(lane_spacing),
+                camera=None if camera is None else _camera_from_document(camera),
+                trigger_distance_m=None if camera is None else float(
+                    camera["trigger_distance"]))
         scenario = Scenario(
             corner_a=GeoPoint(*map(float, area["corner_a"])),
             corner_b=GeoPoint(*map(float, area["corner_b"])),
@@ -499,6 +544,17 @@ def _check_plan_values(scenario: Scenario, settings: PlannerSettings, legs, doc:
             if leg.waypoints != settings.waypoints:
                 raise bad(f"legs[{k}].waypoints", f"{leg.waypoints} differs from the plan's "
                                                   f"waypoints = {settings.waypoints}")
+
+
+def _camera_from_document(doc: dict) -> Camera:
+    gsd = doc.get("gsd_cm")
+    return Camera(
+        sensor_width_mm=float(doc["sensor_width_mm"]),
+        sensor_height_mm=float(doc["sensor_height_mm"]),
+        focal_length_mm=float(doc["focal_length_mm"]), image_width_px=int(doc["image_width_px"]),
+        image_height_px=int(doc["image_height_px"]), front_overlap=float(doc["front_overlap"]),
+        side_overlap=float(doc["side_overlap"]), landscape=bool(doc["landscape"]),
+        gsd_cm=None if gsd is None else float(gsd))
 
 
 def _cost_terms(doc: dict) -> CostTerms:

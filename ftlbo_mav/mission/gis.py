@@ -31,6 +31,7 @@ from .items import (
     CMD_NAV_LOITER_UNLIM,
     CMD_NAV_WAYPOINT,
 )
+from .photos import UavPhotos
 
 if TYPE_CHECKING:  # for annotations only
     from ..planning.planner import Plan
@@ -106,15 +107,34 @@ def fence_shapes(fence: UavFence):
         yield "rally_point", (r.lat_deg, r.lon_deg, r.alt_m), {}
 
 
+def _photo_rings(plan: Plan, photos: Sequence[UavPhotos]):
+    """Per UAV: its photos ``(lat, lon, alt)`` and footprint rings ``[(lat, lon), ...]``
+    (closed), from the ENU positions and corners of :mod:`.photos`."""
+    frame = plan.scenario.frame
+    for uav in photos:
+        if not uav.count:
+            yield uav, [], []
+            continue
+        lat, lon, _ = frame.to_lla(uav.positions)
+        corners = uav.corners.reshape(-1, 2)
+        clat, clon, _ = frame.to_lla(np.column_stack([corners, np.zeros(len(corners))]))
+        clat, clon = clat.reshape(-1, 4), clon.reshape(-1, 4)
+        points = list(zip(np.atleast_1d(lat), np.atleast_1d(lon), uav.positions[:, 2]))
+        rings = [[*zip(a, o), (a[0], o[0])] for a, o in zip(clat, clon)]
+        yield uav, points, rings
+
+
 def geojson_document(
     plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None,
-    fences: Sequence[UavFence] = (),
+    fences: Sequence[UavFence] = (), photos: Sequence[UavPhotos] = (),
 ) -> dict:
     """The plan as an RFC 7946 FeatureCollection (a plain ``dict``, ready for ``json``).
 
     Every feature has a ``kind`` property: ``area``, ``obstacle``, ``centroid_path``,
-    ``uav_path`` or ``mission_item``. ``geodetic``: the plan's :func:`geodetic_view`
-    (computed here when not given).
+    ``uav_path``, ``mission_item``, the fence's kinds, and for a survey with a camera
+    ``photo`` (where a photo is taken, its number per UAV) and ``photo_footprint`` (the
+    ground it covers). ``geodetic``: the plan's :func:`geodetic_view` (computed here when
+    not given).
     """
     s = plan.scenario
     view = geodetic if geodetic is not None else geodetic_view(plan)
@@ -180,14 +200,22 @@ def geojson_document(
                 geometry = {"type": "Polygon",
                             "coordinates": [[_position(lat, lon) for lat, lon in shape]]}
             features.append(_feature(geometry, kind=kind, uav=fence.name, **props))
+    for uav, points, rings in _photo_rings(plan, photos):
+        for k, (point, ring) in enumerate(zip(points, rings), start=1):
+            features.append(_feature({"type": "Point", "coordinates": _position(*point)},
+                                     kind="photo", uav=uav.name, photo=k,
+                                     altitude_reference=ALTITUDE_REFERENCE))
+            features.append(_feature(
+                {"type": "Polygon", "coordinates": [[_position(a, o) for a, o in ring]]},
+                kind="photo_footprint", uav=uav.name, photo=k))
     return {"type": "FeatureCollection", "name": s.name or "ftlbo-mav plan", "features": features}
 
 
 def render_geojson(
     plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None,
-    fences: Sequence[UavFence] = (),
+    fences: Sequence[UavFence] = (), photos: Sequence[UavPhotos] = (),
 ) -> str:
-    doc = geojson_document(plan, missions, geodetic=geodetic, fences=fences)
+    doc = geojson_document(plan, missions, geodetic=geodetic, fences=fences, photos=photos)
     return json.dumps(doc, indent=1) + "\n"
 
 
@@ -256,13 +284,14 @@ def _kml_polygon(
 
 def render_kml(
     plan: Plan, missions: Sequence[UavMission], *, geodetic: GeodeticPlan | None = None,
-    fences: Sequence[UavFence] = (),
+    fences: Sequence[UavFence] = (), photos: Sequence[UavPhotos] = (),
 ) -> str:
     """The plan as KML 2.2: area and obstacles, the centroid, then one folder per UAV.
 
     Altitudes are ``relativeToGround``. Obstacles are drawn as prisms up to the top of
     the altitude band, so Google Earth shows the cylinders the paths avoid. ``geodetic``:
-    the plan's :func:`geodetic_view` (computed here when not given).
+    the plan's :func:`geodetic_view` (computed here when not given). A survey's photos
+    (``photos``) are a folder per UAV of footprints on the ground.
     """
     ET.register_namespace("", KML_NS)
     s = plan.scenario
@@ -278,6 +307,9 @@ def render_kml(
     _kml_style(doc, "centroid", line=_kml_colour("#000000"), width=2)
     for n in range(len(missions)):
         _kml_style(doc, f"uav{n + 1}", line=_kml_colour(uav_colour(n)), width=3)
+    for n, uav in enumerate(photos):
+        _kml_style(doc, f"{uav.name}-photo", line=_kml_colour(uav_colour(n)), width=1,
+                   poly=_kml_colour(uav_colour(n), 0x30))
 
     area = _sub(doc, "Folder")
     _sub(area, "name", "Area and obstacles")
@@ -319,5 +351,11 @@ def render_kml(
                          else f"exclusion r {props['radius_m']:g} m")
                 _kml_polygon(folder, f"{fence.name} fence {label}", "area",
                              [(lat, lon, 0.0) for lat, lon in shape], height_m=None)
+    for uav, _points, rings in _photo_rings(plan, photos):
+        folder = _sub(doc, "Folder")
+        _sub(folder, "name", f"{uav.name} photos ({uav.count})")
+        for k, ring in enumerate(rings, start=1):
+            _kml_polygon(folder, f"{uav.name} photo {k}", f"{uav.name}-photo",
+                         [(a, o, 0.0) for a, o in ring], height_m=None)
     ET.indent(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

@@ -23,6 +23,7 @@ CMD_NAV_RETURN_TO_LAUNCH = 20
 CMD_NAV_LAND = 21
 CMD_NAV_TAKEOFF = 22
 CMD_DO_CHANGE_SPEED = 178
+CMD_DO_SET_CAM_TRIGG_DIST = 206
 # fence and rally items (mission_type FENCE / RALLY; their storage: ardupilot/fence.py)
 CMD_FENCE_POLYGON_VERTEX_INCLUSION = 5001
 CMD_FENCE_CIRCLE_EXCLUSION = 5004
@@ -35,6 +36,7 @@ COMMAND_NAMES = {
     CMD_NAV_LAND: "LAND",
     CMD_NAV_TAKEOFF: "TAKEOFF",
     CMD_DO_CHANGE_SPEED: "DO_CHANGE_SPEED",
+    CMD_DO_SET_CAM_TRIGG_DIST: "DO_SET_CAM_TRIGG_DIST",
     CMD_FENCE_POLYGON_VERTEX_INCLUSION: "FENCE_POLYGON_VERTEX_INCLUSION",
     CMD_FENCE_CIRCLE_EXCLUSION: "FENCE_CIRCLE_EXCLUSION",
     CMD_RALLY_POINT: "RALLY_POINT",
@@ -102,6 +104,7 @@ def build_mission(
     end_action: str = "land",
     speed_m_s: float | None = None,
     holds_s: Sequence[float] | None = None,
+    camera: Sequence[tuple[int, int, float]] = (),
 ) -> list[MissionItem]:
     """The mission of one UAV.
 
@@ -129,10 +132,17 @@ def build_mission(
     holds = [0.0] * len(path) if holds_s is None else [float(h) for h in holds_s]
     if len(holds) != len(path):
         raise ValueError(f"holds_s has {len(holds)} values for {len(path)} path points")
-    items += [
-        dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt, param1=hold)
-        for (lat, lon, alt), hold in zip(path, holds)
-    ]
+    after: dict[int, list[dict]] = {}
+    for entry, exit_, distance in camera:
+        if not 0 < entry < exit_ < len(path):
+            raise ValueError(f"a lane from path point {entry} to {exit_} is not in the path")
+        after.setdefault(entry, []).append(dict(
+            command=CMD_DO_SET_CAM_TRIGG_DIST, param1=float(distance), param3=1.0))
+        after.setdefault(exit_, []).append(dict(command=CMD_DO_SET_CAM_TRIGG_DIST))
+    for k, ((lat, lon, alt), hold) in enumerate(zip(path, holds)):
+        items.append(dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt,
+                          param1=hold))
+        items += after.get(k, [])
     if speed_m_s is not None:
         # After the start point, before the first leg: a mission started there (fly's
         # synchronized start) runs it as it begins, and ModeAuto::init would forget a

@@ -6,9 +6,14 @@ reader (:mod:`ftlbo_mav.scenario`) turns a ``[survey]`` table into lanes with
 
 Conventions: ``heading_deg`` is the lanes' direction in degrees clockwise from north (a
 compass heading; 0 and 180 give the same lanes). "Across" is the direction 90 degrees
-clockwise from the heading. Lane ``k`` (0-based, across order) runs at ``first + k *
-spacing`` across, where ``first`` is the rectangle's smallest across coordinate: with an
-axis-aligned heading the first lane runs along one side of the rectangle, on it.
+clockwise from the heading.
+
+Coverage (as Mission Planner's grid and QGroundControl's survey lay transects): the first
+lane runs on the rectangle's one side and the last on the other, the lanes in between
+evenly spread, as many as it takes for the spacing to be no wider than asked. So every
+point of the rectangle is within half the (actual) spacing of a lane's line. With an
+oblique heading the two outer "sides" are corners: the outer lanes are the first ones
+:data:`MIN_LANE_M` long, a corner triangle less than that wide beyond them.
 """
 
 from __future__ import annotations
@@ -80,8 +85,9 @@ def lay_lanes(*, lower: np.ndarray, upper: np.ndarray, spacing_m: float, heading
               radii: np.ndarray | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
     """Lanes inside the rectangle ``lower (2,)``..``upper (2,)``, in flight order.
 
-    Parallel centre lines ``spacing_m`` apart along ``heading_deg``, clipped to the
-    rectangle. A lane end inside one of the discs ``centres (C, 2)``, ``radii (C,)``
+    Parallel centre lines along ``heading_deg``, clipped to the rectangle: the first and
+    last on its two sides across (see the module), :func:`lane_offsets` between them, at
+    most ``spacing_m`` apart. A lane end inside one of the discs ``centres (C, 2)``, ``radii (C,)``
     (the obstacles as the centroid sees them: one disc per UAV and cylinder, radius +
     clearance) is moved inward along the lane until it is outside every disc; the
     obstacles in a lane's middle are left to the planner's detours. Lanes shorter than
@@ -97,13 +103,9 @@ def lay_lanes(*, lower: np.ndarray, upper: np.ndarray, spacing_m: float, heading
     along, across = directions(heading_deg)
     centres = np.zeros((0, 2)) if centres is None else np.asarray(centres, float)
     radii = np.zeros(0) if radii is None else np.asarray(radii, float)
-    corners = np.array([[lower[0], lower[1]], [upper[0], lower[1]],
-                        [lower[0], upper[1]], [upper[0], upper[1]]])
-    first, last = float((corners @ across).min()), float((corners @ across).max())
     lanes = []
-    count = int(math.floor((last - first) / spacing_m + 1e-9)) + 1
-    for k in range(count):
-        offset = first + k * spacing_m
+    for offset in lane_offsets(lower=lower, upper=upper, spacing_m=spacing_m,
+                               heading_deg=heading_deg):
         point = offset * across
         span = _clip_line(point, along, lower, upper)
         if span is None:
@@ -124,6 +126,41 @@ def lay_lanes(*, lower: np.ndarray, upper: np.ndarray, spacing_m: float, heading
         ordered.append((a, b))
         here = b
     return ordered
+
+
+def across_extent(*, lower: np.ndarray, upper: np.ndarray,
+                  heading_deg: float) -> tuple[float, float]:
+    """The smallest and largest across coordinate a lane of the rectangle can have: its
+    sides, or for an oblique heading the offsets where a lane is :data:`MIN_LANE_M` long
+    (a lane ``u`` inside a corner is ``u / |sin h cos h|`` long)."""
+    along, across = directions(heading_deg)
+    corners = np.array([[lower[0], lower[1]], [upper[0], lower[1]],
+                        [lower[0], upper[1]], [upper[0], upper[1]]])
+    first, last = float((corners @ across).min()), float((corners @ across).max())
+    skew = abs(along[0] * along[1])
+    inset = MIN_LANE_M * skew * (1 + 1e-6) if skew > 1e-12 else 0.0
+    if last - first <= 2 * inset:
+        middle = (first + last) / 2
+        return middle, middle
+    return first + inset, last - inset
+
+
+def lane_offsets(*, lower: np.ndarray, upper: np.ndarray, spacing_m: float,
+                 heading_deg: float) -> np.ndarray:
+    """The lanes' across coordinates ``(K,)``: ``K = ceil(width / spacing) + 1`` evenly
+    from one side (:func:`across_extent`) to the other, so never more than ``spacing_m``
+    apart; one lane when the rectangle is no wider than a lane."""
+    first, last = across_extent(lower=lower, upper=upper, heading_deg=heading_deg)
+    width = last - first
+    if width <= 1e-9:
+        return np.array([first])
+    gaps = max(int(math.ceil(width / spacing_m - 1e-9)), 1)
+    return first + np.arange(gaps + 1) * (width / gaps)
+
+
+def lane_spacing(offsets: np.ndarray) -> float:
+    """The actual spacing of lanes at ``offsets`` (0 for one lane)."""
+    return float(np.diff(np.sort(offsets)).max()) if len(offsets) > 1 else 0.0
 
 
 def _distance(point: np.ndarray, lane: tuple[np.ndarray, np.ndarray]) -> float:

@@ -11,6 +11,7 @@ from .model import (
     ALGORITHMS,
     AUTO,
     END_ACTIONS,
+    Camera,
     Cylinder,
     GeoPoint,
     MissionSettings,
@@ -23,7 +24,7 @@ from .model import (
 from .reader import load_scenario, parse_scenario, survey_width
 
 __all__ = [
-    "ALGORITHMS", "AUTO", "END_ACTIONS", "Cylinder", "GeoPoint", "MissionSettings",
+    "ALGORITHMS", "AUTO", "END_ACTIONS", "Camera", "Cylinder", "GeoPoint", "MissionSettings",
     "PlannerSettings", "Scenario", "Survey", "ViaPoint", "Weights", "load_scenario",
     "parse_scenario", "survey_width",
 ]

@@ -1,7 +1,8 @@
 """The scenario as values: a frozen :class:`Scenario` and its parts, and its ENU frame.
 
 Read from TOML by :mod:`.reader`; every name here is also :mod:`ftlbo_mav.scenario`'s
-(``Cylinder`` with them: it lives in :mod:`ftlbo_mav.obstacles`).
+(``Cylinder`` and ``Camera`` with them: they live in :mod:`ftlbo_mav.obstacles` and
+:mod:`ftlbo_mav.planning.camera`).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import numpy as np
 from ..ardupilot.navigation import Navigation
 from ..geo import LocalFrame
 from ..obstacles import Cylinder
+from ..planning.camera import Camera
 
 ALGORITHMS = ("ftlbo-seeded", "ftlbo", "tlbo", "ga", "theta-pso")
 """Every name in planning.optimizers.OPTIMIZERS; the first is the default. ``ftlbo`` is
@@ -78,15 +80,23 @@ class ViaPoint:
 
 @dataclass(frozen=True)
 class Survey:
-    """A ``[survey]``: lanes ``spacing_m`` apart along ``heading_deg`` (degrees clockwise
-    from north), ``margin_m`` inside the area's sides, flown at ``alt_m``. ``lanes``:
-    each lane's (entry, exit) in flight order; its ends are the scenario's via points."""
+    """A ``[survey]``: lanes at most ``spacing_m`` apart along ``heading_deg`` (degrees
+    clockwise from north), ``margin_m`` inside the area's sides, flown at ``alt_m``.
+    ``lanes``: each lane's (entry, exit) in flight order; its ends are the scenario's via
+    points. ``lane_spacing_m``: the spacing they were laid at (the width between the
+    outer lanes over their gaps: never wider than ``spacing_m``; 0 for one lane).
+    ``camera``: the ``[camera]`` table, when the survey takes photos; ``spacing_m`` then
+    comes from its side overlap when the file gives none, and ``trigger_distance_m``
+    (metres between photos along a lane) from its front overlap."""
 
     spacing_m: float
     heading_deg: float
     margin_m: float
     alt_m: float
     lanes: tuple[tuple[GeoPoint, GeoPoint], ...] = ()
+    lane_spacing_m: float | None = None
+    camera: Camera | None = None
+    trigger_distance_m: float | None = None
 
 
 @dataclass(frozen=True)

@@ -34,6 +34,7 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..ardupilot import fence as ap_fence
+from ..ardupilot.camera import CAMERA_PARAM_DEFAULTS, DistanceTrigger, feedback_message
 from ..ardupilot.commands import (
     ARMABLE_MODES,
     ARMING_MOTORS,
@@ -67,7 +68,7 @@ from .modes.common import text as _text
 from .physics import FlightLimits, VerticalShaper, WaypointNav
 from .wind import Gusts
 
-PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS}
+PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS, **CAMERA_PARAM_DEFAULTS}
 FENCE_CHECK_S = 1.0 / ap_fence.FENCE_CHECK_HZ
 
 STEP_S = 0.02
@@ -131,6 +132,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self._armed_on_ground_since: float | None = None
         self._announced_ready = False
         self._pending: list = []  # announcements made outside advance()
+        self.camera = DistanceTrigger()  # AP_Camera's first instance (with CAM1_TYPE set)
+        self.home_alt_m = 0.0  # home above mean sea level (CAMERA_FEEDBACK's alt_msl)
         self._takeoff_at: float | None = None  # spool-up: the climb starts then
         self._takeoff_alt = 0.0
         self._takeoff_done_at: float | None = None
@@ -389,10 +392,34 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             self.time += dt
             self._flush_do(out)
             self._step(dt, out)
+            self._camera_step()
             self._fence_step(out)
             out += self._take_pending()
         self._flush_do(out)
         return out + self._take_pending()
+
+    # -- the camera (ardupilot/camera.py: AP_Camera, distance triggering)
+    def _camera_trigger_distance(self, distance_m: float, trigger: float) -> None:
+        """AP_Mission::start_command_camera for DO_SET_CAM_TRIGG_DIST: no camera, nothing."""
+        if int(self.params["CAM1_TYPE"]) == 0:
+            return
+        self.camera.set_distance(distance_m)
+        self.params["CAM1_TRIGG_DIST"] = float(distance_m)
+        if int(trigger) == 1:  # cam_trigg_dist.trigger, a uint8
+            self._photo()
+
+    def _camera_step(self) -> None:
+        """AP_Camera_Backend::update at 50 Hz (one step is 20 ms)."""
+        if int(self.params["CAM1_TYPE"]) != 0 and self.camera.update(self.position):
+            self._photo()
+
+    def _photo(self) -> None:
+        image = self.camera.take_picture(self.position)
+        lat, lon = self.latlon()
+        alt = float(self.position[2])
+        self._pending.append(feedback_message(
+            time_usec=int(self.time * 1e6), image=image & 0xFFFF, lat_e7=round(lat * 1e7),
+            lon_e7=round(lon * 1e7), alt_msl_m=alt + self.home_alt_m, alt_rel_m=alt))
 
     def _fence_step(self, out: list) -> None:
         """Copter::fence_check at 25 Hz (ArduCopter/fence.cpp): a new breach while armed

@@ -133,6 +133,7 @@ class Vehicle:
         self._fence_version = -1
         self.autopilot = Autopilot(home=(lat, lon), boot_time=boot_time,
                                    options=AutopilotOptions(boot=self.boot, limits=options.limits))
+        self.autopilot.home_alt_m = alt
         self.links: dict[Link, LinkState] = {}
         self._mission_version = -1
 

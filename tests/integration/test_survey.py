@@ -1,6 +1,6 @@
 """The shipped survey (missions/orchard-survey.toml), end to end: plan it, upload the
 missions, fly them on the emulator (or ArduPilot SITL when ARDUPILOT_SITL is set) and
-check on what the vehicles reported that every UAV flew every lane and came back."""
+check on what the vehicles reported that every UAV flew every lane and landed at the goal."""
 
 from __future__ import annotations
 
@@ -47,7 +47,7 @@ def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
     # the promised clearance less a stated corner tolerance, as in test_fly
     assert summary["inside_obstacle"] is False
     assert summary["min_clearance_m"] >= scenario.clearance_m - 0.05, summary["min_clearance_m"]
-    assert max(summary["final_distance_to_goal_m"]) < 1.0  # back where they took off
+    assert max(summary["final_distance_to_goal_m"]) < 1.0  # landed at the goal
     # every UAV passed each of its lane ends (via point + its offset), in order
     record = FlightRecord.from_csv((out / "flight" / "flight.csv").read_text())
     via = scenario.route_enu()[1:-1]

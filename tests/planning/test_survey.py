@@ -11,7 +11,14 @@ import pytest
 from ftlbo_mav.planning.geometric import lower_bound
 from ftlbo_mav.planning.planner import AUTO_TARGET, plan, route_lower_bound, solve
 from ftlbo_mav.planning.seeds import RouteChains
-from ftlbo_mav.planning.survey import formation_width, lay_lanes
+from ftlbo_mav.planning.survey import (
+    MIN_LANE_M,
+    directions,
+    formation_width,
+    lane_offsets,
+    lane_spacing,
+    lay_lanes,
+)
 from ftlbo_mav.scenario import AUTO, PlannerSettings, load_scenario, parse_scenario
 
 from ..conftest import EXAMPLE, ROOT, SMALL
@@ -22,11 +29,11 @@ SURVEY = ROOT / "missions" / "orchard-survey.toml"
 
 
 def test_lanes_are_spacing_apart_along_the_heading_in_boustrophedon_order():
-    lanes = lay_lanes(lower=np.array([3.0, 3.0]), upper=np.array([60.0, 77.0]), spacing_m=14.0,
+    lanes = lay_lanes(lower=np.array([3.0, 3.0]), upper=np.array([59.0, 77.0]), spacing_m=14.0,
                       heading_deg=0.0, begin=np.array([6.0, 4.0]))
     assert len(lanes) == 5
     xs = [a[0] for a, _ in lanes]
-    assert np.allclose(xs, [3, 17, 31, 45, 59])  # first lane on the west side, 14 m apart
+    assert np.allclose(xs, [3, 17, 31, 45, 59])  # from the west side to the east, 14 m apart
     for k, (a, b) in enumerate(lanes):
         assert a[0] == pytest.approx(b[0])  # north-south
         # lane 1 entered at its south end (nearer the start), then north, south, ...
@@ -52,11 +59,50 @@ def test_an_oblique_heading_gives_parallel_lanes_inside_the_rectangle():
     along = np.array([np.sin(np.radians(30)), np.cos(np.radians(30))])
     across = np.array([along[1], -along[0]])
     offsets = sorted(float(a @ across) for a, _ in lanes)
-    assert np.allclose(np.diff(offsets), 7.0)
+    gaps = np.diff(offsets)
+    assert np.allclose(gaps, gaps[0]) and gaps[0] <= 7.0  # even, never wider than asked
     for a, b in lanes:
         assert abs(abs((b - a) @ along) - np.linalg.norm(b - a)) < 1e-9  # along the heading
         for p in (a, b):
             assert np.all(p >= lower - 1e-9) and np.all(p <= upper + 1e-9)
+
+
+def test_the_lanes_reach_both_sides_and_never_spread_wider_than_asked():
+    """The issue's orchard: 52 m across (north-south), margin 4, spacing 12, east-west
+    lanes: five lanes 11 m apart from the southern margin to the northern one (not four,
+    12 m apart from the northern one, leaving the southern 8 m unflown)."""
+    lanes = lay_lanes(lower=np.array([4.0, 4.0]), upper=np.array([96.0, 48.0]), spacing_m=12.0,
+                      heading_deg=90.0, begin=np.array([4.0, 4.0]))
+    ys = sorted(a[1] for a, _ in lanes)
+    assert ys == pytest.approx([4, 15, 26, 37, 48])
+    assert lanes[0][0][1] == pytest.approx(4.0)  # the start is south: the southern lane first
+
+
+@pytest.mark.parametrize("heading", [0.0, 17.0, 45.0, 90.0, 133.0])
+@pytest.mark.parametrize("spacing", [3.0, 7.5, 40.0])
+def test_every_point_is_within_half_a_spacing_of_a_lane(heading, spacing):
+    lower, upper = np.array([0.0, 0.0]), np.array([37.0, 23.0])
+    offsets = lane_offsets(lower=lower, upper=upper, spacing_m=spacing, heading_deg=heading)
+    actual = lane_spacing(offsets)
+    assert actual <= spacing + 1e-9
+    lanes = lay_lanes(lower=lower, upper=upper, spacing_m=spacing, heading_deg=heading,
+                      begin=lower)
+    assert len(lanes) == len(offsets)  # every lane is at least MIN_LANE_M long
+    grid = np.stack(np.meshgrid(np.linspace(0, 37, 75), np.linspace(0, 23, 47)), -1)
+    grid = grid.reshape(-1, 2)
+    # across each lane's line: every point within half the spacing (oblique: but for the
+    # corner triangles beyond the outer lanes, where a lane would be under MIN_LANE_M)
+    _, across = directions(heading)
+    side = np.abs((grid @ across)[:, None] - offsets[None, :]).min(axis=1)
+    skew = abs(np.sin(np.radians(heading)) * np.cos(np.radians(heading)))
+    assert side.max() <= actual / 2 + MIN_LANE_M * skew * 1.01 + 1e-9, (side.max(), actual)
+    if heading % 90 == 0:  # and to the lane itself (the segment), for a heading along a side
+        near = np.full(len(grid), np.inf)
+        for a, b in lanes:
+            ab = b - a
+            t = np.clip((grid - a) @ ab / (ab @ ab), 0, 1)
+            near = np.minimum(near, np.hypot(*(grid - a - t[:, None] * ab).T))
+        assert near.max() <= actual / 2 + 1e-6
 
 
 def test_a_lane_end_on_an_obstacle_moves_along_the_lane_until_clear():
@@ -175,4 +221,8 @@ def test_the_shipped_survey_has_lanes_trees_and_the_papers_triangle():
     assert s.offsets == ((0.0, 0.0, 2.0), (3.0, 0.0, -1.0), (-3.0, 0.0, -1.0))
     assert s.planner.waypoints == AUTO
     assert len(s.via) == 2 * len(s.survey.lanes)
-    assert s.start == s.goal  # a loop
+    # an odd number of lanes: from the south-west corner to the north-east one, where
+    # the last lane ends
+    assert len(s.survey.lanes) % 2 == 1
+    route = s.route_enu()
+    assert np.hypot(*(route[-1, :2] - route[-2, :2])) < 2.0

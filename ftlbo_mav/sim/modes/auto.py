@@ -25,6 +25,7 @@ from ...ardupilot.commands import (
 )
 from ...mission.items import (
     CMD_DO_CHANGE_SPEED,
+    CMD_DO_SET_CAM_TRIGG_DIST,
     CMD_NAV_LAND,
     CMD_NAV_LOITER_UNLIM,
     CMD_NAV_RETURN_TO_LAUNCH,
@@ -130,6 +131,8 @@ class ModeAuto:
             self._announce_start(item)
             if item.command == CMD_DO_CHANGE_SPEED and item.param2 > 0:
                 self.change_speed(float(item.param2))  # ModeAuto::do_change_speed
+            elif item.command == CMD_DO_SET_CAM_TRIGG_DIST:  # AP_Mission, AP_Camera
+                self._camera_trigger_distance(item.param1, item.param3)
             self._do_done.append(self.current)
             self.current += 1
         if item is None:
