@@ -375,3 +375,31 @@ def test_departures_are_seen_within_their_deadlines(plan_dir):
     print(f"[{BACKEND}] mode seen after {mode_s:.2f} s, link lost after {lost_s:.2f} s")
     assert mode_s <= 1.0 + 0.2  # one HEARTBEAT period, one watch cycle
     assert lost_s <= 2.0
+
+
+def test_monitor_lists_a_vehicle_that_leaves_its_mission(plan_dir):
+    """``monitor`` on the vehicles' SERIAL1 ports while they fly on SERIAL0: a switch to
+    LOITER in the middle of the mission is listed, and monitor exits 1."""
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        holder = {}
+        with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
+            take_off(planned, flying.vehicles, FlyOptions(), say=lambda _t: None)
+            thread = threading.Thread(target=lambda: holder.setdefault(
+                "result", CliRunner().invoke(main, [
+                    "monitor", str(plan_dir), "--sysid", "1..3", "--duration", "4",
+                    "--log-dir", str(plan_dir / "watched"),
+                    "--connect", " ".join(fleet.serial1_urls)])))
+            thread.start()
+            start_together(planned, flying.vehicles)
+            flying.vehicles[0].wait_for(lambda s: False, 2.0 / SPEEDUP + 1.0)
+            flying.vehicles[0].set_mode("LOITER")  # as a pilot would
+            thread.join(timeout=60)
+            abort(flying.vehicles, mode="LAND")
+    result = holder["result"]
+    assert result.exit_code == 1, result.output
+    assert "departure(s) from the plan" in result.stdout
+    assert "uav1 (sysid 1): mode: switched to LOITER" in result.stdout
+    summary = json.loads((plan_dir / "watched" / "summary.json").read_text())
+    assert any("switched to LOITER" in line for line in summary["departures"])
