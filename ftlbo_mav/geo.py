@@ -67,3 +67,11 @@ class LocalFrame:
             out = self._transformer.transform(float(x[0]), float(y[0]), float(z[0]), **kwargs)
             return tuple(np.array([v], float) for v in out)
         return self._transformer.transform(x, y, z, **kwargs)
+
+
+def segment_distance(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distances from points ``q`` (..., 2) to segments ``a``-``b`` (..., 2), broadcast."""
+    ab = b - a
+    denom = np.maximum((ab * ab).sum(-1), 1e-12)
+    t = np.clip(((q - a) * ab).sum(-1) / denom, 0.0, 1.0)
+    return np.linalg.norm(a + t[..., None] * ab - q, axis=-1)

@@ -62,25 +62,21 @@ class Response:
     """The policy at work: ``react`` to the watch's events, ``step`` every cycle,
     ``ended`` once nothing is left to wait for; ``lines`` for the report."""
 
-    def __init__(self, policy: FaultPolicy, names: Sequence[str], sysids: Sequence[int], *,
-                 stop_s: float = 3.0, budget_s: float = 50.0, lost_wait_s: float = 15.0,
-                 confirm_tries: int = 5,
+    def __init__(self, policy: FaultPolicy, *, stop_s: float = 3.0, budget_s: float = 50.0,
+                 lost_wait_s: float = 15.0, confirm_tries: int = 5,
                  t0: float | None = None,
                  route_check: Callable[[int], str | None] = lambda _j: None,
                  landing: Callable[[int], bool] = lambda _j: False) -> None:
         self.policy = policy
         self.landing = landing  # vehicle -> already on its mission's final landing
         self.route_check = route_check  # vehicle -> why RTL from here is not safe, or None
-        self.names, self.sysids = list(names), list(sysids)
         self.stop_s, self.budget_s, self.confirm_tries = stop_s, budget_s, confirm_tries
         self.lost_wait_s = lost_wait_s  # how long a lost link is waited for
-        self.lost_at: dict[int, float] = {}
         self.t0 = time.monotonic() if t0 is None else t0
         self.first_t: float | None = None
         self.left: dict[int, list[Event]] = {}  # vehicle -> its departures
         self.chose: set[int] = set()  # left by its own choice: never commanded
-        self.lost: set[int] = set()  # link down now
-        self.back: dict[int, float] = {}  # link back at
+        self.lost: dict[int, float] = {}  # link down now: since when
         self.answers: dict[int, _Answer] = {}
         self.history: dict[int, list[str]] = {}  # what was done, kept after a choice
 
@@ -96,8 +92,7 @@ class Response:
               watch: DepartureWatch, now: float) -> None:
         for e in events:
             if e.kind == LINK_BACK:
-                self.lost.discard(e.index)
-                self.back[e.index] = e.t
+                self.lost.pop(e.index, None)
                 if e.index in self.answers:
                     self.answers[e.index].done.append(f"link back at {self._at(e.t)}")
                 elif self.active:
@@ -106,8 +101,7 @@ class Response:
                 continue
             self.left.setdefault(e.index, []).append(e)
             if e.kind == LINK_LOST:
-                self.lost.add(e.index)
-                self.lost_at[e.index] = e.t
+                self.lost[e.index] = e.t
             if e.vehicle_chose:
                 self.chose.add(e.index)
                 gone = self.answers.pop(e.index, None)  # its own choice now stands
@@ -197,7 +191,7 @@ class Response:
         if now - self.first_t >= self.budget_s:
             return True
         return all(not v.status.armed or j in self.chose
-                   or (j in self.lost and now - self.lost_at[j] >= self.lost_wait_s)
+                   or (j in self.lost and now - self.lost[j] >= self.lost_wait_s)
                    for j, v in enumerate(vehicles))
 
     # -- the report

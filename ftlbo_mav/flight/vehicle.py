@@ -65,13 +65,17 @@ class Status:
     clock_offset_s: float | None = None
     heartbeat_t: float = 0.0
     heard_t: float = 0.0  # the last message of any kind from the vehicle
-    texts: list[str] = field(default_factory=list)
     # every STATUSTEXT as (arrival time, severity, text), the last 50; text_count counts
     # them all, so a watcher knows which ones are new
     text_log: list[tuple[float, int, str]] = field(default_factory=list)
     text_count: int = 0
     acks: dict[int, int] = field(default_factory=dict)
     params: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def texts(self) -> list[str]:
+        """The last 20 STATUSTEXTs' words."""
+        return [text for _t, _severity, text in self.text_log[-20:]]
 
 
 class FlightVehicle:
@@ -148,8 +152,6 @@ class FlightVehicle:
             elif kind == "PARAM_VALUE":
                 s.params[msg.param_id] = msg.param_value
             elif kind == "STATUSTEXT":
-                s.texts.append(msg.text)
-                del s.texts[:-20]
                 s.text_log.append((now, msg.severity, msg.text))
                 del s.text_log[:-50]
                 s.text_count += 1

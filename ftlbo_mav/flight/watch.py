@@ -14,6 +14,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ..ardupilot.fence import rtl_target
+from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
 from .departures import DEFAULT_WATCH, DepartureWatch, Event, Seen, WatchOptions
 from .keeper import FormationKeeper
@@ -52,13 +53,6 @@ def rally_points(planned: PlannedFlight, j: int) -> np.ndarray:
     return np.asarray(enu, float).reshape(-1, 3)[:, :2]
 
 
-def _segment_distance(a: np.ndarray, b: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Distance of each point (M, 2) from segment a-b."""
-    ab = b - a
-    t = np.clip(((points - a) @ ab) / max(float(ab @ ab), 1e-12), 0.0, 1.0)
-    return np.linalg.norm(points - (a + t[:, None] * ab), axis=1)
-
-
 def rtl_line_problem(planned: PlannedFlight, j: int, position: np.ndarray,
                      others: Sequence[np.ndarray], *, separation_m: float = 2.0) -> str | None:
     """Why ArduCopter's RTL from ``position`` (ENU) would not be safe for vehicle j, or
@@ -71,13 +65,13 @@ def rtl_line_problem(planned: PlannedFlight, j: int, position: np.ndarray,
     target, name = (home, "home") if k is None else (rally[k], "its rally point")
     here = np.asarray(position[:2], float)
     if len(planned.centres):
-        gap = _segment_distance(here, target, np.asarray(planned.centres)[:, :2]) - planned.radii
+        gap = segment_distance(np.asarray(planned.centres)[:, :2], here, target) - planned.radii
         worst = int(np.argmin(gap))
         if gap[worst] < planned.clearance_m:
             return (f"the straight line to {name} passes {gap[worst]:.1f} m from an obstacle "
                     f"(clearance {planned.clearance_m:g} m); landing where it stopped")
     if others:
-        near = float(np.min(_segment_distance(here, target, np.asarray(others)[:, :2])))
+        near = float(np.min(segment_distance(np.asarray(others)[:, :2], here, target)))
         if near < separation_m:
             return (f"the straight line to {name} passes {near:.1f} m from another vehicle; "
                     "landing where it stopped")
@@ -132,8 +126,7 @@ class FlightWatch:
         self.on_event = on_event
         self.departures = DepartureWatch(len(vehicles), options=options,
                                          landing=landing_points(planned))
-        self.response = Response(policy, [v.name for v in vehicles],
-                                 [v.sysid for v in vehicles], budget_s=budget_s,
+        self.response = Response(policy, budget_s=budget_s,
                                  lost_wait_s=lost_wait_s,
                                  route_check=self.rtl_problem, landing=self.landing)
         self.keeper: FormationKeeper | None = None
@@ -168,8 +161,9 @@ class FlightWatch:
         seen = [observe(v, self.planned) for v in self.vehicles]
         events = self.departures.check(seen, now)
         for e in events:
-            self.say(describe(e, self.vehicles))
-            self.on_event(describe(e, self.vehicles))
+            line = describe(e, self.vehicles)
+            self.say(line)
+            self.on_event(line)
         if any(e.departure for e in events):  # before the policy pauses the others
             self.stand_keeper_down(skip={e.index for e in events if e.vehicle_chose})
         self.response.react(events, self.vehicles, self.departures, now)
@@ -202,10 +196,7 @@ class FlightWatch:
         keeper, self.keeper = self.keeper, None
         for i, pause in keeper.release().items():
             if i not in self.response.chose and i not in skip:
-                try:
-                    self.vehicles[i].send_pause(pause)
-                except FlightError:
-                    pass
+                _send_pause(self.vehicles[i], pause)
 
     def left_plan(self) -> FlightLeftPlan:
         return FlightLeftPlan(self.response.lines(self.vehicles))

@@ -8,6 +8,8 @@ from typing import Protocol
 
 import numpy as np
 
+from ..geo import segment_distance
+
 
 class RallySettings(Protocol):
     """What the search reads of :class:`~.fence.FenceSettings` (metres)."""
@@ -16,14 +18,6 @@ class RallySettings(Protocol):
     margin_m: float
     rally_separation_m: float
     grid_m: float
-
-
-def _segment_distance(q: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Distances from points ``q`` (..., 2) to segments ``a``-``b`` (..., 2), broadcast."""
-    ab = b - a
-    denom = np.maximum((ab * ab).sum(-1), 1e-12)
-    t = np.clip(((q - a) * ab).sum(-1) / denom, 0.0, 1.0)
-    return np.linalg.norm(a + t[..., None] * ab - q, axis=-1)
 
 
 def _densify(path: np.ndarray, step_m: float) -> np.ndarray:
@@ -277,7 +271,7 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
     lo, hi = chunk.min(axis=0), chunk.max(axis=0)
     hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
     if hit.any():
-        d = _segment_distance(chunk[:, None], line_a[hit][None], line_b[hit][None])
+        d = segment_distance(chunk[:, None], line_a[hit][None], line_b[hit][None])
         ok &= d.min(axis=1) >= sep
     live = np.flatnonzero(ok)
     i, step = 0, 4
@@ -308,6 +302,6 @@ def _own_lines_clear(cand: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
         live = np.flatnonzero(ok)
         if not len(live):
             break
-        d = _segment_distance(q, pts[None], cand[live, None])  # (C', P')
+        d = segment_distance(q, pts[None], cand[live, None])  # (C', P')
         ok[live] &= np.where(to_cand[live], d, np.inf).min(axis=1) >= sep
     return ok

@@ -47,7 +47,7 @@ def fleet(n=3):
 
 
 def response(policy=FaultPolicy.RALLY, **kw):
-    return Response(policy, ["uav1", "uav2", "uav3"], [1, 2, 3], t0=0.0, **kw)
+    return Response(policy, t0=0.0, **kw)
 
 
 def test_rally_stops_the_others_on_their_track_then_rtl_and_leaves_the_chooser_alone():

@@ -90,7 +90,8 @@ def test_the_qgc_plan_carries_the_fence_and_the_rally_point():
 def _rally_reference(*, paths, centres, radii, clearance_m, area_min, area_max, settings):
     """The rally search written plainly (every grid cell, every test, no pruning): the
     fast search must choose the same points."""
-    from ftlbo_mav.mission.rally import _densify, _segment_distance
+    from ftlbo_mav.geo import segment_distance as _segment_distance
+    from ftlbo_mav.mission.rally import _densify
 
     inset = settings.corner_cut_m + settings.margin_m
     sep = settings.rally_separation_m
