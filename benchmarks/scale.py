@@ -28,6 +28,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from planner import table  # the benchmarks' one table printer (run as a script, beside it)
 
 ROOT = Path(__file__).resolve().parents[1]
 LAT0, LON0 = 12.2331044, 109.1144313  # the example's south-west corner
@@ -106,14 +107,6 @@ def growth(rows: list[dict], key: str) -> None:
         if before["seconds"] > 0 and before[key] > 0:
             row["growth"] = (f"x{row['seconds'] / before['seconds']:.1f} time for "
                              f"x{row[key] / before[key]:.2g} {key}")
-
-
-def table(headers: list[str], rows: list[list]) -> str:
-    cells = [[str(h) for h in headers]] + [[str(c) for c in r] for r in rows]
-    widths = [max(len(row[i]) for row in cells) for i in range(len(headers))]
-    lines = ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
-    lines.insert(1, "  ".join("-" * w for w in widths))
-    return "\n".join(lines)
 
 
 GOALS = {10: 1.5, 50: 5.0, 200: 30.0}

@@ -95,6 +95,8 @@ def record_survey(link, sysid: int, *, timing: Timing, timeout_s: float = 330.0)
     from ftlbo_mav.flight.vehicle import FlightVehicle
     from ftlbo_mav.mission.waypoints import read_waypoints
 
+    from .record import fly_from_hover
+
     items = read_waypoints(SURVEY_UAV1)
     with link.channel(sysid) as channel:
         upload_mission(channel, items, timing=timing)
@@ -126,16 +128,8 @@ def record_survey(link, sysid: int, *, timing: Timing, timeout_s: float = 330.0)
     v = FlightVehicle("uav1", sysid, link, position_hz=5.0)
     try:
         params = {name: v.read_param(name) for name in READ_PARAMS}
-        v.set_mode("GUIDED", timeout_s=60)
-        v.arm(budget_s=90)
-        v.takeoff(items[1].alt_m)
-        v.wait_for(lambda s: abs(s.alt_m - items[1].alt_m) < 0.2 and abs(s.climb_m_s) < 0.1,
-                   60)
-        time.sleep(1.0)
-        v.set_current(2)
-        t0[0] = time.monotonic()
-        v.set_mode("AUTO")
-        done = v.wait_for(lambda s: not s.armed, timeout_s)
+        done = fly_from_hover(v, items[1].alt_m, settle_m=0.2, timeout_s=timeout_s,
+                              start=lambda: t0.__setitem__(0, time.monotonic()))
     finally:
         v.close()
         link.taps.remove(watch)

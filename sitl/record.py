@@ -95,6 +95,24 @@ def version(channel, timeout_s: float = 5.0) -> str:
     return "unknown version"
 
 
+def fly_from_hover(v, takeoff_alt_m: float, *, settle_m: float, timeout_s: float,
+                   start) -> bool:
+    """Fly vehicle ``v``'s stored mission as the shared recordings did: GUIDED, arm, take
+    off to ``takeoff_alt_m``, hover until within ``settle_m`` of it and still, then item 2
+    current and AUTO (``start()`` runs just before the switch); True once it has landed
+    (disarmed) within ``timeout_s``."""
+    v.set_mode("GUIDED", timeout_s=60)
+    v.arm(budget_s=90)
+    v.takeoff(takeoff_alt_m)
+    v.wait_for(lambda s: abs(s.alt_m - takeoff_alt_m) < settle_m and abs(s.climb_m_s) < 0.1,
+               60)
+    time.sleep(1.0)
+    v.set_current(2)
+    start()
+    v.set_mode("AUTO")
+    return v.wait_for(lambda s: not s.armed, timeout_s)
+
+
 def record_flight(link, sysid: int, *, timing: Timing, timeout_s: float = 300.0) -> dict:
     """Fly the example's uav1 mission as the shared recording did; reached items and
     positions, times in seconds since the AUTO command."""
@@ -119,16 +137,8 @@ def record_flight(link, sysid: int, *, timing: Timing, timeout_s: float = 300.0)
     link.taps.append(watch)
     v = FlightVehicle("uav1", sysid, link)
     try:
-        v.set_mode("GUIDED", timeout_s=60)
-        v.arm(budget_s=90)
-        v.takeoff(items[1].alt_m)
-        v.wait_for(lambda s: abs(s.alt_m - items[1].alt_m) < 0.1 and abs(s.climb_m_s) < 0.1,
-                   60)
-        time.sleep(1.0)
-        v.set_current(2)
-        t0[0] = time.monotonic()
-        v.set_mode("AUTO")
-        v.wait_for(lambda s: not s.armed, timeout_s)
+        fly_from_hover(v, items[1].alt_m, settle_m=0.1, timeout_s=timeout_s,
+                       start=lambda: t0.__setitem__(0, time.monotonic()))
     finally:
         v.close()
         link.taps.remove(watch)
