@@ -113,7 +113,7 @@ def wind_params(wind, n: int) -> list[str]:
         ("SIM_WIND_TURB", turb))]
 
 
-def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
+def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None) -> dict:
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
     keeper = None
@@ -132,16 +132,35 @@ def fly_once(plan_dir: Path, urls, strategy: str) -> dict:
         else:
             options = FlyOptions(keeper=KeeperOptions(enabled=strategy == "fly"))
             keeper = make_keeper(planned, options.keeper)
+            if keep is not None:
+                keeper.trace = []
             fly(planned, fleet.vehicles, options=options, timing=Timing(),
                 say=lambda _t: None, tick=lambda: None, keeper=keeper)
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)
     summary = summarize(planned, times, positions, seqs)
     summary["_samples"] = monitor.record.samples  # for --record, not in the JSON summary
+    if keep is not None:
+        keep.mkdir(parents=True, exist_ok=True)
+        (keep / "samples.json").write_text(json.dumps(
+            {"fields": ["t", "sysid", "lat_e7", "lon_e7", "alt_mm", "seq", "boot_ms"],
+             "rows": [list(r) for r in _sample_rows(monitor.record.samples)],
+             "keeper": keeper.trace if keeper is not None else None,
+             "paths": keeper.paths.tolist() if keeper is not None else None,
+             "frame": [planned.frame.origin_lat_deg, planned.frame.origin_lon_deg],
+             "t0": monitor.t0}))
     if keeper is not None:
         summary["keeper"] = {"active": keeper.active, "link_gaps": keeper.log.link_gaps,
                              "off_reason": keeper.off_reason,
                              "vehicles": keeper.log.as_dict(planned.names)}
     return summary
+
+
+def _sample_rows(samples) -> list[list]:
+    """The positions sent in AUTO, as a recording's ``samples`` rows."""
+    return [[round(x.t, 3), x.sysid, int(round(x.lat_deg * 1e7)), int(round(x.lon_deg * 1e7)),
+             int(round(x.alt_m * 1000)), x.seq,
+             int(round(x.boot_s * 1000)) if x.boot_s == x.boot_s else None]
+            for x in samples if x.mode == "AUTO"]
 
 
 class UploadFailed(Exception):
@@ -150,16 +169,17 @@ class UploadFailed(Exception):
 
 def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None,
               speedup: float = 1.0, seed: int = 0, vary: bool = False,
-              params=(), wind=None) -> dict:
+              params=(), wind=None, keep: Path | None = None) -> dict:
     """One flight of ``plan_dir`` on freshly started vehicles (SITL when ``binary``, else
     the emulator, ``vary`` and ``seed`` giving each copter its differences) flown the
     ``strategy`` way, in ``wind`` (SPD, DIR, TURB: SITL's SIM_WIND_* set on each instance,
-    the emulator's wind model); its summary."""
+    the emulator's wind model); its summary. ``keep``: a folder for the flight's samples
+    and keeper trace and SITL's instance folders (DataFlash logs in ``instanceN/logs``)."""
     planned = load_planned_flight(plan_dir)
     if binary:
         from sitl import SitlSwarm
 
-        swarm = SitlSwarm(binary=binary, homes=homes, speedup=speedup)
+        swarm = SitlSwarm(binary=binary, homes=homes, speedup=speedup, workdir=keep)
     else:
         from ftlbo_mav.sim.server import Simulator
 
@@ -176,7 +196,7 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
                                          f"{r.message}" for r in failed))
         set_params(vehicles.urls, list(params) + (wind_params(wind, len(homes)) if binary
                                                   else []))
-        return fly_once(plan_dir, vehicles.urls, strategy)
+        return fly_once(plan_dir, vehicles.urls, strategy, keep)
 
 
 def print_clearance(scenario: Path, rows: dict, *, binary: str | None) -> None:
@@ -219,10 +239,7 @@ def write_recording(path: Path, plan_dir: Path, samples, summary: dict, *, strat
         "missions": {p.stem: p.read_text() for p in sorted(plan_dir.glob("uav*.waypoints"))},
         "samples": {
             "fields": ["t", "sysid", "lat_e7", "lon_e7", "alt_mm", "seq", "boot_ms"],
-            "rows": [[round(x.t, 3), x.sysid, int(round(x.lat_deg * 1e7)),
-                      int(round(x.lon_deg * 1e7)), int(round(x.alt_m * 1000)), x.seq,
-                      int(round(x.boot_s * 1000)) if x.boot_s == x.boot_s else None]
-                     for x in samples if x.mode == "AUTO"],
+            "rows": _sample_rows(samples),
         },
         "summary": summary,
     }
@@ -259,6 +276,10 @@ def main() -> int:
                              "(degrees), turbulence m/s; on SITL its SIM_WIND_SPD/DIR/TURB "
                              "(and SIM_WIND_T 1, full strength to the ground) set on each "
                              "instance, on the emulator its wind model")
+    parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
+                        help="keep each flight's positions and what the keeper saw "
+                             "(DIR/runN-STRATEGY/samples.json) and, on SITL, its instance "
+                             "folders (DataFlash logs with the position targets, PSCN/PSCE)")
     args = parser.parse_args()
     scenario = load_scenario(args.scenario)
     homes = scenario_homes(scenario)
@@ -277,7 +298,9 @@ def main() -> int:
                 try:
                     summary = fly_fresh(plan_dir, homes, strategy, binary=binary,
                                         speedup=args.speedup, seed=run, vary=args.vary,
-                                        params=args.params, wind=args.wind)
+                                        params=args.params, wind=args.wind,
+                                        keep=(args.keep / f"run{run}-{strategy.replace(' ', '')}"
+                                              if args.keep else None))
                 except UploadFailed as exc:  # flying without its mission measures nothing
                     print(exc, file=sys.stderr)
                     return 1

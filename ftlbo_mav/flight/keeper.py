@@ -151,6 +151,9 @@ class FormationKeeper:
     _last_t: float | None = None
     _standing_aside: bool = False
     log: KeeperLog | None = None
+    # when a list: one row per measurement, (now, progress (N,), lead (N,)), for looking
+    # back at what the keeper saw (``benchmarks/flight.py --keep-sitl``)
+    trace: list | None = None
 
     def __post_init__(self) -> None:
         n = len(self.paths)
@@ -206,6 +209,8 @@ class FormationKeeper:
         self._standing_aside = False
         s = self.progress(positions)
         lead = s - s.mean()
+        if self.trace is not None:
+            self.trace.append((now, s.tolist(), lead.tolist()))
         group_speed = float(np.mean(speeds_m_s))
         flying = group_speed >= o.min_speed_m_s
         # a lead in time shows before a lead in metres while the group speeds up
