@@ -267,8 +267,9 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
     # last report on our clock
     vehicle_now = max(s.position_boot_s + min(a, 0.1) for s, a in zip(st, arrived))
-    if keeper.trace is not None:
-        keeper.trace.append(("inputs", now, vehicle_now, arrived.tolist(), age.tolist(),
+    trace = getattr(keeper, "trace", None)
+    if trace is not None:
+        trace.append(("inputs", now, vehicle_now, arrived.tolist(), age.tolist(),
                              [s.position_boot_s for s in st], positions.tolist()))
     for i, pause in keeper.update(positions, speeds, vehicle_now, ages_s=arrived).items():
         _send_pause(vehicles[i], pause)
