@@ -141,6 +141,7 @@ def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None) -> d
     summary["_samples"] = monitor.record.samples  # for --record, not in the JSON summary
     if keep is not None:
         keep.mkdir(parents=True, exist_ok=True)
+        shutil.copytree(plan_dir, keep / "plan", dirs_exist_ok=True)
         (keep / "samples.json").write_text(json.dumps(
             {"fields": ["t", "sysid", "lat_e7", "lon_e7", "alt_mm", "seq", "boot_ms"],
              "rows": [list(r) for r in _sample_rows(monitor.record.samples)],

@@ -18,9 +18,12 @@ them (ArduCopter/mode_auto.cpp):
 - the last point is stopped at (the NAV_LAND / RTL after it is not a waypoint: set_next_wp
   adds no next destination), and the path ends when it is reached.
 
-The step is the emulator's (:data:`STEP_S`); positions are AC_PosControl's target (the
-copter follows it within centimetres on SITL; ``tests/conformance`` holds this to recorded
-SITL tracks).
+The step is the emulator's (:data:`STEP_S`). Positions are the copter's, following
+AC_PosControl's target as :class:`.poscontrol.PositionFollower` has it: behind it by the
+airframe's drag, outside it in turns, past it where it stops (0.4-0.9 m on SITL after
+6-10 m/s), and AC_WPNav's track clock slows where the copter falls behind
+(``tests/conformance`` holds this to recorded SITL tracks). Without an airframe
+(``airframe=None``) the path is the target itself.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .navigation import Navigation
+from .poscontrol import DEFAULT_AIRFRAME, Airframe, PositionFollower
 from .wpnav import WaypointNav
 
 STEP_S = 0.02  # the emulator's step (sim.autopilot STEP_S); ArduCopter runs at 400 Hz
@@ -62,11 +66,12 @@ class FlownPath:
 
 def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
              speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
-             dt: float = STEP_S) -> FlownPath:
+             dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME) -> FlownPath:
     """Fly ``points`` ``(P, 3)`` metres ENU (the copter hovering at the first) as
     ArduCopter's AUTO does (see the module's docstring). ``speed_m_s``: the
     DO_CHANGE_SPEED before the first leg (None: WPNAV_SPEED); ``holds_s``: ``(P,)`` whole
-    seconds held at each point (its waypoint's ``param1``; default none)."""
+    seconds held at each point (its waypoint's ``param1``; default none); ``airframe``:
+    the drag the copter follows its target with (None: on its target)."""
     points = np.asarray(points, float)
     if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
         raise ValueError(f"points must be (P >= 2, 3), got {points.shape}")
@@ -84,12 +89,22 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     times, positions = [0.0], [points[0].copy()]
     reached = np.zeros(len(points))
     k, t, wait_until = 1, 0.0, None
+    follower = (None if airframe is None
+                else PositionFollower(points[0], nav=nav, airframe=airframe))
+    here, velocity = points[0].copy(), np.zeros(3)
     start(k)
     for _ in range(budget):
         t += dt
-        wp.advance(dt, wp.target)
+        if follower is None:
+            wp.advance(dt, wp.target)
+            here = wp.target.copy()
+        else:
+            wp.advance(dt, here, velocity)
+            here = np.array([*follower.step(dt, wp.target, wp.target_vel, wp.target_accel),
+                             wp.target[2]])
+            velocity = np.array([follower.vx, follower.vy, wp.target_vel[2]])
         times.append(t)
-        positions.append(wp.target.copy())
+        positions.append(here)
         if not wp.reached:
             continue
         if holds[k] > 0 and wait_until is None:  # ModeAuto::verify_nav_wp: the hold
@@ -112,7 +127,8 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
 
 def fly_paths(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
               speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
-              dt: float = STEP_S) -> list[FlownPath]:
+              dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME
+              ) -> list[FlownPath]:
     """:func:`fly_path` for every row of ``paths`` ``(N, P, 3)``. The model is the same
     wherever a path lies (AC_WPNav works on offsets from its origin), so paths that are
     translations of one another (a formation's, each UAV at a fixed offset) are flown once
@@ -124,6 +140,7 @@ def fly_paths(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
         shape = np.round(path - path[0], 6)
         key = shape.tobytes()
         if key not in flown:
-            flown[key] = fly_path(shape, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s, dt=dt)
+            flown[key] = fly_path(shape, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s, dt=dt,
+                                  airframe=airframe)
         out.append(flown[key].translated(path[0]))
     return out

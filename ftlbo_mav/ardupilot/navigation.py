@@ -83,6 +83,13 @@ DEFAULTS: Mapping[str, ParamDefault] = {
     "PSC_JERK_Z": ParamDefault(5.0, REAL32, _PSC + " (POSCONTROL_JERK_Z, m/s/s/s)"),
     "PSC_POSZ_P": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_POS_Z_P)"),
     "PSC_POSXY_P": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_POS_XY_P)"),
+    "PSC_VELXY_P": ParamDefault(2.0, REAL32, _PSC + " (POSCONTROL_VEL_XY_P)"),
+    "PSC_VELXY_I": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_VEL_XY_I)"),
+    "PSC_VELXY_D": ParamDefault(0.5, REAL32, _PSC + " (POSCONTROL_VEL_XY_D)"),
+    "PSC_VELXY_IMAX": ParamDefault(1000.0, REAL32, _PSC + " (POSCONTROL_VEL_XY_IMAX, cm/s/s)"),
+    "PSC_VELXY_FLTE": ParamDefault(5.0, REAL32, _PSC + " (POSCONTROL_VEL_XY_FILT_HZ)"),
+    "PSC_VELXY_FLTD": ParamDefault(5.0, REAL32, _PSC + " (POSCONTROL_VEL_XY_FILT_D_HZ)"),
+    "ANGLE_MAX": ParamDefault(3000.0, INT16, _COPTER + " (DEFAULT_ANGLE_MAX, cdeg)"),
     "ATC_INPUT_TC": ParamDefault(0.15, REAL32, _ATC + " (AC_ATTITUDE_CONTROL_INPUT_TC_DEFAULT)"),
     "ATC_ACCEL_R_MAX": ParamDefault(110000.0, REAL32, _ATC + " (cdeg/s/s)"),
     "ATC_ACCEL_P_MAX": ParamDefault(110000.0, REAL32, _ATC + " (cdeg/s/s)"),
@@ -117,6 +124,13 @@ class Navigation:
     psc_jerk_z: float = 5.0       # PSC_JERK_Z
     psc_posz_p: float = 1.0       # PSC_POSZ_P
     psc_posxy_p: float = 1.0      # PSC_POSXY_P
+    psc_velxy_p: float = 2.0      # PSC_VELXY_P
+    psc_velxy_i: float = 1.0      # PSC_VELXY_I
+    psc_velxy_d: float = 0.5      # PSC_VELXY_D
+    psc_velxy_imax: float = 10.0  # PSC_VELXY_IMAX, m/s/s
+    psc_velxy_flte: float = 5.0   # PSC_VELXY_FLTE, Hz
+    psc_velxy_fltd: float = 5.0   # PSC_VELXY_FLTD, Hz
+    angle_max: float = math.radians(30.0)  # ANGLE_MAX, rad
     atc_input_tc: float = 0.15    # ATC_INPUT_TC
     atc_accel_rp_max: float = math.radians(1100.0)  # ATC_ACCEL_R_MAX / _P_MAX, rad/s/s
     atc_rate_rp_max: float = 0.0  # ATC_RATE_R_MAX / _P_MAX, rad/s (0: unlimited)
@@ -199,6 +213,10 @@ _SCALES = (
     ("RTL_LOIT_TIME", "rtl_loit_time", 1000.0), ("DISARM_DELAY", "disarm_delay", 1.0),
     ("PSC_JERK_XY", "psc_jerk_xy", 1.0), ("PSC_JERK_Z", "psc_jerk_z", 1.0),
     ("PSC_POSZ_P", "psc_posz_p", 1.0), ("PSC_POSXY_P", "psc_posxy_p", 1.0),
+    ("PSC_VELXY_P", "psc_velxy_p", 1.0), ("PSC_VELXY_I", "psc_velxy_i", 1.0),
+    ("PSC_VELXY_D", "psc_velxy_d", 1.0), ("PSC_VELXY_IMAX", "psc_velxy_imax", 100.0),
+    ("PSC_VELXY_FLTE", "psc_velxy_flte", 1.0), ("PSC_VELXY_FLTD", "psc_velxy_fltd", 1.0),
+    ("ANGLE_MAX", "angle_max", math.degrees(1.0) * 100.0),
     ("ATC_INPUT_TC", "atc_input_tc", 1.0),
     ("ATC_ACCEL_R_MAX", "atc_accel_rp_max", math.degrees(1.0) * 100.0),
     ("ATC_ACCEL_P_MAX", "atc_accel_rp_max", math.degrees(1.0) * 100.0),
@@ -221,6 +239,14 @@ VEHICLE_PARAMS: Mapping[str, tuple[float, float]] = {
     "WPNAV_JERK": (1.0, 20.0),         # m/s/s/s
     "WPNAV_ACCEL_C": (0.0, 500.0),     # cm/s/s (0: twice WPNAV_ACCEL)
     "PSC_JERK_XY": (1.0, 20.0),        # AC_PosControl.cpp, m/s/s/s
+    "PSC_POSXY_P": (0.5, 2.0),         # AC_PosControl.cpp (AC_P_2D)
+    "PSC_VELXY_P": (0.1, 6.0),         # AC_PosControl.cpp (AC_PID_2D)
+    "PSC_VELXY_I": (0.02, 1.0),
+    "PSC_VELXY_D": (0.0, 1.0),
+    "PSC_VELXY_IMAX": (0.0, 4500.0),   # cm/s/s
+    "PSC_VELXY_FLTE": (0.0, 100.0),    # Hz
+    "PSC_VELXY_FLTD": (0.0, 100.0),    # Hz
+    "ANGLE_MAX": (1000.0, 8000.0),     # ArduCopter/Parameters.cpp, cdeg
     "ATC_INPUT_TC": (0.0, 1.0),        # AC_AttitudeControl.cpp, s
 }
 
