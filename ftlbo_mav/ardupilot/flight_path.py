@@ -39,13 +39,17 @@ from .wpnav import WaypointNav
 STEP_S = 0.02  # the emulator's step (sim.autopilot STEP_S); ArduCopter runs at 400 Hz
 DEFAULT_NAV = Navigation()  # ArduCopter 4.5.6's defaults (copter.parm keeps them)
 _MIN_PACE_M_S = 0.05  # for the step budget: no leg is flown slower on average
+# after its goal (the mission's NAV_LAND holds it there, ModeAuto::land_start) the path
+# goes on until the copter is at rest on the goal
+SETTLED_M, SETTLED_M_S, SETTLE_BUDGET_S = 0.01, 0.02, 15.0
 
 
 @dataclass(frozen=True, eq=False)
 class FlownPath:
     """``times``: ``(T,)`` seconds since the first leg began; ``positions``: ``(T, 3)``
-    metres ENU; ``reached``: ``(P,)`` when each point was reached (0 for the first, where
-    the copter starts)."""
+    metres ENU, the copter's (on to where it has come to rest on the goal); ``reached``:
+    ``(P,)`` when each point was reached (0 for the first, where the copter starts; the
+    last when AC_WPNav had it reached, before the copter came to rest)."""
 
     times: np.ndarray
     positions: np.ndarray
@@ -122,6 +126,16 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     else:
         raise RuntimeError(f"the path of {len(points)} points was not flown within "
                            f"{budget * dt:.0f} s")
+    if follower is not None:  # the copter comes to rest on its goal (past it, and back)
+        for _ in range(int(SETTLE_BUDGET_S / dt)):
+            if (float(np.hypot(*(here[:2] - points[-1, :2]))) < SETTLED_M
+                    and float(np.hypot(follower.vx, follower.vy)) < SETTLED_M_S):
+                break
+            t += dt
+            here = np.array([*follower.step(dt, points[-1], np.zeros(3), np.zeros(3)),
+                             points[-1, 2]])
+            times.append(t)
+            positions.append(here)
     return FlownPath(np.array(times), np.array(positions), reached)
 
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import BadInput
-from ..scenario import AUTO, PlannerSettings, Scenario
+from ..scenario import AUTO, PlannerSettings, Scenario, relay_lanes
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
 from .geometric import lower_bound, shortest_routes
@@ -115,6 +115,9 @@ class Plan:
     replans: int = 0
     """Times the route was planned again to avoid corner stops (:data:`REPLANS`); the
     best of the plans is kept, ``seconds`` counts them all."""
+    lanes_inset_m: float = 0.0
+    """How much further inside the area than its margin the survey's lanes were laid
+    so that the copters' predicted swings stay inside (:data:`SURVEY_RELAYS`; 0: not)."""
 
     @property
     def feasible(self) -> bool:
@@ -179,6 +182,47 @@ def plan(
     settings = replace(settings, **{k: v for k, v in overrides.items() if v is not None})
     _check_settings(settings)
     check_size(scenario, settings)
+    best = _plan_replanning(scenario, settings, progress=progress, notice=notice, on_leg=on_leg)
+    inset_lo, inset_hi = np.zeros(2), np.zeros(2)
+    for _ in range(SURVEY_RELAYS):
+        out_lo, out_hi = _area_excursion(best)
+        if scenario.survey is None or not scenario.survey.lanes or (
+                out_lo.max() <= 0 and out_hi.max() <= 0):
+            break
+        # the copters swing out of the area where they turn into or out of a lane: the
+        # lanes are laid that much (and a little) further in, and the route planned again
+        inset_lo = inset_lo + np.where(out_lo > 0, out_lo + SURVEY_RELAY_MARGIN_M, 0.0)
+        inset_hi = inset_hi + np.where(out_hi > 0, out_hi + SURVEY_RELAY_MARGIN_M, 0.0)
+        relaid = relay_lanes(scenario, inset_lower_m=inset_lo, inset_upper_m=inset_hi)
+        again = _plan_replanning(relaid, settings, progress=None, notice=None, on_leg=None)
+        again = replace(again, seconds=again.seconds + best.seconds,
+                        lanes_inset_m=float(max(inset_lo.max(), inset_hi.max())))
+        if not _better(again, best):
+            break
+        best, scenario = again, relaid
+    return best
+
+
+SURVEY_RELAYS = 2
+"""Times at most the survey's lanes are laid again, further inside the area, when the
+copters are predicted to swing out of it (:func:`plan`)."""
+SURVEY_RELAY_MARGIN_M = 0.05
+
+
+def _area_excursion(p: Plan) -> tuple[np.ndarray, np.ndarray]:
+    """How far (metres, east and north; <= 0: not at all) the predicted flight goes past
+    the area's lower and upper sides."""
+    if p.prediction is None:
+        return np.zeros(2), np.zeros(2)
+    xy = p.prediction.positions[:, :, :2].reshape(-1, 2)
+    return (p.problem.area_lower - xy).max(axis=0), (xy - p.problem.area_upper).max(axis=0)
+
+
+def _plan_replanning(scenario: Scenario, settings: PlannerSettings, *,
+                     progress: Progress | None, notice: Callable[[str], None] | None,
+                     on_leg: LegDone | None) -> Plan:
+    """The route planned, judged on the flown path, and planned again (at most
+    :data:`REPLANS` times) while the copters had to stop at corners."""
     base = problem_from_scenario(scenario, waypoints=_count(settings))
     extra = np.zeros(len(base.radii))
     best: Plan | None = None

@@ -21,9 +21,10 @@ from .model import (
     ViaPoint,
     Weights,
 )
-from .reader import load_scenario, parse_scenario, survey_width
+from .reader import load_scenario, parse_scenario, relay_lanes, survey_width
 
 __all__ = [
+    "relay_lanes",
     "ALGORITHMS", "AUTO", "END_ACTIONS", "Camera", "Cylinder", "GeoPoint", "MissionSettings",
     "PlannerSettings", "Scenario", "Survey", "ViaPoint", "Weights", "load_scenario",
     "parse_scenario", "survey_width",

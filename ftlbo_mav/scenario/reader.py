@@ -350,21 +350,35 @@ def _camera_spacing(s: Scenario, survey: Survey) -> Survey:
     return replace(survey, spacing_m=spacing, margin_m=margin, trigger_distance_m=distance)
 
 
-def _with_lanes(s: Scenario, survey: Survey) -> Scenario:
+def relay_lanes(s: Scenario, *, inset_lower_m, inset_upper_m) -> Scenario:
+    """``s`` with its survey's lanes laid again, ``inset_lower_m`` ``(2,)`` and
+    ``inset_upper_m`` ``(2,)`` metres (east, north) further inside the area's lower and
+    upper sides than its margin asks: the planner's answer to copters predicted to swing
+    out of the area where they turn into or out of a lane."""
+    if s.survey is None or not s.survey.lanes:
+        raise ValueError("the scenario has no survey lanes")
+    keep = len(s.via) - 2 * len(s.survey.lanes)  # the lanes' ends are the last via points
+    return _with_lanes(replace(s, via=s.via[:keep]), s.survey,
+                       inset=(np.asarray(inset_lower_m, float), np.asarray(inset_upper_m, float)))
+
+
+def _with_lanes(s: Scenario, survey: Survey, *, inset=((0.0, 0.0), (0.0, 0.0))) -> Scenario:
     """Lay the survey's lanes (:func:`~.planning.survey.lay_lanes`) and append their ends
     to the via points.
 
     The lanes stay ``margin`` inside the area's sides and where the centroid keeps every
-    UAV inside the area; a lane end on a tree is moved along the lane until every UAV
-    clears it. The survey begins from the last ``[[via]]`` point, or the start.
+    UAV inside the area (and ``inset``, ``(lower (2,), upper (2,))`` metres, further in);
+    a lane end on a tree is moved along the lane until every UAV clears it. The survey
+    begins from the last ``[[via]]`` point, or the start.
     """
     if survey.camera is not None:
         survey = _camera_spacing(s, survey)
     lower, upper = s.area_bounds_enu()
     offsets = s.offsets_m
-    inset = 1e-3  # a millimetre inside: lane ends survive the round trip through lat/lon
-    lo = np.maximum(lower + survey.margin_m, lower - offsets[:, :2].min(axis=0)) + inset
-    hi = np.minimum(upper - survey.margin_m, upper - offsets[:, :2].max(axis=0)) - inset
+    mm = 1e-3  # a millimetre inside: lane ends survive the round trip through lat/lon
+    inset_lo, inset_hi = (np.asarray(x, float) for x in inset)
+    lo = np.maximum(lower + survey.margin_m, lower - offsets[:, :2].min(axis=0)) + mm + inset_lo
+    hi = np.minimum(upper - survey.margin_m, upper - offsets[:, :2].max(axis=0)) - mm - inset_hi
     if np.any(lo >= hi):
         raise ScenarioError(
             s.source, "survey.margin",

@@ -58,6 +58,7 @@ from ..ardupilot.navigation import (
     REAL32,
     param_value,
 )
+from ..ardupilot.poscontrol import PositionFollower
 from ..mission.items import (
     MissionItem,
 )
@@ -149,6 +150,9 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self.fence = FenceGuard(self.tangent.to_en)  # AC_Fence + AP_Rally
         self._brake_since = 0.0  # when the current mode began (BRAKE's deceleration ramp)
         self.gusts: Gusts | None = None  # wind (:mod:`.wind`): the copter is off its target
+        self._follower: PositionFollower | None = None  # AC_PosControl, while AC_WPNav flies
+        self._followed_until: float | None = None
+        self._land_target = np.zeros(3)  # where a landing's descent holds the copter
 
     # -- what the vehicle knows about itself
     @property
@@ -485,15 +489,34 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         if not self.landed:
             self._armed_on_ground_since = None
 
+    def _follow(self, dt: float, target, target_vel, target_accel) -> None:
+        """AC_PosControl's horizontal loops for ``dt``: the copter follows ``target``
+        (ENU) with the airframe's drag, from where it was (a follower is started anew,
+        AC_PosControl::init_xy_controller, when the last step did not follow one or
+        the parameters changed); vertically it is on the target."""
+        nav = self.nav_params()
+        wind = np.zeros(3) if self.gusts is None else self.gusts.wind.velocity_enu()
+        follower = self._follower
+        if (follower is None or follower.nav != nav or self._followed_until is None
+                or abs(self._followed_until - (self.time - dt)) > 1e-9):
+            follower = self._follower = PositionFollower(
+                self.position[:2], self.velocity[:2], nav=nav,
+                airframe=self.options.limits.airframe, wind=wind[:2])
+        east, north = follower.step(dt, target, target_vel, target_accel)
+        self._followed_until = self.time
+        self.position = np.array([east, north, target[2]])
+        self.velocity = np.array([follower.vx, follower.vy, target_vel[2]])
+
     def _nav_step(self, dt: float, out: list) -> None:
-        """AC_WPNav moves the target (the emulated copter is on it); the mode in use then
-        checks whether its leg is over (ModeAuto::verify_command, ModeRTL::run)."""
+        """AC_WPNav moves the target and the copter follows it (AC_PosControl and the
+        airframe's drag, :class:`~ftlbo_mav.ardupilot.poscontrol.PositionFollower`;
+        vertically it is on its target); the mode in use then checks whether its leg is
+        over (ModeAuto::verify_command, ModeRTL::run)."""
         nav = self.nav
-        nav.advance(dt, self.position, None if self.gusts is None else self.velocity)
-        self.position = nav.target.copy()
-        self.velocity = nav.target_vel.copy()
-        if self.gusts is not None:  # in wind the copter is off its target
-            airspeed = float(np.linalg.norm(nav.target_vel - self.gusts.wind.velocity_enu()))
+        nav.advance(dt, self.position, self.velocity)
+        self._follow(dt, nav.target, nav.target_vel, nav.target_accel)
+        if self.gusts is not None:  # the gusts push it off the path it follows
+            airspeed = float(np.linalg.norm(self.velocity - self.gusts.wind.velocity_enu()))
             self.position += self.gusts.step(dt, airspeed)
             self.velocity += self.gusts.error_vel
         self.position[2] = max(self.position[2], 0.0)

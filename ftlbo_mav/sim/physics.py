@@ -30,6 +30,7 @@ from ..ardupilot.navigation import (
     Navigation,
     sqrt_controller,
 )
+from ..ardupilot.poscontrol import DEFAULT_AIRFRAME, Airframe
 from ..ardupilot.wpnav import (  # re-exported: the emulator's autopilot imports them here
     WP_RADIUS_MIN,
     WP_SPEED_MIN,
@@ -49,6 +50,8 @@ class FlightLimits:
     ``disarm_after_touchdown_s``: touchdown to the land detector's disarm (recorded).
     ``start_latency_s``: a mission (AUTO) starts moving this much after it is entered (0
     on ArduPilot itself; per-vehicle variation, :func:`varied`).
+    ``airframe``: its drag, with which it follows its position target
+    (:mod:`ftlbo_mav.ardupilot.poscontrol`; SITL's default frame).
     ``hover_error_m``: how far below its altitude target the copter hovers after a
     takeoff (SITL: 5.975 m for 6 m when AUTO started, flight.json and flight_speed.json;
     it is why the first leg of a mission started where the copter hovers still takes
@@ -62,6 +65,7 @@ class FlightLimits:
     land_rate_achieved: float = LAND_RATE_ACHIEVED
     start_latency_s: float = 0.0
     hover_error_m: float = 0.025
+    airframe: Airframe = DEFAULT_AIRFRAME
 
     @property
     def speed_m_s(self) -> float:

@@ -11,10 +11,14 @@ class ModeLand:
     """The LAND part of :class:`~ftlbo_mav.sim.autopilot.Autopilot`."""
 
     def _descend_enter(self) -> None:
-        """Landing: the vertical target starts where the copter is."""
+        """Landing: the vertical target starts where the copter is; horizontally the
+        position controller holds the target it had (ModeAuto::land_start keeps the xy
+        controller running; Mode::land_run_horizontal_control shapes its velocity to
+        zero), so a copter that overshot its landing point comes back to it."""
+        self._land_target = (self.position.copy() if self.nav is None
+                             else self.nav.target.copy())
         self.nav = None
         self.z = VerticalShaper(pos=float(self.position[2]), vel=float(self.velocity[2]))
-        self.velocity[:2] = 0.0
         self._phase = "descend"
 
     def _descend_step(self, dt: float) -> None:
@@ -25,8 +29,9 @@ class ModeLand:
         rate = landing_rate(nav, float(self.position[2]), dt)
         rate *= self.options.limits.land_rate_achieved
         self.z.at_rate(rate, dt, accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
-        self.position[2] = max(self.z.pos, 0.0)
-        self.velocity[:] = (0.0, 0.0, self.z.vel)
+        target = self._land_target
+        self._follow(dt, (target[0], target[1], max(self.z.pos, 0.0)), (0.0, 0.0, self.z.vel),
+                     (0.0, 0.0, 0.0))
         if self.position[2] <= 0.0:
             self.velocity[:] = 0.0
             self._touchdown_at = self.time

@@ -1,0 +1,104 @@
+"""How SITL's copters followed their position targets, from their own DataFlash logs.
+
+``python -m sitl.tracking DIR [DIR ...] --out tracking.json`` reads each flight folder
+that ``benchmarks/flight.py --keep DIR`` kept on SITL (``DIR/runN-STRATEGY``, one
+``instanceN/logs/*.BIN`` per copter) and writes, per copter and for the time it flew in
+AUTO, what AC_PosControl logged at 10 Hz (PSCN / PSCE: the target position TP, desired
+velocity DV and acceleration DA that AC_WPNav set, and the copter's position P and
+velocity V, in metres and seconds from the EKF origin), the parameters its position
+controller ran with (PARM) and the drag coefficients SITL's frame printed at start
+(``sitl.log``: "Suggested EK3_DRAG_BCOEF_* = ..., EK3_DRAG_MCOEF = ...").
+``tests/conformance/test_tracking.py`` holds :mod:`ftlbo_mav.ardupilot.poscontrol` to it:
+the recorded targets in, the recorded positions out.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+from pymavlink import DFReader
+
+PARAMS = ("PSC_POSXY_P", "PSC_VELXY_P", "PSC_VELXY_I", "PSC_VELXY_D", "PSC_VELXY_IMAX",
+          "PSC_VELXY_FLTE", "PSC_VELXY_FLTD", "ANGLE_MAX", "ATC_INPUT_TC", "WPNAV_ACCEL",
+          "WPNAV_SPEED", "WPNAV_JERK")
+FIELDS = ("t", "TPN", "TPE", "DVN", "DVE", "DAN", "DAE", "PN", "PE", "VN", "VE")
+AUTO = 3  # ArduCopter's mode number
+
+
+def read_log(path: Path) -> dict:
+    """One copter's PSCN / PSCE rows in AUTO (times from AUTO's start), its PARMs and
+    version."""
+    log = DFReader.DFReader_binary(str(path), zero_time_base=True)
+    params, version, rows, north = {}, None, [], None
+    auto_since = None
+    while True:
+        m = log.recv_match(type=["PARM", "MODE", "PSCN", "PSCE", "MSG"])
+        if m is None:
+            break
+        kind = m.get_type()
+        if kind == "PARM" and m.Name in PARAMS:
+            params[m.Name] = float(m.Value)
+        elif kind == "MSG" and version is None and m.Message.startswith("ArduCopter V"):
+            version = m.Message
+        elif kind == "MODE":
+            auto_since = m.TimeUS if m.ModeNum == AUTO else None
+        elif auto_since is not None and kind == "PSCN":
+            north = m
+        elif auto_since is not None and kind == "PSCE" and north is not None:
+            if north.TimeUS == m.TimeUS:
+                rows.append([round((m.TimeUS - auto_since) / 1e6, 4),
+                             *(round(float(getattr(north, f)), 4) for f in ("TPN",)),
+                             round(float(m.TPE), 4), round(float(north.DVN), 4),
+                             round(float(m.DVE), 4), round(float(north.DAN), 4),
+                             round(float(m.DAE), 4), round(float(north.PN), 4),
+                             round(float(m.PE), 4), round(float(north.VN), 4),
+                             round(float(m.VE), 4)])
+            north = None
+    return {"version": version, "params": params, "rows": rows}
+
+
+def drag_coefficients(sitl_log: Path) -> dict:
+    """The drag SITL's frame printed at start."""
+    text = sitl_log.read_text(errors="replace")
+    found = re.search(r"EK3_DRAG_BCOEF_\* = ([0-9.]+), EK3_DRAG_MCOEF = ([0-9.]+)", text)
+    if not found:
+        raise SystemExit(f"{sitl_log}: no drag coefficients printed")
+    return {"bcoef": float(found[1]), "mcoef": float(found[2])}
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("flights", nargs="+", type=Path,
+                        help="flight folders kept by benchmarks/flight.py --keep")
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--note", default="", help="how the flights were flown")
+    args = parser.parse_args(argv)
+    flights = []
+    for folder in args.flights:
+        copters = []
+        for instance in sorted(folder.glob("instance*")):
+            logs = sorted((instance / "logs").glob("*.BIN"))
+            if not logs:
+                raise SystemExit(f"{instance}: no DataFlash log")
+            copter = read_log(logs[-1])
+            copter["drag"] = drag_coefficients(instance / "sitl.log")
+            copter["instance"] = instance.name
+            copters.append(copter)
+            print(f"{folder.name}/{instance.name}: {len(copter['rows'])} rows in AUTO",
+                  file=sys.stderr)
+        flights.append({"flight": folder.name, "copters": copters})
+    version = next((c["version"] for f in flights for c in f["copters"] if c["version"]), "?")
+    doc = {"about": f"{version} SITL (copter.parm), the position controller's own log "
+                    f"(PSCN/PSCE at 10 Hz) in AUTO; `python -m sitl.tracking`. {args.note}",
+           "fields": list(FIELDS), "flights": flights}
+    args.out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
