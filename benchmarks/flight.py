@@ -187,8 +187,9 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
         swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary,
                           **({"wind": wind} if wind else {}))
     with swarm as vehicles:
-        # as `ftlbo-mav upload` sends them: mission, and the fence and rally points if any
-        assignments = [Assignment(n, i + 1, m, f) for i, (n, m, f) in
+        # as `ftlbo-mav upload` sends them: mission, the fence and rally points if any,
+        # and the plan's [vehicle] parameters
+        assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
                        enumerate(zip(planned.names, planned.missions, planned.fences))]
         results = upload_swarm(assignments, vehicles.urls, timing=Timing())
         failed = [r for r in results if not r.verified]
@@ -265,7 +266,9 @@ def main() -> int:
                         metavar="SYSID:NAME=VALUE",
                         help="set a parameter on one vehicle before each flight (PARAM_SET, "
                              "read back), e.g. 2:WPNAV_JERK=0.8 for a copter that is slower "
-                             "than the others; repeatable")
+                             "than the others; repeatable. `fly` refuses a copter whose "
+                             "[vehicle] parameters (WPNAV_*, PSC_JERK_XY, ATC_INPUT_TC) are "
+                             "not the plan's: those fly only the naive way")
     parser.add_argument("--record", type=Path, default=None,
                         help="write the first `fly` flight's telemetry (in AUTO), its plan and "
                              "missions as JSON here (tests/data/ardupilot-4.5.6/flown-*.json)")

@@ -271,6 +271,35 @@ def vehicle_params(nav: Navigation) -> dict[str, float]:
     return {name: round(params[name], 6) for name in VEHICLE_PARAMS}
 
 
+# float32 keeps 24 significant bits (a relative step of 6e-8) and plan.json writes the
+# [vehicle] values with 6 decimals: values this close are the same parameter value.
+PARAM_REL_TOL = 1e-6
+PARAM_ABS_TOL = 1e-6
+
+
+def param_matches(name: str, planned: float, onboard: float) -> bool:
+    """A vehicle holds ``planned`` as AP_Param keeps it: an integer type as the whole
+    number it was cast to, a REAL32 as a float32 (PARAM_VALUE carries a float32), within
+    float32's precision of the 6 decimals plan.json writes."""
+    d = DEFAULTS.get(name)
+    if d is not None and d.type != REAL32:
+        return int(planned) == int(onboard)
+    return math.isclose(planned, onboard, rel_tol=PARAM_REL_TOL, abs_tol=PARAM_ABS_TOL)
+
+
+def vehicle_param_differences(planned: Mapping[str, float],
+                              onboard: Mapping[str, float | None]
+                              ) -> list[tuple[str, float | None, float]]:
+    """``(name, onboard value, planned value)`` for every planned parameter the vehicle
+    holds another value of (``None``: it did not answer for it), in ``planned`` order."""
+    out = []
+    for name, want in planned.items():
+        have = onboard.get(name)
+        if have is None or not param_matches(name, want, have):
+            out.append((name, have, want))
+    return out
+
+
 def param_value(name: str, value: float) -> float:
     """A value as PARAM_VALUE carries it: integer types are whole numbers (AP_Param
     casts on set), REAL32 a float32."""

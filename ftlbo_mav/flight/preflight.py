@@ -1,17 +1,20 @@
 """Pre-flight: every vehicle holds exactly its planned mission and fence (read back and
-compared as ``upload`` verifies), has a 3D GPS fix and passes its pre-arm checks. Any
-failure stops the flight here, one line per vehicle, before anything is armed."""
+compared as ``upload`` verifies) and the ``[vehicle]`` parameters its flown path was
+predicted with (plan.json ``vehicle``: WPNAV_SPEED, WPNAV_ACCEL, ...), has a 3D GPS fix
+and passes its pre-arm checks. Any failure stops the flight here, one line per vehicle,
+before anything is armed."""
 
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from ..errors import FtlboError
 from ..link.codec import mission_differences
 from ..link.endpoints import is_ready, readiness_problems
 from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
+from ..link.params import read_vehicle_params
 from ..link.transfer import Timing
 from .fleet import concurrently
 from .planned import PlannedFlight
@@ -26,36 +29,65 @@ class PreflightError(FtlboError):
         super().__init__("pre-flight failed, nothing armed:\n  " + "\n  ".join(problems))
 
 
+def vehicle_param_problem(differences: Sequence[tuple[str, float | None, float]]
+                          ) -> str | None:
+    """One sentence for a vehicle whose parameters are not the plan's ``[vehicle]`` ones
+    (``(name, onboard or None, planned)``, :func:`~ftlbo_mav.link.params.read_vehicle_params`);
+    None when there are none."""
+    if not differences:
+        return None
+    held = [(n, have, want) for n, have, want in differences if have is not None]
+    silent = [n for n, have, _want in differences if have is None]
+    parts = [f"{n} is {have:g} on the vehicle, the plan predicted its path with {want:g}"
+             for n, have, want in held]
+    if silent:
+        parts.append(f"{', '.join(silent)} not answered (PARAM_REQUEST_READ): the path the "
+                     "plan predicts cannot be checked")
+    text = "; ".join(parts)
+    if held:
+        them = "it" if len(held) == 1 else "them"
+        values = ", ".join(f"{n} = {have:g}" for n, have, _want in held)
+        text += (f" (set {them}: `ftlbo-mav upload` does, or re-plan with [vehicle] "
+                 f"{values})")
+    return text
+
+
 def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
               timing: Timing, ready_timeout_s: float) -> None:
     """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission."""
+    params: Mapping[str, float] = planned.vehicle or {}
 
-    def mission_problem(pair) -> str | None:
+    def onboard_problems(pair) -> list[str]:
         vehicle, expected, fence = pair
         try:
             with vehicle.link.channel(vehicle.sysid) as channel:
                 onboard = download_mission(channel, timing=timing)
                 fence_diff = ([] if fence is None
                               else fence_differences(channel, fence, timing=timing))
+                param_diff = read_vehicle_params(channel, params, timing=timing)
         except FtlboError as exc:
-            return f"cannot read its mission or fence back: {exc}"
+            return [f"cannot read its mission or fence back: {exc}"]
+        why = []
         diff = mission_differences(expected, onboard)
         if diff:
-            return (f"holds a different mission than {vehicle.name}.waypoints "
-                    f"({diff[0]}); run `ftlbo-mav upload` first")
+            why.append(f"holds a different mission than {vehicle.name}.waypoints "
+                       f"({diff[0]}); run `ftlbo-mav upload` first")
         if fence_diff:  # the fence, rally points and FENCE_* of uavN.fence/.rally, fence.parm
-            return (f"holds a different fence than {vehicle.name}.fence "
-                    f"({fence_diff[0]}); run `ftlbo-mav upload` first")
-        return None
+            why.append(f"holds a different fence than {vehicle.name}.fence "
+                       f"({fence_diff[0]}); run `ftlbo-mav upload` first")
+        param_problem = vehicle_param_problem(param_diff)
+        if param_problem:
+            why.append(param_problem)
+        return why
 
     fences = planned.fences or (None,) * len(planned.missions)
-    missions = concurrently(mission_problem, list(zip(vehicles, planned.missions, fences)))
+    onboard = concurrently(onboard_problems, list(zip(vehicles, planned.missions, fences)))
     deadline = time.monotonic() + ready_timeout_s
     while time.monotonic() < deadline and not all(is_ready(v.link, v.sysid) for v in vehicles):
         time.sleep(0.1)
     problems = []
-    for v, mission in zip(vehicles, missions):
-        why = [mission] if mission else []
+    for v, why in zip(vehicles, onboard):
+        why = list(why)
         if not is_ready(v.link, v.sysid):
             why += readiness_problems(v.link, v.sysid)
         if v.status.armed:

@@ -82,6 +82,20 @@ def mission_files(folder: Path) -> list[Path]:
     return [found[n] for n in numbers]
 
 
+def plan_vehicle_params(folder: Path) -> dict[str, float]:
+    """plan.json's ``vehicle``: the ArduCopter parameters the plan predicted every UAV's
+    flown path with (empty without a plan.json, or for a plan written before them)."""
+    if not (folder / "plan.json").exists():
+        return {}
+    doc, source = read_plan_json(folder)
+    vehicle = doc.get("vehicle") or {}
+    try:
+        return {str(k): float(v) for k, v in vehicle.items()}
+    except (AttributeError, TypeError, ValueError):
+        raise BadInput(f"{source}: its \"vehicle\" is not a table of parameter values; "
+                       "plan again with `ftlbo-mav plan`; no vehicle was contacted") from None
+
+
 class ProgressBoard:
     """One line per vehicle on stderr: redrawn in place on a terminal, else a line per step."""
 
@@ -152,15 +166,21 @@ def timing_options(func):
                    "NO_SPACE answer refuses them, also before any item is sent.")
 @click.option("--no-fence", "no_fence", is_flag=True,
               help="Send only the missions: no fence, rally points or fence parameters.")
+@click.option("--no-vehicle-params", "no_vehicle_params", is_flag=True,
+              help="Leave the vehicles' WPNAV_*, PSC_JERK_XY, ATC_INPUT_TC as they are "
+                   "(`fly` still refuses a vehicle whose values are not plan.json's).")
 @timing_options
 @user_errors
-def upload(mission_dir, sysid_text, connect, capacity, no_fence, timeout, retries,
-           ready_timeout, discover_timeout, signing_key):
+def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_params, timeout,
+           retries, ready_timeout, discover_timeout, signing_key):
     """Upload MISSION_DIR/uavN.waypoints to the vehicles, read each back and verify it.
 
     With uavN.fence (and uavN.rally, fence.parm) beside it, each vehicle also gets its
-    fence, rally points and fence parameters, each read back and verified. Exits 0 only
-    when every vehicle holds exactly what its files say.
+    fence, rally points and fence parameters, each read back and verified. With a
+    plan.json, each vehicle also gets the [vehicle] parameters the plan predicted its
+    flown path with (WPNAV_SPEED, WPNAV_ACCEL, ...): those it holds other values of are
+    set and read back, and the line says which. Exits 0 only when every vehicle holds
+    exactly what its files say.
     """
     sysids = parse_sysids(sysid_text)
     files = mission_files(mission_dir)
@@ -170,6 +190,7 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, timeout, retrie
     try:  # every file is read before any vehicle is touched
         missions = [tuple(read_waypoints(f)) for f in files]
         fences = [None if no_fence else read_fence_set(mission_dir, f.stem) for f in files]
+        params = {} if no_vehicle_params else plan_vehicle_params(mission_dir)
     except MissionFileError as exc:
         raise BadInput(f"{exc}; no vehicle was contacted") from None
     if capacity is not None:
@@ -179,7 +200,7 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, timeout, retrie
                                f"{capacity}; no vehicle was contacted")
     key = load_key(signing_key) if signing_key else None
     urls = _urls(connect) or default_urls_for(sysids)
-    assignments = [Assignment(f.stem, s, m, fence)
+    assignments = [Assignment(f.stem, s, m, fence, params)
                    for f, s, m, fence in zip(files, sysids, missions, fences)]
     if not no_fence and all(fence is None for fence in fences):
         click.echo(f"note: {mission_dir} has no uavN.fence files: missions only (plan "

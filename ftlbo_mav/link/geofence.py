@@ -3,20 +3,14 @@
 Fence and rally points go through the mission protocol's machines
 (:mod:`~ftlbo_mav.link.mission_protocol`) with ``mission_type`` FENCE (1) and RALLY (2);
 what ArduCopter keeps of each item is :mod:`ftlbo_mav.ardupilot.fence`, so the read-back
-is compared in that form. Parameters are set with PARAM_SET and read back with
-PARAM_REQUEST_READ (libraries/GCS_MAVLink/GCS_Param.cpp: both answered with PARAM_VALUE),
-compared as AP_Param keeps them (integer types cast, REAL32 a float32).
+is compared in that form. The fence parameters are set and read back by
+:mod:`.params` (PARAM_SET, PARAM_REQUEST_READ), compared as AP_Param keeps them.
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable
 
-from pymavlink.dialects.v20 import ardupilotmega as R
-
-from ..ardupilot.fence import FENCE_PARAM_DEFAULTS, param_equal
-from ..errors import FtlboError
 from ..mission.fence_files import FenceSet
 from .codec import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, mission_differences
 from .mission_protocol import (
@@ -26,72 +20,10 @@ from .mission_protocol import (
     download_mission,
     upload_mission,
 )
+from .params import ParamError, param_differences, read_params, set_params
 
 Progress = Callable[[str, int, int], None]
 PARTS = (("fence", MISSION_TYPE_FENCE), ("rally", MISSION_TYPE_RALLY))
-
-
-class ParamError(FtlboError):
-    """A parameter could not be set or read; names the vehicle and the parameter."""
-
-    def __init__(self, sysid: int, name: str, problem: str):
-        self.sysid, self.name, self.problem = sysid, name, problem
-        super().__init__(f"vehicle {sysid}: parameter {name}: {problem}")
-
-
-def _param_name(msg) -> str:
-    name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
-    return name.rstrip("\x00")
-
-
-def _exchange(channel, send, name: str, timing: Timing) -> float | None:
-    """Send (and resend) until a PARAM_VALUE for ``name`` arrives; its value or None."""
-    clock = getattr(channel, "clock", time.monotonic)
-    for _ in range(timing.retries + 1):
-        channel.send(send())
-        deadline = clock() + timing.timeout_s
-        while (left := deadline - clock()) > 0:
-            msg = channel.recv(left)
-            if msg is not None and msg.get_type() == "PARAM_VALUE" and _param_name(msg) == name:
-                return float(msg.param_value)
-    return None
-
-
-def read_params(channel, names: Iterable[str], *, timing: Timing) -> dict[str, float | None]:
-    """PARAM_REQUEST_READ by name for each; None for one never answered."""
-    return {name: _exchange(channel, lambda n=name: R.MAVLink_param_request_read_message(
-        channel.sysid, 1, n.encode(), -1), name, timing) for name in names}
-
-
-def set_params(channel, params: Mapping[str, float], *, timing: Timing) -> None:
-    """PARAM_SET each, then read each back; :class:`ParamError` for the first that is
-    not answered or not kept."""
-    for name, value in params.items():
-        kind = FENCE_PARAM_DEFAULTS[name].type if name in FENCE_PARAM_DEFAULTS else \
-            R.MAV_PARAM_TYPE_REAL32
-        got = _exchange(channel, lambda n=name, v=value, k=kind: R.MAVLink_param_set_message(
-            channel.sysid, 1, n.encode(), float(v), k), name, timing)
-        if got is None:
-            raise ParamError(channel.sysid, name, f"no PARAM_VALUE answered PARAM_SET within "
-                             f"{timing.budget_s:g} s (does this vehicle have it?)")
-    back = read_params(channel, params, timing=timing)
-    for name, value in params.items():
-        if back[name] is None:
-            raise ParamError(channel.sysid, name, "set, but not answered on read-back")
-        if not param_equal(name, value, back[name]):
-            raise ParamError(channel.sysid, name, f"set to {value:g}, reads back {back[name]:g}")
-
-
-def param_differences(channel, params: Mapping[str, float], *, timing: Timing) -> list[str]:
-    """Why the vehicle's parameters are not ``params``; empty when they are."""
-    back = read_params(channel, params, timing=timing)
-    out = []
-    for name, value in params.items():
-        if back[name] is None:
-            out.append(f"{name} not answered")
-        elif not param_equal(name, value, back[name]):
-            out.append(f"{name} is {back[name]:g}, expected {value:g}")
-    return out
 
 
 def fence_differences(channel, expected: FenceSet, *, timing: Timing,

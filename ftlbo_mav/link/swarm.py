@@ -9,9 +9,9 @@ missing or fails never stops the others; each gets a :class:`VehicleResult`.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
@@ -28,17 +28,21 @@ from .mission_protocol import (
     download_mission,
     run_transfer,
 )
+from .params import ParamError, set_vehicle_params
 
 
 @dataclass(frozen=True)
 class Assignment:
     """Which mission goes to which vehicle: ``uav1`` -> system id 1; ``fence``: its
-    fence, rally points and fence parameters, sent after the mission (None: none)."""
+    fence, rally points and fence parameters, sent after the mission (None: none);
+    ``params``: the plan's ``[vehicle]`` parameters (plan.json ``vehicle``), set after
+    the fence where the vehicle holds other values, and read back."""
 
     name: str
     sysid: int
     items: tuple[MissionItem, ...]
     fence: FenceSet | None = None
+    params: Mapping[str, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -150,6 +154,21 @@ def _upload_and_verify(channel, items, machine, *, timing, progress, report):
     return True, f"verified ({len(items)} items)"
 
 
+def _set_vehicle_params(channel, a: Assignment, timing: Timing) -> tuple[bool, str]:
+    """The plan's [vehicle] parameters on one vehicle: ``(True, what changed)`` or
+    ``(False, why)``."""
+    try:
+        changed = set_vehicle_params(channel, a.params, timing=timing)
+    except ParamError as exc:
+        return False, f"vehicle parameter {exc.name}: {exc.problem}"
+    except OSError as exc:
+        return False, (f"the link failed ({exc.strerror or exc}) while setting the vehicle "
+                       "parameters: `ftlbo-mav fly` checks them before arming")
+    if not changed:
+        return True, f"{len(a.params)} vehicle parameters as planned"
+    return True, "set " + ", ".join(f"{n} {old:g} -> {new:g}" for n, old, new in changed)
+
+
 def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                  signing_key: bytes | None = None, timing: Timing | None = None,
                  discover_timeout_s: float = 5.0,
@@ -195,6 +214,11 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                     ok = fence_ok
                     msg = (f"{msg[:-1]}; {fence_msg})" if fence_ok
                            else f"mission {msg}, but {fence_msg}")
+                if ok and a.params:
+                    progress("parameters", 0, len(a.params))
+                    ok, params_msg = _set_vehicle_params(channel, a, own_timing)
+                    msg = (f"{msg[:-1]}; {params_msg})" if ok
+                           else f"mission {msg}, but {params_msg}")
             if not ok and link.closed_by_peer and "closed by the other end" not in msg:
                 msg += f" ({link.url} was closed by the other end)"
             emit(ProgressEvent(a.name, a.sysid, "verified" if ok else "failed",

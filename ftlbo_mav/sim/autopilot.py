@@ -28,7 +28,7 @@ BRAKE):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
@@ -351,8 +351,13 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
 
     # -- parameters (GCS_Param.cpp)
     def nav_params(self):
-        """The navigation parameters now (the defaults, as set by PARAM_SET)."""
-        return self.options.limits.nav.with_params(self.params)
+        """The navigation parameters now (the defaults, as set by PARAM_SET), as this
+        airframe flies them (FlightLimits.jerk_factor: 1 but with ``--vary``)."""
+        limits = self.options.limits
+        nav = limits.nav.with_params(self.params)
+        if limits.jerk_factor != 1.0:
+            nav = replace(nav, wp_jerk=nav.wp_jerk * limits.jerk_factor)
+        return nav
 
     def get_param(self, name: str) -> tuple[float, int] | None:
         """``(value, MAV_PARAM_TYPE)`` of a parameter the emulator has, else None."""

@@ -52,6 +52,10 @@ class FlightLimits:
     on ArduPilot itself; per-vehicle variation, :func:`varied`).
     ``airframe``: its drag, with which it follows its position target
     (:mod:`ftlbo_mav.ardupilot.poscontrol`; SITL's default frame).
+    ``jerk_factor``: this airframe flies its S-curves with its WPNAV_JERK times this (1 on
+    ArduPilot itself; per-vehicle variation, :func:`varied`). It is not a parameter: the
+    vehicle holds and reports the WPNAV_JERK it was given, as every copter of a fleet set
+    up from one parameter file does.
     ``hover_error_m``: how far below its altitude target the copter hovers after a
     takeoff (SITL: 5.975 m for 6 m when AUTO started, flight.json and flight_speed.json;
     it is why the first leg of a mission started where the copter hovers still takes
@@ -64,6 +68,7 @@ class FlightLimits:
     disarm_after_touchdown_s: float = TOUCHDOWN_TO_DISARM_S
     land_rate_achieved: float = LAND_RATE_ACHIEVED
     start_latency_s: float = 0.0
+    jerk_factor: float = 1.0
     hover_error_m: float = 0.025
     airframe: Airframe = DEFAULT_AIRFRAME
 
@@ -80,12 +85,14 @@ class FlightLimits:
 def varied(limits: FlightLimits, rng: np.random.Generator, *, latency_s: float = 0.3,
            jerk_spread: float = 0.05) -> FlightLimits:
     """``limits`` as one copter of a real fleet differs: a start latency drawn from
-    [0, ``latency_s``] and WPNAV_JERK scaled by a factor drawn from 1 +- ``jerk_spread``
-    (short legs are jerk-limited, so their speed and duration differ by a few percent,
-    as ``benchmarks/flight.py --set SYSID:WPNAV_JERK=..`` shows on SITL)."""
+    [0, ``latency_s``] and the jerk it flies with scaled by a factor drawn from 1 +-
+    ``jerk_spread`` (short legs are jerk-limited, so their speed and duration differ by a
+    few percent, as ``benchmarks/flight.py --set SYSID:WPNAV_JERK=..`` shows on SITL).
+    Its parameters stay those of ``limits``: the fleet holds what the plan predicted
+    with, and `fly`'s pre-flight check of them passes."""
     factor = 1.0 + float(rng.uniform(-jerk_spread, jerk_spread))
     return replace(limits, start_latency_s=float(rng.uniform(0.0, latency_s)),
-                   nav=replace(limits.nav, wp_jerk=limits.nav.wp_jerk * factor))
+                   jerk_factor=limits.jerk_factor * factor)
 
 
 @dataclass

@@ -58,7 +58,8 @@ def _upload(folder: Path, urls) -> str:
 def test_fence_rally_and_parameters_upload_and_verify(fenced, tmp_path):
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
         out = _upload(fenced, fleet.urls)
-        assert out.count("fence 11 items, 1 rally point(s), 5 fence parameters)") == 3, out
+        assert out.count("fence 11 items, 1 rally point(s), 5 fence parameters; "
+                         "10 vehicle parameters as planned)") == 3, out
         assert "3/3 vehicles verified" in out
         back = tmp_path / "back2.waypoints"
         code, out = run("download", "--sysid", 2, "--connect", fleet.urls[1], "-o", back)

@@ -19,6 +19,10 @@ from pymavlink import mavutil
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, abort, start_together, take_off
 from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.flight.preflight import preflight
+from ftlbo_mav.link.endpoints import discover, open_links
+from ftlbo_mav.link.params import set_params
+from ftlbo_mav.link.transfer import Timing
 from ftlbo_mav.scenario import load_scenario
 from ftlbo_mav.sim.homes import scenario_homes
 from ftlbo_mav.sim.vehicle import VehicleOptions
@@ -128,6 +132,45 @@ def test_fly_refuses_before_arming_when_a_mission_differs(plan_dir, tmp_path):
             for v in watching.vehicles:
                 assert v.wait_for(lambda s: s.heartbeat_t > 0, 5.0)
                 assert not v.status.armed and v.status.mode != "GUIDED"
+
+
+def _set_param(url: str, sysid: int, name: str, value: float) -> None:
+    """PARAM_SET on one vehicle and read back, as a user's ground station would."""
+    links = open_links([url])
+    try:
+        found, missing = discover(links, [sysid])
+        assert not missing
+        with found[sysid].channel(sysid) as channel:
+            set_params(channel, {name: value}, timing=Timing())
+    finally:
+        for link in links:
+            link.close()
+
+
+def test_fly_refuses_a_vehicle_whose_wpnav_accel_is_not_the_plans_and_upload_sets_it(
+        plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+        _upload(plan_dir, fleet.urls)
+        _set_param(fleet.urls[1], 2, "WPNAV_ACCEL", 500.0)
+        result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--control-port", "0",
+                                           "--connect", " ".join(fleet.urls)])
+        assert result.exit_code == 1
+        assert "pre-flight failed, nothing armed" in result.stderr
+        assert ("uav2 (sysid 2): WPNAV_ACCEL is 500 on the vehicle, the plan predicted its "
+                "path with 250 (set it: `ftlbo-mav upload` does, or re-plan with [vehicle] "
+                "WPNAV_ACCEL = 500)") in result.stderr
+        assert "uav1 (sysid 1)" not in result.stderr and "uav3 (sysid 3)" not in result.stderr
+        # upload sets what differs, reads it back and says so
+        uploaded = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                             "--connect", " ".join(fleet.urls)])
+        assert uploaded.exit_code == 0, uploaded.output
+        assert "set WPNAV_ACCEL 500 -> 250)" in uploaded.stdout
+        assert uploaded.stdout.count("10 vehicle parameters as planned") == 2
+        planned = load_planned_flight(plan_dir)
+        with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
+            preflight(planned, flying.vehicles, timing=Timing(), ready_timeout_s=60.0)
+            assert not any(v.status.armed for v in flying.vehicles)
 
 
 def test_monitor_records_and_forwards_to_a_ground_station(plan_dir):

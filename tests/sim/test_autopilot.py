@@ -7,6 +7,7 @@ from ftlbo_mav.ardupilot.commands import BootTimeline
 from ftlbo_mav.mission.items import build_mission
 from ftlbo_mav.sim.autopilot import Autopilot, AutopilotOptions, LocalTangent
 from ftlbo_mav.sim.modes.common import AUTO, GUIDED, LAND, RTL
+from ftlbo_mav.sim.physics import FlightLimits, varied
 
 HOME = (12.2332099, 109.1145051)
 
@@ -151,3 +152,32 @@ def test_local_tangent_round_trip_and_scale():
     assert np.allclose(t.to_en(lat, lon), (30.0, -20.0))
     # 1e-5 degree of latitude is about 1.106 m at 12 degrees north
     assert t.to_en(HOME[0] + 1e-5, HOME[1])[1] == pytest.approx(1.1061, abs=1e-3)
+
+
+def _mission_seconds(ap: Autopilot) -> float:
+    """GUIDED takeoff, then AUTO from item 2 until item 5: the seconds it flew."""
+    items, _ = _mission()
+    ap.set_mission(items)
+    ap.set_mode(GUIDED, 0.0)
+    ap.arm(0.0)
+    ap.takeoff(4.0)
+    t0, _ = _run(ap, 0.0, lambda a: abs(a.position[2] - 4.0) < 0.05, dt=0.02)
+    ap.set_current(2)
+    ap.set_mode(AUTO, t0)
+    t, _ = _run(ap, t0, lambda a: a.current >= 5, dt=0.02)
+    return t - t0
+
+
+def test_the_copter_flies_with_the_wpnav_values_it_holds():
+    default = _mission_seconds(Autopilot(home=HOME, boot_time=0.0))
+    brisk = Autopilot(home=HOME, boot_time=0.0)
+    assert brisk.set_param("WPNAV_ACCEL", 500.0) and brisk.set_param("WPNAV_JERK", 5.0)
+    assert brisk.get_param("WPNAV_ACCEL") == (500.0, 9)
+    assert _mission_seconds(brisk) < 0.8 * default  # 10 m legs: jerk-limited
+
+
+def test_a_varied_airframe_holds_the_fleets_parameters_and_flies_a_little_differently():
+    varied_ = varied(FlightLimits(), np.random.default_rng(1))
+    ap = Autopilot(home=HOME, boot_time=0.0, options=AutopilotOptions(limits=varied_))
+    assert ap.get_param("WPNAV_JERK") == (1.0, 9)
+    assert ap.nav_params().wp_jerk == pytest.approx(varied_.jerk_factor)

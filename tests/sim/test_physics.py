@@ -103,4 +103,5 @@ def test_variation_is_seeded_and_small():
     b = varied(FlightLimits(), np.random.default_rng(3))
     assert a == b
     assert 0.0 <= a.start_latency_s <= 0.3
-    assert abs(a.nav.wp_jerk - 1.0) <= 0.05 and a.nav.wp_jerk != 1.0
+    assert abs(a.jerk_factor - 1.0) <= 0.05 and a.jerk_factor != 1.0
+    assert a.nav == FlightLimits().nav  # its parameters are the fleet's

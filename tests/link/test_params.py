@@ -1,0 +1,54 @@
+"""The plan's [vehicle] parameters on one vehicle, over the loopback channel (virtual
+time): read and compared, set where they differ and read back."""
+
+from __future__ import annotations
+
+import pytest
+
+from ftlbo_mav.ardupilot.navigation import Navigation, vehicle_params
+from ftlbo_mav.link.mission_protocol import Timing
+from ftlbo_mav.link.params import ParamError, read_vehicle_params, set_vehicle_params
+from ftlbo_mav.sim.faults import Faults
+from ftlbo_mav.sim.loopback import LoopbackChannel
+from ftlbo_mav.sim.vehicle import Vehicle
+
+from .support import HOME
+
+PLANNED = vehicle_params(Navigation())
+TIMING = Timing(timeout_s=0.5, retries=3)
+
+
+def channel(**kw) -> LoopbackChannel:
+    return LoopbackChannel(Vehicle(sysid=2, home=(*HOME, 0.0)), **kw)
+
+
+def test_a_vehicle_with_arducopters_defaults_holds_a_default_plans_values():
+    assert read_vehicle_params(channel(), PLANNED, timing=TIMING) == []
+
+
+def test_set_changes_only_what_differs_and_reads_it_back():
+    ch = channel()
+    assert ch.vehicle.autopilot.set_param("WPNAV_ACCEL", 500.0)
+    assert read_vehicle_params(ch, PLANNED, timing=TIMING) == [("WPNAV_ACCEL", 500.0, 250.0)]
+    sets = len([m for m in ch.received if m.get_type() == "PARAM_VALUE"])
+    assert set_vehicle_params(ch, PLANNED, timing=TIMING) == [("WPNAV_ACCEL", 500.0, 250.0)]
+    assert ch.vehicle.autopilot.nav_params().wp_accel == 2.5  # it flies with it now
+    assert read_vehicle_params(ch, PLANNED, timing=TIMING) == []
+    # read (10) + one PARAM_SET + its read-back, then the read of this test (10)
+    assert len([m for m in ch.received if m.get_type() == "PARAM_VALUE"]) - sets == 22
+    assert set_vehicle_params(ch, PLANNED, timing=TIMING) == []  # nothing left to set
+
+
+def test_set_rides_out_a_lossy_link():
+    ch = channel(faults=Faults(loss_up=0.3, loss_down=0.3))
+    ch.vehicle.autopilot.set_param("WPNAV_JERK", 2.0)
+    assert set_vehicle_params(ch, PLANNED, timing=TIMING) == [("WPNAV_JERK", 2.0, 1.0)]
+    assert ch.vehicle.autopilot.get_param("WPNAV_JERK") == (1.0, 9)
+
+
+def test_a_parameter_the_vehicle_does_not_have_is_a_param_error_and_nothing_is_set():
+    ch = channel()
+    ch.vehicle.autopilot.set_param("WPNAV_ACCEL", 500.0)
+    with pytest.raises(ParamError, match="NO_SUCH_PARAM: not answered"):
+        set_vehicle_params(ch, {**PLANNED, "NO_SUCH_PARAM": 1.0}, timing=TIMING)
+    assert ch.vehicle.autopilot.get_param("WPNAV_ACCEL") == (500.0, 9)
