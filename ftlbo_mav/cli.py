@@ -263,7 +263,10 @@ def format_survey(result) -> list[str]:
     spacing = survey.lane_spacing_m if survey.lane_spacing_m is not None else survey.spacing_m
     lines = [f"survey: {len(survey.lanes)} lane{'s' if len(survey.lanes) != 1 else ''} "
              f"{spacing:.2f} m apart (at most {survey.spacing_m:.2f} m), heading "
-             f"{survey.heading_deg:g} deg, margin {survey.margin_m:.2f} m, at {survey.alt_m:.2f} m"]
+             f"{survey.heading_deg:g} deg, margin {survey.margin_m:.2f} m, at {survey.alt_m:.2f} m"
+             + (f"; laid {result.lanes_inset_m:.2f} m further in, where the copters were "
+                "predicted to swing out of the area turning into or out of a lane"
+                if result.lanes_inset_m > 0 else "")]
     if survey.camera is None:
         return lines
     doc = camera_document(result, plan_photos(result, plan_missions(result)))

@@ -170,7 +170,8 @@ def test_the_written_missions_photograph_the_whole_field(planned):
                             for a, _ in doc["survey"]["lanes"]])
         assert np.abs(across[:, None] - lanes_x[None, :]).min(axis=1).max() < 0.01
     # each UAV's line in the summary, and the lanes
-    assert "survey: 4 lanes 11.34 m apart (at most 11.40 m)" in result.stdout
+    assert "survey: 4 lanes 11.26 m apart (at most 11.40 m)" in result.stdout
+    assert "laid 0.30 m further in, where the copters were predicted to swing out" in result.stdout
     assert "camera uav2: at 9.00 m a footprint 13.50 x 9.00 m" in result.stdout
     assert f"{sum(p.count for p in photos)} photos in all" in result.stdout
 

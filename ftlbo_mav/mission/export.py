@@ -187,6 +187,8 @@ def plan_document(
             "lane_count": len(survey.lanes),
             "lane_spacing": _round(survey.lane_spacing_m, 4),
             "lanes": [[[a.lat_deg, a.lon_deg], [b.lat_deg, b.lon_deg]] for a, b in survey.lanes],
+            # further inside than the margin, for the copters' predicted swings (planner)
+            "lanes_inset": round(plan.lanes_inset_m, 3),
             "camera": camera_document(plan, photos),
         },
         "legs": [_leg_document(leg, int(f)) for leg, f in zip(plan.legs, firsts)],
@@ -377,9 +379,11 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         via = tuple(ViaPoint(float(v["lat"]), float(v["lon"]), float(v["alt"]), str(v["name"]))
                     for v in doc.get("via", []))
         survey = doc.get("survey")
+        lanes_inset = 0.0
         if survey is not None:
             camera = survey.get("camera")
             lane_spacing = survey.get("lane_spacing")
+            lanes_inset = float(survey.get("lanes_inset", 0.0))
             survey = Survey(
                 spacing_m=float(survey["spacing"]), heading_deg=float(survey["heading"]),
                 margin_m=float(survey["margin"]), alt_m=float(survey["alt"]),
@@ -479,6 +483,7 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         lower_bound_length=bound,
         legs=tuple(legs),
         holds_s=_holds(doc, len(centroid_enu), source),
+        lanes_inset_m=lanes_inset,
     )
 
 

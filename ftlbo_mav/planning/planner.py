@@ -224,20 +224,29 @@ def _plan_replanning(scenario: Scenario, settings: PlannerSettings, *,
     """The route planned, judged on the flown path, and planned again (at most
     :data:`REPLANS` times) while the copters had to stop at corners."""
     base = problem_from_scenario(scenario, waypoints=_count(settings))
-    extra = np.zeros(len(base.radii))
-    best: Plan | None = None
-    for attempt in range(REPLANS + 1):
-        problem = replace(base, radii=base.radii + extra)
-        quiet = attempt > 0  # progress and notices once, for the first plan
+
+    def attempt(problem: PlanningProblem, quiet: bool) -> Plan:  # progress once, first plan
         legs = _plan_legs(scenario, settings, problem, progress=None if quiet else progress,
                           notice=None if quiet else notice, on_leg=None if quiet else on_leg)
-        result = fly_as_arducopter(combine(scenario, settings, legs))
-        replans = replace(result, replans=attempt, seconds=result.seconds
+        return fly_as_arducopter(combine(scenario, settings, legs))
+
+    return _replanning(base, attempt)
+
+
+def _replanning(base: PlanningProblem, attempt: Callable[[PlanningProblem, bool], Plan]) -> Plan:
+    """``attempt(problem, quiet)`` on ``base``, then again (at most :data:`REPLANS` times)
+    with the obstacles widened by what the corner stops fell short of them, while there
+    were stops; the best plan, its ``seconds`` all of theirs."""
+    extra = np.zeros(len(base.radii))
+    best: Plan | None = None
+    for k in range(REPLANS + 1):
+        result = attempt(replace(base, radii=base.radii + extra), k > 0)
+        replans = replace(result, replans=k, seconds=result.seconds
                           + (best.seconds if best is not None else 0.0))
         if best is None or _better(replans, best):
             best = replans
         else:
-            best = replace(best, seconds=replans.seconds, replans=attempt)
+            best = replace(best, seconds=replans.seconds, replans=k)
         stopped = result.stopped_for
         if result.corner_stops == 0 or stopped is None or not stopped.any():
             break
@@ -429,13 +438,19 @@ def solve(
 ) -> Plan:
     """Run ``settings.algorithm`` on the one-leg ``problem`` and package the result
     (``scenario`` is only carried along; ``settings.waypoints = "auto"`` chooses the
-    count, else ``problem.waypoints`` is used). See :func:`plan_leg`."""
+    count, else ``problem.waypoints`` is used), planned again as :func:`plan` does while
+    its corners need stops. See :func:`plan_leg`."""
     _check_settings(settings)
-    rng = np.random.default_rng(settings.seed)
-    leg = plan_leg(problem, settings, rng=rng, progress=progress, notice=notice)
     # problem's radii include the scenario's clearance and allowance (problem_from_scenario)
     own = problem.radii - scenario.clearance_m - scenario.mission.corner_allowance_m
-    return fly_as_arducopter(combine(scenario, settings, [leg]), own_radii=own)
+
+    def attempt(widened: PlanningProblem, quiet: bool) -> Plan:
+        rng = np.random.default_rng(settings.seed)
+        leg = plan_leg(widened, settings, rng=rng, progress=None if quiet else progress,
+                       notice=None if quiet else notice)
+        return fly_as_arducopter(combine(scenario, settings, [leg]), own_radii=own)
+
+    return _replanning(problem, attempt)
 
 
 def plan_leg(

@@ -192,22 +192,39 @@ def _moved(problem: PlanningProblem, path: np.ndarray, j: int, shift: np.ndarray
     return None
 
 
+def _area_shortfalls(problem: PlanningProblem, p: Prediction) -> list:
+    """Per UAV whose predicted path leaves the area: ``(uav, time index, inward (2,),
+    metres)`` of its furthest excursion, the unit vector back in and how far (plus
+    :data:`PUSH_MARGIN_M`)."""
+    xy = p.positions[:, :, :2]
+    beyond = np.concatenate([problem.area_lower - xy, xy - problem.area_upper], axis=2)
+    out = []
+    for n in np.flatnonzero(beyond.max(axis=(1, 2)) > _TOL):
+        t_i, side = np.unravel_index(int(np.argmax(beyond[n])), beyond[n].shape)
+        inward = np.zeros(2)
+        inward[side % 2] = 1.0 if side < 2 else -1.0
+        out.append((int(n), int(t_i), inward, float(beyond[n, t_i, side]) + PUSH_MARGIN_M))
+    return out
+
+
 def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: FlightModel,
                    obstacle_radii: np.ndarray, clearance_m: float,
                    fixed: np.ndarray | None = None) -> Kept:
     """Change the centroid path until every UAV's predicted flown path keeps
     ``clearance_m`` from every obstacle's surface (``obstacle_radii``: the cylinders' own
-    radii at ``problem.centres``).
+    radii at ``problem.centres``) and stays inside the area.
 
     Each round predicts the flight; where a UAV comes too close it finds the corner it
     was turning at and moves that corner (the centroid's point, so every UAV's) straight
     away from the obstacle by the shortfall plus :data:`PUSH_MARGIN_M`, if the moved
     polyline still keeps the clearance segment by segment, inside the area and the band
-    (:func:`..feasibility.violations`), else together with its neighbours; a corner that
-    cannot be moved (a via point, a move that breaks the polyline either way, or one moved
-    :data:`MAX_PUSHES` times) becomes a stop:
-    a hold of :data:`HOLD_S` s, so that every copter stops on it and the polyline's
-    clearance is flown. ``fixed``: ``(P,)`` True for points that may not move (the start,
+    (:func:`..feasibility.violations`), else together with its neighbours; where a UAV
+    swings out of the area the corner it turns at moves back in the same way (one that
+    cannot is left to the plan's violations: a stop would be overshot). A corner too
+    close to an obstacle that cannot be moved (a via point, a move that breaks the
+    polyline either way, or one moved :data:`MAX_PUSHES` times) becomes a stop: a hold
+    of :data:`HOLD_S` s, so that every copter stops on it and the polyline's clearance
+    is flown. ``fixed``: ``(P,)`` True for points that may not move (the start,
     via points and the goal always are)."""
     path = np.array(centroid, float)
     P = len(path)
@@ -223,16 +240,22 @@ def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: Fli
         pred = predict(uavs, model=model, centres=problem.centres, radii=obstacle_radii,
                        holds_s=holds)
         short = pred.clearance < clearance_m - _TOL
-        if not short.any() or rounds >= MAX_ROUNDS:
+        outside = _area_shortfalls(problem, pred)
+        if (not short.any() and not outside) or rounds >= MAX_ROUNDS:
             break
         rounds += 1
         # the worst shortfall at each corner, over the UAVs that cut in
         worst: dict[int, tuple[float, np.ndarray, int]] = {}
+        for n, t_i, inward, need in outside:  # a swing out of the area: the corner moves in
+            j = _corner(pred.reached[n], pred.times[t_i], fixed)
+            if (j is not None and holds[j] == 0 and pushes[j] < MAX_PUSHES
+                    and (j not in worst or need > worst[j][0])):
+                worst[j] = (need, inward, -1)
         for n in np.flatnonzero(short):
             t_i, k = pred.worst[n]
             j = _corner(pred.reached[n], pred.times[t_i], fixed)
-            if j is None or holds[j] > 0:
-                continue
+            if j is None or (holds[j] > 0 and pushes[j] >= MAX_PUSHES):
+                continue  # a stop still overshot towards the tree is moved, while it can be
             where = pred.positions[n, t_i, :2]
             away = where - problem.centres[k]
             away = away / max(float(np.linalg.norm(away)), 1e-9)
@@ -245,9 +268,11 @@ def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: Fli
             trial = _moved(problem, path, j, away * need, fixed) if pushes[j] < MAX_PUSHES else None
             if trial is not None:
                 path, pushes[j], moved = trial, pushes[j] + 1, moved + 1
-            else:
+            elif k >= 0 and holds[j] == 0:
                 holds[j] = HOLD_S
                 stops += 1
                 stopped_for[k] = max(stopped_for[k], need)
+            else:  # a stop that cannot move, or a swing out of the area (a stop would be
+                pushes[j] = MAX_PUSHES  # overshot too): left to the plan's violations
     return Kept(centroid=path, holds_s=holds, prediction=pred, moved=moved, stops=stops,
                 rounds=rounds, stopped_for=stopped_for)

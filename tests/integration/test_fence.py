@@ -15,6 +15,7 @@ import pytest
 from click.testing import CliRunner
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ftlbo_mav.ardupilot.navigation import VEHICLE_PARAMS
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet
 from ftlbo_mav.link.codec import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, mission_differences
@@ -59,7 +60,7 @@ def test_fence_rally_and_parameters_upload_and_verify(fenced, tmp_path):
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
         out = _upload(fenced, fleet.urls)
         assert out.count("fence 11 items, 1 rally point(s), 5 fence parameters; "
-                         "10 vehicle parameters as planned)") == 3, out
+                         f"{len(VEHICLE_PARAMS)} vehicle parameters as planned)") == 3, out
         assert "3/3 vehicles verified" in out
         back = tmp_path / "back2.waypoints"
         code, out = run("download", "--sysid", 2, "--connect", fleet.urls[1], "-o", back)

@@ -16,6 +16,7 @@ import pytest
 from click.testing import CliRunner
 from pymavlink import mavutil
 
+from ftlbo_mav.ardupilot.navigation import VEHICLE_PARAMS
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, abort, start_together, take_off
 from ftlbo_mav.flight.planned import load_planned_flight
@@ -166,7 +167,7 @@ def test_fly_refuses_a_vehicle_whose_wpnav_accel_is_not_the_plans_and_upload_set
                                              "--connect", " ".join(fleet.urls)])
         assert uploaded.exit_code == 0, uploaded.output
         assert "set WPNAV_ACCEL 500 -> 250)" in uploaded.stdout
-        assert uploaded.stdout.count("10 vehicle parameters as planned") == 2
+        assert uploaded.stdout.count(f"{len(VEHICLE_PARAMS)} vehicle parameters as planned") == 2
         planned = load_planned_flight(plan_dir)
         with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
             preflight(planned, flying.vehicles, timing=Timing(), ready_timeout_s=60.0)

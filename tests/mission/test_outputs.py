@@ -19,9 +19,10 @@ STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"
 EXPECTED = {
     "plan.geojson": "0faf4f1890ba9489c526da8137455a93549fdefccb6a41b917d5dc728e4333e3",
     # plan.json gained "corner_allowance" (issue 11), then "vehicle" and "predicted" (null
-    # for this stored plan, made before the flown path was predicted; issue 19); the
+    # for this stored plan, made before the flown path was predicted; issue 19), then the
+    # position controller's parameters in "vehicle" (PSC_VELXY_*, ANGLE_MAX); the
     # missions are as they were
-    "plan.json": "e92f6e90a81ac437c18d0ab992b8ed00ad558ba2220d6cd7343458c2a1ec0e1a",
+    "plan.json": "489d961bf5807841ccea767c61910bee512f15867895ee759e536d7e0bec94ad",
     "plan.kml": "34978a2a892e1c305510fc2fa59d7fd71aeee24cf29841a226208da315009848",
     "uav1.plan": "07c2c82fc64bcfa5015f814294223e7a2a6648583903c37f6b00af0e631d657f",
     "uav1.waypoints": "c5989eff6b30ed4ee87b7cea965815d1a8e0dec678b8e241247a2ab954fc4171",
