@@ -42,7 +42,7 @@ from ..ardupilot.navigation import Navigation
 @dataclass(frozen=True)
 class KeeperOptions:
     """Every ``period_s`` (on the vehicles' clock) each vehicle's lead over the group's
-    mean progress is measured, in metres and in seconds (metres over the group's speed).
+    last is measured, in metres and in seconds (metres over the group's speed).
     A vehicle more than ``engage_m`` ahead, or more than ``engage_s`` ahead and at least
     ``floor_m`` (while the group speeds up, a lead shows in time before it shows in
     metres), is paused for as long as makes it lose that lead (ArduCopter's pause and
@@ -208,13 +208,18 @@ class FormationKeeper:
             return out
         self._standing_aside = False
         s = self.progress(positions)
-        lead = s - s.mean()
+        lead = s - s.mean()  # what the formation error sees (logged)
+        # what a pause can take back: a copter cannot be made to catch up, so every other
+        # one loses its whole lead over the last (against the mean a laggard's two
+        # leaders would each lose only a third of the gap a round, and the formation stay
+        # out for rounds: SITL in 5 m/s wind, a copter 0.5 m behind for 8 s)
+        ahead = s - s.min()
         if self.trace is not None:
             self.trace.append((now, s.tolist(), lead.tolist()))
         group_speed = float(np.mean(speeds_m_s))
         flying = group_speed >= o.min_speed_m_s
         # a lead in time shows before a lead in metres while the group speeds up
-        lead_s = lead / max(group_speed, o.min_speed_m_s)
+        ahead_s = ahead / max(group_speed, o.min_speed_m_s)
         out: dict[int, bool] = {}
         for i in range(len(s)):
             log.max_lead_m[i] = max(log.max_lead_m[i], float(lead[i]), key=abs)
@@ -228,8 +233,9 @@ class FormationKeeper:
                 self._resend[i] -= 1
                 out[i] = False
             elif (flying and now >= self._rest_until[i]
-                  and (lead[i] > o.engage_m or (lead[i] > o.floor_m and lead_s[i] > o.engage_s))):
-                d = o.pause_for(float(lead[i]), group_speed, self.cruise_speed_m_s)
+                  and (ahead[i] > o.engage_m
+                       or (ahead[i] > o.floor_m and ahead_s[i] > o.engage_s))):
+                d = o.pause_for(float(ahead[i]), group_speed, self.cruise_speed_m_s)
                 if d > 0:
                     self._paused_at[i], self._resume_at[i] = now, now + d
                     self._rest_until[i] = now + d + o.rest_s

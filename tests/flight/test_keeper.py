@@ -50,11 +50,12 @@ def test_a_leader_waits_just_long_enough_to_lose_its_lead_then_continues():
     keeper = FormationKeeper(PATHS, CRUISE, options=ON)
     speeds = np.full(3, 5.0)
     assert keeper.update(positions_at([5.0, 5.0, 5.0]), speeds, 0.0) == {}
-    # uav1 0.6 m ahead: 0.4 m ahead of the group's mean
+    # uav1 0.6 m ahead of the others (0.4 m ahead of the group's mean): a pause a copter
+    # can take back all of, since the others cannot be made to catch up
     assert keeper.update(positions_at([5.6, 5.0, 5.0]), speeds, 1.0) == {0: True}
-    pause = ON.pause_for(0.4, 5.0, CRUISE)
+    pause = ON.pause_for(0.6, 5.0, CRUISE)
     lost = 5.0 * ON.navigation.pause_cost_s(pause, CRUISE)
-    assert 0.4 <= lost < 0.4 + 0.1 and 0.0 < pause < ON.max_pause_s
+    assert 0.6 <= lost < 0.6 + 0.1 and 0.0 < pause < ON.max_pause_s
     assert keeper.update(positions_at([6.0, 5.4, 5.4]), speeds, 1.0 + pause - 0.06) == {}
     assert keeper.update(positions_at([6.3, 5.8, 5.8]), speeds, 1.0 + pause) == {0: False}
     # the continue is said twice more (a lost one is not final), then nothing
@@ -62,14 +63,14 @@ def test_a_leader_waits_just_long_enough_to_lose_its_lead_then_continues():
             for k in range(4)]
     assert said == [{0: False}, {0: False}, {}, {}]
     assert keeper.log.pauses == [1, 0, 0] and keeper.log.paused_s[0] == pytest.approx(pause)
-    assert keeper.log.max_lead_m[0] == pytest.approx(0.4)
+    assert keeper.log.max_lead_m[0] == pytest.approx(0.4)  # the formation's view: the mean
 
 
 def test_a_waited_leader_rests_before_it_is_paused_again():
     keeper = FormationKeeper(PATHS, CRUISE, options=ON)
     speeds = np.full(3, 5.0)
     assert keeper.update(positions_at([5.6, 5.0, 5.0]), speeds, 0.0) == {0: True}
-    t = ON.pause_for(0.4, 5.0, CRUISE)
+    t = ON.pause_for(0.6, 5.0, CRUISE)
     assert keeper.update(positions_at([6.6, 6.0, 6.0]), speeds, t) == {0: False}
     for k in range(1, 3):
         keeper.update(positions_at([6.6, 6.0, 6.0]), speeds, t + 0.1 * k)
@@ -80,10 +81,10 @@ def test_a_waited_leader_rests_before_it_is_paused_again():
 
 def test_while_the_group_speeds_up_a_lead_in_seconds_is_enough():
     keeper = FormationKeeper(PATHS, CRUISE, options=ON)
-    slow = np.full(3, 0.4)  # 0.06 m ahead at 0.4 m/s: 0.1 s ahead (a late start)
-    assert keeper.update(positions_at([1.09, 1.0, 1.0]), slow, 0.0) == {0: True}
+    slow = np.full(3, 0.4)  # 0.05 m ahead at 0.4 m/s: 0.125 s ahead (a late start)
+    assert keeper.update(positions_at([1.05, 1.0, 1.0]), slow, 0.0) == {0: True}
     tiny = FormationKeeper(PATHS, CRUISE, options=ON)  # below the 1.1 cm quantization x3
-    assert tiny.update(positions_at([1.03, 1.0, 1.0]), np.full(3, 0.2), 0.0) == {}
+    assert tiny.update(positions_at([1.025, 1.0, 1.0]), np.full(3, 0.2), 0.0) == {}
 
 
 def test_longer_leads_get_longer_pauses_up_to_the_limit():
@@ -96,7 +97,7 @@ def test_longer_leads_get_longer_pauses_up_to_the_limit():
 
 def test_small_leads_slow_groups_and_unknown_cruise_speeds_are_left_alone():
     keeper = FormationKeeper(PATHS, CRUISE, options=ON)
-    assert keeper.update(positions_at([5.1, 5.0, 5.0]), np.full(3, 5.0), 0.0) == {}
+    assert keeper.update(positions_at([5.07, 5.0, 5.0]), np.full(3, 5.0), 0.0) == {}
     assert keeper.update(positions_at([6.0, 5.0, 5.0]), np.full(3, 0.1), 1.0) == {}  # starting
     off = FormationKeeper(PATHS, CRUISE, options=KeeperOptions(enabled=False))
     assert off.update(positions_at([9.0, 1.0, 1.0]), np.full(3, 5.0), 0.0) == {}
