@@ -18,6 +18,7 @@ drops it, so a request is not done when acknowledged, only when the message arri
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -61,6 +62,13 @@ def message_name(msgid: int) -> str:
     return cls.msgname if cls is not None else str(msgid)
 
 
+RATE_WINDOW_S = 2.0
+"""A stream counts as flowing once it arrives at half its rate or more over this long (on
+SITL one copter's GLOBAL_POSITION_INT, asked at 10 Hz, once came at 1 Hz for a whole
+flight: arriving, so never asked again, and the keeper measured on a position up to a
+second old)."""
+
+
 @dataclass
 class _Want:
     hz: float
@@ -68,6 +76,26 @@ class _Want:
     last_asked: float | None = None
     asked: int = 0
     refused: bool = False  # SET_MESSAGE_INTERVAL answered with anything but ACCEPTED
+    arrivals: deque = field(default_factory=deque)  # the last RATE_WINDOW_S of them
+    since: float | None = None  # seen since then without a gap (its rate can be judged)
+
+    def arrived(self, now: float) -> None:
+        if self.last_seen is None or now - self.last_seen > RATE_WINDOW_S:
+            self.since = now
+        self.last_seen = now
+        self.arrivals.append(now)
+        while self.arrivals and now - self.arrivals[0] > RATE_WINDOW_S:
+            self.arrivals.popleft()
+
+    def too_slow(self, now: float) -> bool:
+        """Arriving, for long enough to tell, at less than half the rate asked."""
+        if self.since is None or now - self.since < RATE_WINDOW_S:
+            return False
+        recent = sum(1 for t in self.arrivals if now - t <= RATE_WINDOW_S)
+        return recent < 0.5 * self.hz * RATE_WINDOW_S
+
+    def rate(self, now: float) -> float:
+        return sum(1 for t in self.arrivals if now - t <= RATE_WINDOW_S) / RATE_WINDOW_S
 
 
 @dataclass
@@ -94,12 +122,12 @@ class StreamRequests:
             if w is None:
                 self.wants[msgid] = _Want(hz=hz)
             elif hz > w.hz:
-                w.hz, w.last_asked, w.last_seen = hz, None, None
+                w.hz, w.last_asked, w.last_seen, w.since = hz, None, None, None
 
     def seen(self, msgid: int, now: float) -> None:
         w = self.wants.get(msgid)
         if w is not None:
-            w.last_seen = now
+            w.arrived(now)
 
     def on_ack(self, msgid: int | None, result: int) -> None:
         """A COMMAND_ACK of SET_MESSAGE_INTERVAL (ArduPilot's ack names no message: a
@@ -116,9 +144,10 @@ class StreamRequests:
         return max(1.5, 3.0 / hz)
 
     def flowing(self, msgid: int, now: float) -> bool:
+        """Arriving, and at half its rate or more (:data:`RATE_WINDOW_S`)."""
         w = self.wants.get(msgid)
         return (w is not None and w.last_seen is not None
-                and now - w.last_seen <= self.patience(w.hz))
+                and now - w.last_seen <= self.patience(w.hz) and not w.too_slow(now))
 
     def due(self, now: float) -> list:
         """The requests to send now (COMMAND_LONG and REQUEST_DATA_STREAM messages)."""
@@ -142,8 +171,9 @@ class StreamRequests:
 
     def missing(self, now: float) -> list[str]:
         """Names of the wanted messages not arriving, with how often each was asked."""
-        return [f"{message_name(m)} (asked {w.asked}x)" for m, w in self.wants.items()
-                if not self.flowing(m, now)]
+        return [f"{message_name(m)} (asked {w.asked}x"
+                + (f"; {w.rate(now):.1f}/s of {w.hz:g}/s)" if w.too_slow(now) else ")")
+                for m, w in self.wants.items() if not self.flowing(m, now)]
 
 
 # REQUEST_DATA_STREAM groups (ArduCopter/GCS_Mavlink.cpp ``STREAM_*_msgs`` and

@@ -49,8 +49,12 @@ class KeeperOptions:
     continue, modelled in :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s`;
     at most ``max_pause_s``), then left ``rest_s`` to regain its pace before it is
     measured for another. Nothing happens while the group flies slower than
-    ``min_speed_m_s``. Reports older than ``stale_s`` make the keeper stand aside
-    (continue for everyone).
+    ``min_speed_m_s``. A report older than ``late_s`` (positions come at 10 Hz) is not
+    measured on: no new pause while one is that late, though a pause under way still
+    ends on time (on SITL with the ground station's machine busy, one copter's reports
+    came 1 s late, and a keeper measuring on them saw it 1.5 m behind where it was and
+    paused the others in turn: 0.50 m RMS). Reports older than ``stale_s`` make the keeper
+    stand aside (continue for everyone).
 
     The numbers are measured, not a taste: docs/flight.md."""
 
@@ -62,12 +66,13 @@ class KeeperOptions:
     rest_s: float = 2.0
     min_speed_m_s: float = 0.2
     period_s: float = 0.05
+    late_s: float = 0.3
     stale_s: float = 1.0
     navigation: Navigation = Navigation()  # ArduCopter's defaults (copter.parm keeps them)
 
     def __post_init__(self) -> None:
         for name in ("engage_m", "engage_s", "floor_m", "max_pause_s", "rest_s",
-                     "min_speed_m_s", "period_s", "stale_s"):
+                     "min_speed_m_s", "period_s", "late_s", "stale_s"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0:
                 raise ValueError(f"keeper {name} must be a finite number >= 0, got {value!r}")
@@ -207,6 +212,7 @@ class FormationKeeper:
                     out[i] = False
             return out
         self._standing_aside = False
+        late = ages_s is not None and float(np.max(ages_s)) > o.late_s
         s = self.progress(positions)
         lead = s - s.mean()  # what the formation error sees (logged)
         # what a pause can take back: a copter cannot be made to catch up, so every other
@@ -222,7 +228,8 @@ class FormationKeeper:
         ahead_s = ahead / max(group_speed, o.min_speed_m_s)
         out: dict[int, bool] = {}
         for i in range(len(s)):
-            log.max_lead_m[i] = max(log.max_lead_m[i], float(lead[i]), key=abs)
+            if not late:
+                log.max_lead_m[i] = max(log.max_lead_m[i], float(lead[i]), key=abs)
             if self._paused_at[i] is not None:
                 if now >= self._resume_at[i] or not flying:
                     log.paused_s[i] += now - self._paused_at[i]
@@ -232,7 +239,7 @@ class FormationKeeper:
             elif self._resend[i] > 0:
                 self._resend[i] -= 1
                 out[i] = False
-            elif (flying and now >= self._rest_until[i]
+            elif (flying and not late and now >= self._rest_until[i]
                   and (ahead[i] > o.engage_m
                        or (ahead[i] > o.floor_m and ahead_s[i] > o.engage_s))):
                 d = o.pause_for(float(ahead[i]), group_speed, self.cruise_speed_m_s)

@@ -22,6 +22,8 @@ from ..ardupilot.streams import flight_streams
 from ..errors import FtlboError
 from ..link.endpoints import LinkError
 
+CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
+
 
 class FlightError(FtlboError):
     """A vehicle refused or did not answer a flight step."""
@@ -63,6 +65,10 @@ class Status:
     # own time on the ground clock is position_boot_s + clock_offset_s (reports can arrive
     # in bursts, so the arrival time overstates how fresh a position is)
     clock_offset_s: float | None = None
+    # vehicle seconds per ground second (1 but on a simulator run faster than real time:
+    # an emulator's time scale, SITL's --speedup), from the reports of the last while
+    clock_rate: float = 1.0
+    _rate_since: tuple[float, float] | None = None  # (ground, vehicle) seconds
     heartbeat_t: float = 0.0
     heard_t: float = 0.0  # the last message of any kind from the vehicle
     # every STATUSTEXT as (arrival time, severity, text), the last 50; text_count counts
@@ -137,6 +143,9 @@ class FlightVehicle:
                 boot_s = msg.time_boot_ms / 1000.0
                 if s.clock_offset_s is None or boot_s < s.position_boot_s:
                     s.clock_offset_s = now - boot_s  # first report, or the vehicle rebooted
+                    s._rate_since = (now, boot_s)
+                elif s._rate_since is not None and now - s._rate_since[0] >= CLOCK_RATE_AFTER_S:
+                    s.clock_rate = (boot_s - s._rate_since[1]) / (now - s._rate_since[0])
                 s.clock_offset_s = min(s.clock_offset_s, now - boot_s)
                 s.position_boot_s = boot_s
                 position = True

@@ -260,13 +260,17 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     # vehicle's clock running slower than ours (SITL on a loaded machine: a copter seen
     # 1.6 m behind that was 0.4 m behind, and pauses for all three)
     age = np.clip(age, arrived, arrived + MAX_REPORT_DELAY_S)
-    positions = positions + np.array([s.velocity_enu for s in st]) * np.clip(age, 0, 0.5)[:, None]
+    # the velocity is per second of the vehicle's clock, the age on ours
+    rate = np.array([s.clock_rate for s in st])
+    positions = positions + (np.array([s.velocity_enu for s in st])
+                             * (np.clip(age, 0, 0.5) * rate)[:, None])
     speeds = np.array([s.ground_speed_m_s for s in st])
     # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
     # with a time scale runs faster than ours), carried on between reports (10 Hz) for
     # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
     # last report on our clock
-    vehicle_now = max(s.position_boot_s + min(a, 0.1) for s, a in zip(st, arrived))
+    vehicle_now = max(s.position_boot_s + min(a, 0.1) * s.clock_rate
+                      for s, a in zip(st, arrived))
     trace = getattr(keeper, "trace", None)
     if trace is not None:
         trace.append(("inputs", now, vehicle_now, arrived.tolist(), age.tolist(),

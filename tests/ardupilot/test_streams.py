@@ -68,3 +68,21 @@ def test_a_higher_rate_is_asked_for_at_once():
     req.seen(POS, 0.4)
     req.want({POS: 10.0})
     assert [m.param2 for m in req.due(0.5)] == [100_000]
+
+
+def test_a_stream_arriving_at_a_tenth_of_its_rate_is_asked_for_again():
+    """On SITL a copter's GLOBAL_POSITION_INT, asked at 10 Hz, once came at 1 Hz for a
+    whole flight: arriving is not enough, it must come at half its rate or more."""
+    pos = R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT
+    req = StreamRequests(1)
+    req.want({pos: 10.0})
+    assert len(req.due(0.0)) == 1
+    for k in range(4):  # 1 Hz
+        req.seen(pos, 0.5 + k)
+    assert not req.flowing(pos, 3.6)
+    asked = req.due(3.6)
+    assert [m.param2 for m in asked if m.get_type() == "COMMAND_LONG"] == [1e5]
+    assert req.missing(3.6) == ["GLOBAL_POSITION_INT (asked 2x; 1.0/s of 10/s)"]
+    for k in range(30):  # 10 Hz from then on
+        req.seen(pos, 3.7 + 0.1 * k)
+    assert req.flowing(pos, 6.7) and req.due(6.7) == []

@@ -161,3 +161,17 @@ def test_auto_starts_at_the_first_real_leg_and_keeps_the_cruise_speed():
     # a first waypoint elsewhere than the start point is a leg of its own: not skipped
     away = build_mission(home=(12.2332099, 109.1145051), takeoff_alt_m=4.0, path=path[1:])
     assert first_leg(away, frame) == (2, [])
+
+
+def test_a_late_report_is_not_measured_on_but_a_pause_still_ends_on_time():
+    """A report 0.3 s late or more (positions come at 10 Hz): no new pause on it; one under
+    way still gets its continue when due. From 1 s the keeper stands aside."""
+    keeper = FormationKeeper(PATHS, CRUISE, options=ON)
+    speeds = np.full(3, 5.0)
+    late = np.array([0.05, 0.6, 0.05])
+    assert keeper.update(positions_at([5.6, 5.0, 5.0]), speeds, 0.0, ages_s=late) == {}
+    assert keeper.update(positions_at([5.6, 5.0, 5.0]), speeds, 0.1) == {0: True}
+    pause = ON.pause_for(0.6, 5.0, CRUISE)
+    assert keeper.update(positions_at([6.0, 6.0, 5.0]), speeds, 0.1 + pause,
+                         ages_s=late) == {0: False}
+    assert keeper.log.link_gaps == 0
