@@ -130,46 +130,61 @@ class PositionFollower:
     def step(self, dt: float, target, target_vel, target_accel) -> np.ndarray:
         """Follow the target for ``dt`` seconds (in AC_PosControl's 400 Hz steps, the
         target held over them); the copter's position (ENU metres, 2)."""
-        nav = self.nav
+        nav, air = self.nav, self.airframe
         kp, kvp, kvi, kvd = nav.psc_posxy_p, nav.psc_velxy_p, nav.psc_velxy_i, nav.psc_velxy_d
-        imax = nav.psc_velxy_imax
+        imax, accel_max, lean = nav.psc_velxy_imax, self._accel_max, self._lean
+        alpha_e, alpha_d = self._alpha_e, self._alpha_d
+        # AC_PosControl::init_xy_controller: _p_pos_xy.set_limits (WPNAV_ACCEL)
+        pos_limit = nav.wp_accel
+        linear = pos_limit / (kp * kp) if kp > 0 and pos_limit > 0 else math.inf
+        quad = 0.5 * air.air_density / air.drag_bcoef if air.drag_bcoef > 0 else 0.0
+        mom = air.drag_mcoef * math.sqrt(air.air_density / SEA_LEVEL_DENSITY)
+        wx, wy = self.wind
         tx, ty = float(target[0]), float(target[1])
         tvx, tvy = float(target_vel[0]), float(target_vel[1])
         tax, tay = float(target_accel[0]), float(target_accel[1])
-        pos_limit = nav.wp_accel  # AC_PosControl::init_xy_controller: _p_pos_xy.set_limits
+        px, py, vx, vy = self.px, self.py, self.vx, self.vy
+        ex_f, ey_f, dx_f, dy_f = self._ex, self._ey, self._dx, self._dy
+        ix, iy, lx, ly = self._ix, self._iy, self._lx, self._ly
+        h = STEP_S
         self._carry += dt
-        while self._carry >= STEP_S - 1e-12:
-            self._carry -= STEP_S
+        while self._carry >= h - 1e-12:
+            self._carry -= h
             # AC_P_2D::update_all: sqrt_controller on the error's length
-            ex, ey = tx - self.px, ty - self.py
+            ex, ey = tx - px, ty - py
             err = math.hypot(ex, ey)
-            if err > 1e-9:
-                corr = sqrt_controller(err, kp, pos_limit, STEP_S) / err
-                ex, ey = ex * corr, ey * corr
+            if err > linear:
+                corr = sqrt_controller(err, kp, pos_limit, h) / err
+            else:
+                corr = min(kp, 1.0 / h)  # proportional (at most the error in one step)
             # AC_PID_2D::update_all
-            wx, wy = tvx + ex - self.vx, tvy + ey - self.vy
-            last_x, last_y = self._ex, self._ey
-            self._ex += (wx - self._ex) * self._alpha_e
-            self._ey += (wy - self._ey) * self._alpha_e
-            self._dx += ((self._ex - last_x) / STEP_S - self._dx) * self._alpha_d
-            self._dy += ((self._ey - last_y) / STEP_S - self._dy) * self._alpha_d
-            self._ix += self._ex * kvi * STEP_S
-            self._iy += self._ey * kvi * STEP_S
-            i_len = math.hypot(self._ix, self._iy)
+            last_x, last_y = ex_f, ey_f
+            ex_f += (tvx + ex * corr - vx - ex_f) * alpha_e
+            ey_f += (tvy + ey * corr - vy - ey_f) * alpha_e
+            dx_f += ((ex_f - last_x) / h - dx_f) * alpha_d
+            dy_f += ((ey_f - last_y) / h - dy_f) * alpha_d
+            ix += ex_f * kvi * h
+            iy += ey_f * kvi * h
+            i_len = math.hypot(ix, iy)
             if i_len > imax:
-                self._ix, self._iy = self._ix * imax / i_len, self._iy * imax / i_len
-            ax = kvp * self._ex + self._ix + kvd * self._dx + tax
-            ay = kvp * self._ey + self._iy + kvd * self._dy + tay
+                ix, iy = ix * imax / i_len, iy * imax / i_len
+            ax = kvp * ex_f + ix + kvd * dx_f + tax
+            ay = kvp * ey_f + iy + kvd * dy_f + tay
             # limit_accel_xy: within the lean angle's reach
             a_len = math.hypot(ax, ay)
-            if a_len > self._accel_max:
-                ax, ay = ax * self._accel_max / a_len, ay * self._accel_max / a_len
+            if a_len > accel_max:
+                ax, ay = ax * accel_max / a_len, ay * accel_max / a_len
             # the attitude reaches its lean with ATC_INPUT_TC; the air holds it back
-            self._lx += (ax - self._lx) * self._lean
-            self._ly += (ay - self._ly) * self._lean
-            dx, dy = self._drag()
-            self.vx += (self._lx - dx) * STEP_S
-            self.vy += (self._ly - dy) * STEP_S
-            self.px += self.vx * STEP_S
-            self.py += self.vy * STEP_S
-        return self.position
+            lx += (ax - lx) * lean
+            ly += (ay - ly) * lean
+            rx, ry = vx - wx, vy - wy
+            speed = math.hypot(rx, ry)
+            d = quad * speed + mom  # the drag's deceleration over the airspeed
+            vx += (lx - rx * d) * h
+            vy += (ly - ry * d) * h
+            px += vx * h
+            py += vy * h
+        self.px, self.py, self.vx, self.vy = px, py, vx, vy
+        self._ex, self._ey, self._dx, self._dy = ex_f, ey_f, dx_f, dy_f
+        self._ix, self._iy, self._lx, self._ly = ix, iy, lx, ly
+        return np.array([px, py])
