@@ -164,6 +164,19 @@ class Navigation:
         offset_accel += max(-jerk * dt, min(jerk * dt, want - offset_accel))
         return offset_vel, offset_accel
 
+    def pause_loss(self, pause_s: float, speed_m_s: float, dt: float = 0.01) -> list[float]:
+        """The seconds of track a pause has cost, every ``dt`` from its start until the
+        clock is back at pace (:meth:`pause_cost_s` is the last)."""
+        vel, acc, lost, t, out = speed_m_s, 0.0, 0.0, 0.0, [0.0]
+        while t < pause_s + 30.0:
+            vel, acc = self.track_clock_step(vel, acc, 0.0 if t < pause_s else speed_m_s, dt)
+            lost += (1.0 - vel / speed_m_s) * dt
+            t += dt
+            out.append(lost)
+            if t >= pause_s and abs(speed_m_s - vel) < 1e-4 and abs(acc) < 1e-4:
+                break
+        return out
+
     def pause_cost_s(self, pause_s: float, speed_m_s: float, dt: float = 0.01) -> float:
         """Seconds of its track a copter loses to MAV_CMD_DO_PAUSE_CONTINUE: paused for
         ``pause_s``, then continued (ModeAuto::pause / resume -> AC_WPNav set_pause /
@@ -171,14 +184,7 @@ class Navigation:
         set to ``speed_m_s`` (the clock's pace is the speed offset over that speed). A
         copter flying along its track at ``v`` ends ``v`` times that many metres behind
         one that was not paused."""
-        vel, acc, lost, t = speed_m_s, 0.0, 0.0, 0.0
-        while t < pause_s + 30.0:
-            vel, acc = self.track_clock_step(vel, acc, 0.0 if t < pause_s else speed_m_s, dt)
-            lost += (1.0 - vel / speed_m_s) * dt
-            t += dt
-            if t >= pause_s and abs(speed_m_s - vel) < 1e-4 and abs(acc) < 1e-4:
-                break
-        return lost
+        return self.pause_loss(pause_s, speed_m_s, dt)[-1]
 
     def land_descent_speed(self) -> float:
         """Mode::land_run_vertical_control: the fastest descent while landing (m/s,

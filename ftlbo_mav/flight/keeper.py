@@ -47,14 +47,17 @@ class KeeperOptions:
     ``floor_m`` (while the group speeds up, a lead shows in time before it shows in
     metres), is paused for as long as makes it lose that lead (ArduCopter's pause and
     continue, modelled in :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s`;
-    at most ``max_pause_s``), then left ``rest_s`` to regain its pace before it is
-    measured for another. Nothing happens while the group flies slower than
-    ``min_speed_m_s``. A report older than ``late_s`` (positions come at 10 Hz) is not
-    measured on: no new pause while one is that late, though a pause under way still
-    ends on time (on SITL with the ground station's machine busy, one copter's reports
-    came 1 s late, and a keeper measuring on them saw it 1.5 m behind where it was and
-    paused the others in turn: 0.50 m RMS). Reports older than ``stale_s`` make the keeper
-    stand aside (continue for everyone).
+    at most ``max_pause_s``). What a pause is still to take (its copter's track clock
+    slows to zero and comes back to pace over seconds) counts as taken: each vehicle's
+    progress is measured less what its pauses have still to cost it, so a lead that keeps
+    growing is answered again at once, without pausing twice for the same lead; a pause
+    is at least ``rest_s`` after the last continue (the measurement then shows it).
+    Nothing happens while the group flies slower than ``min_speed_m_s``. A report older
+    than ``late_s`` (positions come at 10 Hz) is not measured on: no new pause while one
+    is that late, though a pause under way still ends on time (on SITL with the ground
+    station's machine busy, one copter's reports came 1 s late, and a keeper measuring on
+    them saw it 1.5 m behind where it was and paused the others in turn: 0.50 m RMS).
+    Reports older than ``stale_s`` make the keeper stand aside (continue for everyone).
 
     The numbers are measured, not a taste: docs/flight.md."""
 
@@ -63,7 +66,7 @@ class KeeperOptions:
     engage_s: float = 0.08
     floor_m: float = 0.03  # GLOBAL_POSITION_INT's 1e-7 degrees are 1.1 cm
     max_pause_s: float = 0.8
-    rest_s: float = 2.0
+    rest_s: float = 0.5
     min_speed_m_s: float = 0.2
     period_s: float = 0.05
     late_s: float = 0.3
@@ -84,6 +87,20 @@ class KeeperOptions:
         costs = _pause_costs(self.navigation, round(cruise_m_s, 1), self.max_pause_s)
         k = int(np.searchsorted(costs, lead_m / max(speed_m_s, 0.1)))
         return round(min(k, len(costs) - 1) * 0.01, 2)
+
+
+def still_to_lose_s(nav: Navigation, pause_s: float, cruise_m_s: float,
+                    since_s: float) -> float:
+    """Seconds of track a pause of ``pause_s`` has still to cost its copter ``since_s``
+    after it began (:meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_loss`)."""
+    curve = _pause_curve(nav, round(cruise_m_s, 1), round(pause_s, 2))
+    k = int(since_s / 0.01)
+    return float(curve[-1] - curve[min(max(k, 0), len(curve) - 1)])
+
+
+@lru_cache(maxsize=256)
+def _pause_curve(nav: Navigation, cruise_m_s: float, pause_s: float) -> np.ndarray:
+    return nav.pause_loss(pause_s, cruise_m_s)
 
 
 @lru_cache(maxsize=64)
@@ -151,6 +168,7 @@ class FormationKeeper:
     _paused_at: list[float | None] = field(default_factory=list)
     _resume_at: list[float] = field(default_factory=list)
     _rest_until: list[float] = field(default_factory=list)
+    _pause: list = field(default_factory=list)  # the last pause: (when, seconds), or None
     _resend: list[int] = field(default_factory=list)  # continues still to repeat
     _resumed_at: list[float] = field(default_factory=list)
     _last_t: float | None = None
@@ -166,6 +184,7 @@ class FormationKeeper:
         self._paused_at = [None] * n
         self._resume_at = [0.0] * n
         self._rest_until = [-np.inf] * n
+        self._pause = [None] * n
         self._resend = [0] * n
         self._resumed_at = [-np.inf] * n
         self.log = KeeperLog.empty(n)
@@ -215,6 +234,11 @@ class FormationKeeper:
         late = ages_s is not None and float(np.max(ages_s)) > o.late_s
         s = self.progress(positions)
         lead = s - s.mean()  # what the formation error sees (logged)
+        group_speed = float(np.mean(speeds_m_s))
+        # what the pauses under way have still to take, taken
+        owed = np.array([0.0 if p is None else group_speed * still_to_lose_s(
+            o.navigation, p[1], self.cruise_speed_m_s, now - p[0]) for p in self._pause])
+        s = s - owed
         # what a pause can take back: a copter cannot be made to catch up, so every other
         # one loses its whole lead over the last (against the mean a laggard's two
         # leaders would each lose only a third of the gap a round, and the formation stay
@@ -222,7 +246,6 @@ class FormationKeeper:
         ahead = s - s.min()
         if self.trace is not None:
             self.trace.append((now, s.tolist(), lead.tolist()))
-        group_speed = float(np.mean(speeds_m_s))
         flying = group_speed >= o.min_speed_m_s
         # a lead in time shows before a lead in metres while the group speeds up
         ahead_s = ahead / max(group_speed, o.min_speed_m_s)
@@ -246,6 +269,7 @@ class FormationKeeper:
                 if d > 0:
                     self._paused_at[i], self._resume_at[i] = now, now + d
                     self._rest_until[i] = now + d + o.rest_s
+                    self._pause[i] = (now, d)
                     log.pauses[i] += 1
                     out[i] = True
         return out

@@ -12,6 +12,7 @@ from ftlbo_mav.flight.keeper import (
     KeeperOptions,
     planned_speed,
     progress_along,
+    still_to_lose_s,
 )
 from ftlbo_mav.mission.items import MissionItem
 
@@ -56,14 +57,36 @@ def test_a_leader_waits_just_long_enough_to_lose_its_lead_then_continues():
     pause = ON.pause_for(0.6, 5.0, CRUISE)
     lost = 5.0 * ON.navigation.pause_cost_s(pause, CRUISE)
     assert 0.6 <= lost < 0.6 + 0.1 and 0.0 < pause < ON.max_pause_s
-    assert keeper.update(positions_at([6.0, 5.4, 5.4]), speeds, 1.0 + pause - 0.06) == {}
-    assert keeper.update(positions_at([6.3, 5.8, 5.8]), speeds, 1.0 + pause) == {0: False}
-    # the continue is said twice more (a lost one is not final), then nothing
-    said = [keeper.update(positions_at([6.5, 6.0, 6.0]), speeds, 1.1 + pause + 0.1 * k)
+
+    def flown(t):  # uav1 losing its lead as the pause model has it; the others at 5 m/s
+        others = 5.0 + 5.0 * (t - 1.0)
+        owed = still_to_lose_s(ON.navigation, pause, CRUISE, t - 1.0)
+        return positions_at([others + 0.6 - lost + 5.0 * owed, others, others])
+
+    assert keeper.update(flown(1.0 + pause - 0.06), speeds, 1.0 + pause - 0.06) == {}
+    assert keeper.update(flown(1.0 + pause), speeds, 1.0 + pause) == {0: False}
+    # the continue is said twice more (a lost one is not final), then nothing: what the
+    # pause has still to take counts as taken, so nobody is paused for it
+    said = [keeper.update(flown(1.1 + pause + 0.1 * k), speeds, 1.1 + pause + 0.1 * k)
             for k in range(4)]
     assert said == [{0: False}, {0: False}, {}, {}]
     assert keeper.log.pauses == [1, 0, 0] and keeper.log.paused_s[0] == pytest.approx(pause)
     assert keeper.log.max_lead_m[0] == pytest.approx(0.4)  # the formation's view: the mean
+
+
+def test_a_lead_that_keeps_growing_is_answered_again():
+    """A copter paused for a lead that then grows further (the laggard's track clock still
+    slowing) is paused again once the growth shows, beyond what its pause still owes."""
+    keeper = FormationKeeper(PATHS, CRUISE, options=ON)
+    speeds = np.full(3, 5.0)
+    assert keeper.update(positions_at([5.3, 5.0, 5.0]), speeds, 0.0) == {0: True}
+    pause = ON.pause_for(0.3, 5.0, CRUISE)
+    assert keeper.update(positions_at([6.0, 5.5, 5.5]), speeds, pause) == {0: False}
+    keeper.update(positions_at([6.5, 6.0, 6.0]), speeds, pause + 0.1)
+    keeper.update(positions_at([7.0, 6.5, 6.5]), speeds, pause + 0.2)
+    # ON.rest_s after the continue uav1 is 0.6 m ahead, far more than it still owes
+    again = keeper.update(positions_at([8.6, 8.0, 8.0]), speeds, pause + ON.rest_s)
+    assert again == {0: True}
 
 
 def test_a_waited_leader_rests_before_it_is_paused_again():

@@ -1,6 +1,8 @@
 """The example's legs flown by the emulator's navigation in wind, without MAVLink: three
-AC_WPNav S-curves (``WaypointNav``) from the same start, each copter off its target by
-its own gusts (``Gusts``), and the formation keeper pausing the leaders as ``fly`` does.
+AC_WPNav S-curves (``WaypointNav``) from the same start, each copter following its
+target as AC_PosControl makes it (``PositionFollower``: the airframe's drag in the steady
+wind) and off that path by its own gusts (``Gusts``), and the formation keeper pausing
+the leaders as ``fly`` does.
 A naive start is clearly worse than either way of ``fly``, as SITL measured
 (docs/flight.md); the full flights are ``benchmarks/flight.py --wind``."""
 
@@ -12,6 +14,7 @@ import numpy as np
 import pytest
 
 from ftlbo_mav.ardupilot.navigation import Navigation
+from ftlbo_mav.ardupilot.poscontrol import PositionFollower
 from ftlbo_mav.flight.keeper import FormationKeeper
 from ftlbo_mav.flight.metrics import formation_error
 from ftlbo_mav.flight.planned import load_planned_flight
@@ -38,6 +41,8 @@ def fly_legs_positions(wind: Wind, seed: int, *, starts=(0.0, 0.0, 0.0),
     nav = Navigation()
     navs = [WaypointNav(nav, p[0], CRUISE) for p in PATHS]
     gusts = [Gusts(wind, np.random.default_rng([seed, i])) for i in range(len(PATHS))]
+    air = wind.velocity_enu()
+    copters = [PositionFollower(p[0], nav=nav, wind=air[:2]) for p in PATHS]
     leg = [0] * len(PATHS)
     keep = FormationKeeper(PATHS, CRUISE) if keeper else None
     positions = PATHS[:, 0].copy()
@@ -53,9 +58,12 @@ def fly_legs_positions(wind: Wind, seed: int, *, starts=(0.0, 0.0, 0.0),
                     n.set_destination_next(path[leg[i] + 1])
             elif n.reached:
                 leg[i] = path.shape[0]
-            n.advance(DT, positions[i], n.target_vel + gusts[i].error_vel)
-            air = float(np.linalg.norm(n.target_vel - wind.velocity_enu()))
-            positions[i] = n.target + gusts[i].step(DT, air)
+            c = copters[i]
+            velocity = np.array([c.vx, c.vy, n.target_vel[2]]) + gusts[i].error_vel
+            n.advance(DT, positions[i], velocity)
+            xy = c.step(DT, n.target, n.target_vel, n.target_accel)
+            airspeed = float(np.linalg.norm(velocity - air))
+            positions[i] = np.array([*xy, n.target[2]]) + gusts[i].step(DT, airspeed)
         if keep is not None:
             speeds = np.array([np.linalg.norm(n.target_vel[:2]) for n in navs])
             for i, pause in keep.update(positions, speeds, t).items():
