@@ -137,10 +137,14 @@ def _segments(path: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def progress_along(path: np.ndarray, point: np.ndarray, *, start_segment: int = 0,
-                   window: int = 4) -> tuple[float, int]:
+                   window: int = 4, within: tuple[float, float] | None = None
+                   ) -> tuple[float, int]:
     """Distance along ``path`` ``(P, 3)`` of the point nearest ``point`` ``(3,)``, searching
     the segments ``start_segment .. start_segment + window`` (progress never jumps back to
-    an earlier leg nor ahead to a far one when a path passes near itself). Returns
+    an earlier leg nor ahead to a far one when a path passes near itself) and, with
+    ``within`` ``(lowest, highest)`` metres, among the points of those whose progress lies
+    there if any does (where a path comes back along itself, as out to a lane's end and
+    back, the nearest point can be on the way back before the copter has turned). Returns
     ``(metres, segment)``."""
     a, b, cum = _segments(path)
     lo, hi = start_segment, min(len(a), start_segment + window + 1)
@@ -148,9 +152,18 @@ def progress_along(path: np.ndarray, point: np.ndarray, *, start_segment: int = 
     dd = np.einsum("ij,ij->i", d, d)
     t = np.clip(np.einsum("ij,ij->i", point - a[lo:hi], d) / np.where(dd > 0, dd, 1.0), 0, 1)
     nearest = a[lo:hi] + t[:, None] * d
-    k = int(np.argmin(np.linalg.norm(nearest - point, axis=1)))
-    seg = lo + k
-    return float(cum[seg] + t[k] * np.sqrt(dd[k])), seg
+    along = cum[lo:hi] + t * np.sqrt(dd)
+    dist = np.linalg.norm(nearest - point, axis=1)
+    if within is not None:
+        ok = (along >= within[0]) & (along <= within[1])
+        if ok.any():
+            dist = np.where(ok, dist, np.inf)
+    k = int(np.argmin(dist))
+    return float(along[k]), lo + k
+
+
+MAX_AHEAD_M = 3.0  # a progress measured further on than the last one by more is doubted
+MAX_BACK_M = 1.0  # ... or further back (a copter overshooting a stop comes back)
 
 
 @dataclass
@@ -169,6 +182,7 @@ class FormationKeeper:
     _resume_at: list[float] = field(default_factory=list)
     _rest_until: list[float] = field(default_factory=list)
     _pause: list = field(default_factory=list)  # the last pause: (when, seconds), or None
+    _progress: list = field(default_factory=list)  # the last progress measured, per UAV
     _resend: list[int] = field(default_factory=list)  # continues still to repeat
     _resumed_at: list[float] = field(default_factory=list)
     _last_t: float | None = None
@@ -185,6 +199,7 @@ class FormationKeeper:
         self._resume_at = [0.0] * n
         self._rest_until = [-np.inf] * n
         self._pause = [None] * n
+        self._progress = [0.0] * n
         self._resend = [0] * n
         self._resumed_at = [-np.inf] * n
         self.log = KeeperLog.empty(n)
@@ -203,7 +218,13 @@ class FormationKeeper:
         """``(N,)`` metres along each UAV's own path, from ``positions`` ``(N, 3)``."""
         out = np.empty(len(self.paths))
         for i, (path, p) in enumerate(zip(self.paths, positions)):
-            out[i], self._segment[i] = progress_along(path, p, start_segment=self._segment[i])
+            # from one measurement to the next (20 Hz) a copter moves a metre at most; the
+            # first is at the start (fly starts AUTO there)
+            last = self._progress[i]
+            within = (last - MAX_BACK_M, last + MAX_AHEAD_M)
+            out[i], self._segment[i] = progress_along(path, p, start_segment=self._segment[i],
+                                                      within=within)
+        self._progress = out.tolist()
         return out
 
     def update(self, positions: np.ndarray, speeds_m_s: np.ndarray, now: float,

@@ -198,3 +198,13 @@ def test_a_late_report_is_not_measured_on_but_a_pause_still_ends_on_time():
     assert keeper.update(positions_at([6.0, 6.0, 5.0]), speeds, 0.1 + pause,
                          ages_s=late) == {0: False}
     assert keeper.log.link_gaps == 0
+
+
+def test_progress_does_not_jump_to_the_way_back_of_a_spur():
+    """Out to a lane's end and back the same way (SITL, a survey at 10 m/s: a copter near
+    the spur was measured 20 m on, on its way back, and the keeper paused the others for
+    it): progress goes on from where it was."""
+    spur = np.array([[0.0, 0, 4], [10, 0, 4], [20, 0.4, 4], [10, 0.8, 4], [0, 0.8, 4]])
+    keeper = FormationKeeper(spur[None], CRUISE, options=ON)
+    seen = [float(keeper.progress(np.array([[x, 0.45, 4.0]]))[0]) for x in range(13)]
+    assert np.all(np.diff(seen) > 0) and seen[-1] < 13.0, seen
