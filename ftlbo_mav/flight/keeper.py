@@ -277,6 +277,7 @@ class FormationKeeper:
             if self._paused_at[i] is not None:
                 if now >= self._resume_at[i] or not flying:
                     log.paused_s[i] += now - self._paused_at[i]
+                    self._cut_short(i, now)
                     self._paused_at[i], self._resumed_at[i] = None, now
                     self._resend[i] = 2
                     out[i] = False
@@ -295,6 +296,12 @@ class FormationKeeper:
                     out[i] = True
         return out
 
+    def _cut_short(self, i: int, now: float) -> None:
+        """A pause continued before its time owes what a pause that long does."""
+        if self._pause[i] is not None and now < self._resume_at[i]:
+            began = self._pause[i][0]
+            self._pause[i] = (began, max(now - began, 0.0))
+
     def release(self, now: float = 0.0) -> dict[int, bool]:
         """Continue for every vehicle paused (the legs are over, or the reports stopped)."""
         out = {}
@@ -302,6 +309,7 @@ class FormationKeeper:
             if self._paused_at[i] is not None or self._resend[i] > 0:
                 if self._paused_at[i] is not None:
                     self.log.paused_s[i] += max(now - self._paused_at[i], 0.0)
+                    self._cut_short(i, now)
                     self._paused_at[i], self._resumed_at[i] = None, now
                 self._resend[i] = 0
                 out[i] = False
