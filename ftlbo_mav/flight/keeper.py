@@ -50,8 +50,8 @@ class KeeperOptions:
     at most ``max_pause_s``). What a pause is still to take (its copter's track clock
     slows to zero and comes back to pace over seconds) counts as taken: each vehicle's
     progress is measured less what its pauses have still to cost it, so a lead that keeps
-    growing is answered again at once, without pausing twice for the same lead; a pause
-    is at least ``rest_s`` after the last continue (the measurement then shows it).
+    growing is answered again ``rest_s`` after the last continue (once the measurement
+    shows that pause), without pausing twice for the same lead.
     Nothing happens while the group flies slower than ``min_speed_m_s``. A report older
     than ``late_s`` (positions come at 10 Hz) is not measured on: no new pause while one
     is that late, though a pause under way still ends on time (on SITL with the ground
@@ -99,7 +99,7 @@ def still_to_lose_s(nav: Navigation, pause_s: float, cruise_m_s: float,
 
 
 @lru_cache(maxsize=256)
-def _pause_curve(nav: Navigation, cruise_m_s: float, pause_s: float) -> np.ndarray:
+def _pause_curve(nav: Navigation, cruise_m_s: float, pause_s: float) -> list[float]:
     return nav.pause_loss(pause_s, cruise_m_s)
 
 
@@ -188,8 +188,9 @@ class FormationKeeper:
     _last_t: float | None = None
     _standing_aside: bool = False
     log: KeeperLog | None = None
-    # when a list: one row per measurement, (now, progress (N,), lead (N,)), for looking
-    # back at what the keeper saw (``benchmarks/flight.py --keep-sitl``)
+    # when a list: one row per measurement, (now, progress less what pauses still owe
+    # (N,), lead over the mean (N,)), for looking back at what the keeper saw
+    # (``benchmarks/flight.py --keep``)
     trace: list | None = None
 
     def __post_init__(self) -> None:

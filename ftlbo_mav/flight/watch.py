@@ -274,7 +274,7 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     trace = getattr(keeper, "trace", None)
     if trace is not None:
         trace.append(("inputs", now, vehicle_now, arrived.tolist(), age.tolist(),
-                             [s.position_boot_s for s in st], positions.tolist()))
+                      [s.position_boot_s for s in st], positions.tolist()))
     for i, pause in keeper.update(positions, speeds, vehicle_now, ages_s=arrived).items():
         _send_pause(vehicles[i], pause)
     return True
