@@ -83,6 +83,7 @@ DEFAULTS: Mapping[str, ParamDefault] = {
     "PSC_JERK_Z": ParamDefault(5.0, REAL32, _PSC + " (POSCONTROL_JERK_Z, m/s/s/s)"),
     "PSC_POSZ_P": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_POS_Z_P)"),
     "PSC_POSXY_P": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_POS_XY_P)"),
+    "PSC_VELZ_P": ParamDefault(5.0, REAL32, _PSC + " (POSCONTROL_VEL_Z_P)"),
     "PSC_VELXY_P": ParamDefault(2.0, REAL32, _PSC + " (POSCONTROL_VEL_XY_P)"),
     "PSC_VELXY_I": ParamDefault(1.0, REAL32, _PSC + " (POSCONTROL_VEL_XY_I)"),
     "PSC_VELXY_D": ParamDefault(0.5, REAL32, _PSC + " (POSCONTROL_VEL_XY_D)"),
@@ -124,6 +125,7 @@ class Navigation:
     psc_jerk_z: float = 5.0       # PSC_JERK_Z
     psc_posz_p: float = 1.0       # PSC_POSZ_P
     psc_posxy_p: float = 1.0      # PSC_POSXY_P
+    psc_velz_p: float = 5.0       # PSC_VELZ_P
     psc_velxy_p: float = 2.0      # PSC_VELXY_P
     psc_velxy_i: float = 1.0      # PSC_VELXY_I
     psc_velxy_d: float = 0.5      # PSC_VELXY_D
@@ -219,6 +221,7 @@ _SCALES = (
     ("RTL_LOIT_TIME", "rtl_loit_time", 1000.0), ("DISARM_DELAY", "disarm_delay", 1.0),
     ("PSC_JERK_XY", "psc_jerk_xy", 1.0), ("PSC_JERK_Z", "psc_jerk_z", 1.0),
     ("PSC_POSZ_P", "psc_posz_p", 1.0), ("PSC_POSXY_P", "psc_posxy_p", 1.0),
+    ("PSC_VELZ_P", "psc_velz_p", 1.0),
     ("PSC_VELXY_P", "psc_velxy_p", 1.0), ("PSC_VELXY_I", "psc_velxy_i", 1.0),
     ("PSC_VELXY_D", "psc_velxy_d", 1.0), ("PSC_VELXY_IMAX", "psc_velxy_imax", 100.0),
     ("PSC_VELXY_FLTE", "psc_velxy_flte", 1.0), ("PSC_VELXY_FLTD", "psc_velxy_fltd", 1.0),

@@ -260,7 +260,8 @@ class Simulator:
             v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
                         boot_time=start)
             if self.wind is not None and not self.wind.calm:
-                v.autopilot.gusts = Gusts(self.wind, np.random.default_rng([self.seed, 0x57, i]))
+                v.autopilot.gusts = Gusts(self.wind, np.random.default_rng([self.seed, 0x57, i]),
+                                          nav=v.autopilot.nav_params())
             self.runners.append(VehicleRunner(v, faults=self.faults[i], rng=rngs[i], loop=loop,
                                               signing_key=self.signing_key, clock=clock))
         servers = []

@@ -19,9 +19,10 @@ that target by an error :class:`Gusts` carries, per copter:
   that the default frame holds ``refSpd`` 15.08 m/s at ``refAngle`` 45 degrees, that is
   ``g * (v / 15.08)^2`` per unit mass; its slope at the airspeed of the steady wind,
   ``2 g v / 15.08^2`` per second), times the gust's speed;
-- AC_PosControl answers it as a PID on velocity around a P on position (PSC_POSXY_P 1,
-  PSC_VELXY_P 2, PSC_VELXY_I 1; PSC_POSZ_P 1, PSC_VELZ_P 5), reaching the airframe
-  through its attitude and thrust with a lag (``response_s``).
+- AC_PosControl answers it as a PID on velocity around a P on position (the copter's
+  PSC_POSXY_P 1, PSC_VELXY_P 2, PSC_VELXY_I 1; PSC_POSZ_P 1, PSC_VELZ_P 5, from its
+  :class:`~ftlbo_mav.ardupilot.navigation.Navigation`), reaching the airframe through
+  its attitude and thrust with a lag (``response_s``).
 
 The steady wind itself moves no copter off its target for long: the velocity
 integrator takes it up, the same for every copter of a formation (their paths are the
@@ -44,6 +45,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from ..ardupilot.navigation import Navigation
 
 G = 9.80665
 SITL_RATE_HZ = 1200.0  # SIM_RATE_HZ, a copter's physics rate
@@ -96,9 +99,7 @@ class Gusts:
     rng: np.random.Generator
     response_s: float = 0.3
     drag_scale: float = 0.05  # held to SITL: tests/conformance/test_wind.py
-    pos_p: tuple[float, float, float] = (1.0, 1.0, 1.0)  # PSC_POSXY_P, PSC_POSZ_P
-    vel_p: tuple[float, float, float] = (2.0, 2.0, 5.0)  # PSC_VELXY_P, PSC_VELZ_P
-    vel_i: tuple[float, float, float] = (1.0, 1.0, 0.0)  # PSC_VELXY_I (the z loop: accel)
+    nav: Navigation = field(default_factory=Navigation)  # its PSC_* gains
     gust: np.ndarray = field(default_factory=lambda: np.zeros(3))
     error: np.ndarray = field(default_factory=lambda: np.zeros(3))
     error_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -129,7 +130,10 @@ class Gusts:
         gust = self._draw(dt)
         slope = self.drag_scale * 2 * G * max(airspeed_m_s, 1.0) / REF_SPEED ** 2
         disturbance = slope * gust
-        pos_p, vel_p, vel_i = (np.asarray(x) for x in (self.pos_p, self.vel_p, self.vel_i))
+        n = self.nav  # PSC_POSXY_P / PSC_POSZ_P, PSC_VELXY_P / PSC_VELZ_P, PSC_VELXY_I
+        pos_p = np.array([n.psc_posxy_p, n.psc_posxy_p, n.psc_posz_p])
+        vel_p = np.array([n.psc_velxy_p, n.psc_velxy_p, n.psc_velz_p])
+        vel_i = np.array([n.psc_velxy_i, n.psc_velxy_i, 0.0])  # the z loop's I is on accel
         vel_err = -(self.error_vel + pos_p * self.error)
         self._integral += vel_err * dt
         wanted = vel_p * vel_err + vel_i * self._integral
