@@ -22,7 +22,7 @@ from .fleet import BACKEND, vehicles
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
 SURVEY = ROOT / "missions" / "orchard-survey.toml"
-SPEEDUP = 8.0
+SPEEDUP = 12.0
 PASS_M = 3.0
 """How near each UAV must come to each of its lane ends: ArduCopter's waypoint radius
 (WPNAV_RADIUS, 2 m) plus a margin for corner cutting at the turns."""
