@@ -21,7 +21,14 @@ from .feasibility import violations
 from .geometric import lower_bound, shortest_routes
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import Progress
-from .predicted import FlightModel, Prediction, keep_clearance, predict, predicted_violations
+from .predicted import (
+    FlightModel,
+    Prediction,
+    beyond_area,
+    keep_clearance,
+    predict,
+    predicted_violations,
+)
 from .problem import PlanningProblem, problem_from_scenario
 from .seeds import RouteChains, seed_waypoints
 
@@ -214,8 +221,8 @@ def _area_excursion(p: Plan) -> tuple[np.ndarray, np.ndarray]:
     the area's lower and upper sides."""
     if p.prediction is None:
         return np.zeros(2), np.zeros(2)
-    xy = p.prediction.positions[:, :, :2].reshape(-1, 2)
-    return (p.problem.area_lower - xy).max(axis=0), (xy - p.problem.area_upper).max(axis=0)
+    beyond = beyond_area(p.problem, p.prediction.positions).reshape(-1, 4).max(axis=0)
+    return beyond[:2], beyond[2:]
 
 
 def _plan_replanning(scenario: Scenario, settings: PlannerSettings, *,

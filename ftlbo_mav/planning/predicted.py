@@ -130,8 +130,7 @@ def predicted_violations(problem: PlanningProblem, prediction: Prediction, *,
         out.append(f"UAV {n + 1}'s predicted flown path passes {p.clearance[n]:.2f} m from "
                    f"obstacle {k + 1}'s surface {p.times[i]:.1f} s into its legs (needs "
                    f"{clearance_m:.2f} m: ArduCopter cuts the corner)")
-    xy = p.positions[:, :, :2]
-    outside = ((xy < problem.area_lower - _TOL) | (xy > problem.area_upper + _TOL)).any(axis=2)
+    outside = (beyond_area(problem, p.positions) > _TOL).any(axis=2)
     for n in np.flatnonzero(outside.any(axis=1)):
         i = int(np.argmax(outside[n]))
         out.append(f"UAV {n + 1}'s predicted flown path leaves the area {p.times[i]:.1f} s "
@@ -192,12 +191,18 @@ def _moved(problem: PlanningProblem, path: np.ndarray, j: int, shift: np.ndarray
     return None
 
 
+def beyond_area(problem: PlanningProblem, positions: np.ndarray) -> np.ndarray:
+    """How far ``positions`` ``(..., 3)`` lie past the area's sides, ``(..., 4)`` metres:
+    past its lower east and north sides, then its upper ones (<= 0: inside)."""
+    xy = positions[..., :2]
+    return np.concatenate([problem.area_lower - xy, xy - problem.area_upper], axis=-1)
+
+
 def _area_shortfalls(problem: PlanningProblem, p: Prediction) -> list:
     """Per UAV whose predicted path leaves the area: ``(uav, time index, inward (2,),
     metres)`` of its furthest excursion, the unit vector back in and how far (plus
     :data:`PUSH_MARGIN_M`)."""
-    xy = p.positions[:, :, :2]
-    beyond = np.concatenate([problem.area_lower - xy, xy - problem.area_upper], axis=2)
+    beyond = beyond_area(problem, p.positions)
     out = []
     for n in np.flatnonzero(beyond.max(axis=(1, 2)) > _TOL):
         t_i, side = np.unravel_index(int(np.argmax(beyond[n])), beyond[n].shape)
