@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import compiled
 from .navigation import Navigation
 from .poscontrol import DEFAULT_AIRFRAME, Airframe, PositionFollower
 from .wpnav import WaypointNav
@@ -68,6 +69,22 @@ class FlownPath:
         return FlownPath(self.times, self.positions + np.asarray(by, float), self.reached)
 
 
+def _checked(points, holds_s) -> tuple[np.ndarray, np.ndarray]:
+    points = np.asarray(points, float)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
+        raise ValueError(f"points must be (P >= 2, 3), got {points.shape}")
+    holds = np.zeros(len(points)) if holds_s is None else np.asarray(holds_s, float)
+    return points, holds
+
+
+def _budget(points: np.ndarray, holds: np.ndarray, nav: Navigation, desired_speed: float,
+            dt: float) -> int:
+    """Steps the mission may take before it counts as not flown."""
+    pace = max(min(desired_speed, nav.wp_speed_up, nav.wp_speed_dn), _MIN_PACE_M_S)
+    length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    return max(int((length / pace + 10.0 * len(points) + holds.sum()) / dt), 0)
+
+
 def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
              speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
              dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME) -> FlownPath:
@@ -75,15 +92,34 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     ArduCopter's AUTO does (see the module's docstring). ``speed_m_s``: the
     DO_CHANGE_SPEED before the first leg (None: WPNAV_SPEED); ``holds_s``: ``(P,)`` whole
     seconds held at each point (its waypoint's ``param1``; default none); ``airframe``:
-    the drag the copter follows its target with (None: on its target)."""
-    points = np.asarray(points, float)
-    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
-        raise ValueError(f"points must be (P >= 2, 3), got {points.shape}")
-    holds = np.zeros(len(points)) if holds_s is None else np.asarray(holds_s, float)
+    the drag the copter follows its target with (None: on its target).
+
+    The model's arithmetic, compiled (:mod:`.compiled`): the same path as
+    :func:`fly_path_stepwise` flies with the model's objects, some 100 times faster."""
+    points, holds = _checked(points, holds_s)
+    desired = WaypointNav(nav, points[0].copy(), speed_m_s).desired_speed
+    budget = _budget(points, holds, nav, desired, dt)
+    legs = compiled.legs_of(points, nav, desired)
+    prm = compiled.nav_params(nav, airframe, desired)
+    status, n, times, positions, reached = compiled.fly(
+        points, holds, *legs, prm, dt, budget, airframe is not None, SETTLED_M, SETTLED_M_S,
+        int(SETTLE_BUDGET_S / dt))
+    if status != compiled.OK:
+        raise RuntimeError(f"the path of {len(points)} points was not flown within "
+                           f"{budget * dt:.0f} s")
+    return FlownPath(times[:n].copy(), positions[:n].copy(), reached)
+
+
+def fly_path_stepwise(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
+                      speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
+                      dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME
+                      ) -> FlownPath:
+    """:func:`fly_path` flown a step at a time with the model's own objects (AC_WPNav's
+    :class:`.wpnav.WaypointNav`, AC_PosControl's :class:`.poscontrol.PositionFollower`),
+    as the emulator flies them: the reference the compiled loop is held to."""
+    points, holds = _checked(points, holds_s)
     wp = WaypointNav(nav, points[0].copy(), speed_m_s)
-    pace = max(min(wp.desired_speed, nav.wp_speed_up, nav.wp_speed_dn), _MIN_PACE_M_S)
-    length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
-    budget = int((length / pace + 10.0 * len(points) + holds.sum()) / dt)
+    budget = _budget(points, holds, nav, wp.desired_speed, dt)
 
     def start(k: int) -> None:  # ModeAuto::do_nav_wp / set_next_wp
         wp.set_destination(points[k])

@@ -1,0 +1,454 @@
+"""The flown-path model of :mod:`.flight_path`, compiled: one loop over the mission.
+
+:func:`.flight_path.fly_path_stepwise` flies a mission with the model's own objects
+(:class:`.wpnav.WaypointNav` moving the target along :class:`.scurve.SCurve` legs,
+:class:`.poscontrol.PositionFollower` flying the copter after it), as the emulator does,
+a step at a time. The planner predicts thousands of seconds of flight per plan; there the
+same arithmetic runs here as one numba-compiled loop (:func:`fly`), on the legs as the
+SCurve objects planned them (:func:`legs_of`: their pieces, tracks and speeds), with the
+state the objects would hold in plain numbers. Every function here mirrors one of those
+methods, line by line and in the same order of operations, and names it;
+``tests/ardupilot/test_compiled.py`` holds the two to one another (within 1e-6 m over
+random missions, holds, speeds and parameters), ``tests/conformance`` the result to
+recorded ArduCopter SITL tracks.
+
+ArduPilot sources followed (through the methods mirrored): libraries/AP_Math/SCurve.cpp
+(get_jerk_accel_vel_pos_at_time, advance_target_along_track), libraries/AC_WPNav/
+AC_WPNav.cpp (advance_wp_target_along_track), libraries/AC_AttitudeControl/
+AC_PosControl.cpp (update_xy_controller), AP_Math/control.cpp (sqrt_controller,
+shape_vel_accel, limit_accel_xy), ArduCopter/mode_auto.cpp (the waypoint sequence).
+
+numba compiles on first use and caches the machine code beside this file (or in its user
+cache when that is read-only), so only the first plan after an install pays the compile.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .navigation import GRAVITY_M_S2, Navigation
+from .poscontrol import SEA_LEVEL_DENSITY, Airframe
+from .poscontrol import STEP_S as PSC_STEP_S
+from .scurve import ACCEL_MAX, CONST, DECEL_END, FALL, FLAT, PIECES, RISE, SCurve
+
+try:
+    from numba import njit
+except ImportError:  # pragma: no cover - numba is a dependency; pure Python still works
+    def njit(*_args, **_kwargs):
+        return lambda f: f
+
+_EPS = 1.1920929e-07  # scurve._EPS: ArduPilot's float32 is_zero
+# columns of a leg's pieces: end time, kind, jerk, accel, vel, pos (scurve.Piece)
+_T, _K, _J, _A, _V, _X = range(6)
+# nav parameters, in this order (see _nav_params)
+NAV_FIELDS = ("radius", "corner_accel", "psc_posxy_p", "wp_accel", "wp_jerk", "psc_jerk_xy",
+              "desired_speed", "psc_velxy_p", "psc_velxy_i", "psc_velxy_d", "psc_velxy_imax",
+              "alpha_e", "alpha_d", "accel_max", "lean", "quad", "mom")
+OK, OUT_OF_TIME = 0, 1
+
+
+def legs_of(points: np.ndarray, nav: Navigation, desired_speed: float) -> tuple:
+    """Every leg ``points[k-1] -> points[k]`` planned as AC_WPNav plans it
+    (:meth:`.wpnav.WaypointNav._plan`: SCurve.calculate_track from rest to rest), as
+    arrays indexed by the leg's end point ``k`` (row 0 unused): ``pieces`` ``(P, 23, 6)``,
+    ``planned`` ``(P,)``, ``track`` and ``unit`` ``(P, 3)``, ``vel_max`` ``(P,)``."""
+    P = len(points)
+    pieces = np.zeros((P, PIECES, 6))
+    planned = np.zeros(P, np.bool_)
+    track, unit, vel_max = np.zeros((P, 3)), np.zeros((P, 3)), np.zeros(P)
+    jerk, snap = nav.scurve_jerk_snap()
+    for k in range(1, P):
+        leg = SCurve()
+        leg.calculate_track(points[k - 1], points[k], desired_speed, nav.wp_speed_up,
+                            nav.wp_speed_dn, nav.wp_accel, nav.wp_accel_z, snap, jerk)
+        vel_max[k] = leg.vel_max
+        track[k], unit[k] = leg.track, leg.unit
+        if leg.planned:
+            planned[k] = True
+            pieces[k] = [(q.end_time, q.kind, q.jerk, q.accel, q.vel, q.pos) for q in leg.p]
+        else:
+            pieces[k, 0] = [leg.p[0].end_time, FLAT, 0.0, 0.0, 0.0, 0.0]
+    return pieces, planned, track, unit, vel_max
+
+
+def nav_params(nav: Navigation, airframe: Airframe | None, desired_speed: float) -> np.ndarray:
+    """The numbers :func:`fly` needs of ``nav``, the airframe and the speed, in the order
+    of :data:`NAV_FIELDS` (as :class:`.wpnav.WaypointNav` and
+    :class:`.poscontrol.PositionFollower` derive them)."""
+    from .poscontrol import _filter_alpha
+    from .wpnav import WP_RADIUS_MIN
+
+    air = airframe if airframe is not None else Airframe()
+    quad = 0.5 * air.air_density / air.drag_bcoef if air.drag_bcoef > 0 else 0.0
+    mom = air.drag_mcoef * math.sqrt(air.air_density / SEA_LEVEL_DENSITY)
+    lean = min(PSC_STEP_S / nav.atc_input_tc, 1.0) if nav.atc_input_tc > 0 else 1.0
+    values = dict(radius=max(nav.wp_radius, WP_RADIUS_MIN), corner_accel=nav.corner_accel(),
+                  psc_posxy_p=nav.psc_posxy_p, wp_accel=nav.wp_accel, wp_jerk=nav.wp_jerk,
+                  psc_jerk_xy=nav.psc_jerk_xy, desired_speed=desired_speed,
+                  psc_velxy_p=nav.psc_velxy_p, psc_velxy_i=nav.psc_velxy_i,
+                  psc_velxy_d=nav.psc_velxy_d, psc_velxy_imax=nav.psc_velxy_imax,
+                  alpha_e=_filter_alpha(nav.psc_velxy_flte),
+                  alpha_d=_filter_alpha(nav.psc_velxy_fltd),
+                  accel_max=GRAVITY_M_S2 * math.tan(nav.angle_max), lean=lean, quad=quad,
+                  mom=mom)
+    return np.array([values[name] for name in NAV_FIELDS], float)
+
+
+@njit(cache=True)
+def _along(kind, jerk, span, t, a0, v0, p0):
+    """scurve._along."""
+    if kind == FLAT:
+        return (jerk, a0 + jerk * t, v0 + a0 * t + jerk * t * t / 2,
+                p0 + v0 * t + a0 * t * t / 2 + jerk * t ** 3 / 6)
+    if span <= 0:
+        return 0.0, a0, v0, p0
+    h, w = jerk / 2, span / math.pi
+    s, c = math.sin(t / w), math.cos(t / w)
+    sign = 1.0 if kind == RISE else -1.0
+    j = h * (1 - sign * c)
+    a = a0 + h * (t - sign * w * s)
+    v = v0 + a0 * t + h * (t * t / 2 + sign * w * w * (c - 1))
+    p = p0 + v0 * t + a0 * t * t / 2 + h * (t ** 3 / 6 - sign * w * w * t + sign * w ** 3 * s)
+    return j, a, v, p
+
+
+@njit(cache=True)
+def _state_at(pieces, planned, leg, t):
+    """SCurve.state_at: (jerk, accel, speed, distance) of leg ``leg`` at ``t`` (-1: an
+    empty SCurve)."""
+    if leg < 0 or not planned[leg]:
+        return 0.0, 0.0, 0.0, 0.0
+    p = pieces[leg]
+    i = PIECES
+    for k in range(PIECES):
+        if t < p[k, _T]:
+            i = k
+            break
+    if i == 0:
+        j, a, v, x = _along(FLAT, 0.0, 0.0, t - p[0, _T], p[0, _A], p[0, _V], p[0, _X])
+    elif i == PIECES:
+        q = PIECES - 1
+        j, a, v, x = _along(FLAT, 0.0, 0.0, t - p[q, _T], p[q, _A], p[q, _V], p[q, _X])
+    else:
+        j, a, v, x = _along(int(p[i, _K]), p[i, _J], p[i, _T] - p[i - 1, _T], t - p[i - 1, _T],
+                            p[i - 1, _A], p[i - 1, _V], p[i - 1, _X])
+    return j, a, v, max(0.0, x)
+
+
+@njit(cache=True)
+def _time_end(pieces, planned, leg):
+    """SCurve.time_end (time_turn_in / time_turn_out with ACCEL_MAX / CONST)."""
+    if leg < 0 or not planned[leg]:
+        return 0.0
+    return pieces[leg, DECEL_END, _T]
+
+
+@njit(cache=True)
+def _piece_end(pieces, planned, leg, piece):
+    if leg < 0 or not planned[leg]:
+        return 0.0
+    return pieces[leg, piece, _T]
+
+
+@njit(cache=True)
+def _track_sq(track, leg):
+    if leg < 0:
+        return 0.0
+    return track[leg, 0] * track[leg, 0] + track[leg, 1] * track[leg, 1] \
+        + track[leg, 2] * track[leg, 2]
+
+
+@njit(cache=True)
+def _advance_curve(pieces, planned, unit, leg, time, dt, out):
+    """SCurve._advance: the leg's time moved on by ``dt``; its position, velocity and
+    acceleration (along its unit vector) added to the rows of ``out`` (3, 3); returns the
+    new time and position_sq."""
+    time = min(time + dt, _time_end(pieces, planned, leg))
+    _j, a, v, x = _state_at(pieces, planned, leg, time)
+    if leg >= 0:
+        for i in range(3):
+            out[0, i] += unit[leg, i] * x
+            out[1, i] += unit[leg, i] * v
+            out[2, i] += unit[leg, i] * a
+    return time, x * x
+
+
+@njit(cache=True)
+def _sqrt_controller(error, p, second_ord_lim, dt):
+    """navigation.sqrt_controller (AP_Math/control.cpp)."""
+    if second_ord_lim <= 0:
+        rate = error * p
+    elif p == 0:
+        rate = math.copysign(math.sqrt(2 * second_ord_lim * abs(error)), error)
+    else:
+        linear = second_ord_lim / (p * p)
+        if abs(error) > linear:
+            rate = math.copysign(math.sqrt(2 * second_ord_lim * (abs(error) - linear / 2)),
+                                 error)
+        else:
+            rate = error * p
+    if dt > 0:
+        rate = max(-abs(error) / dt, min(rate, abs(error) / dt))
+    return rate
+
+
+@njit(cache=True)
+def _limit_accel(vx, vy, ax, ay, accel_max):
+    """poscontrol._limit_accel (limit_accel_xy)."""
+    speed = math.hypot(vx, vy)
+    if speed < 1e-9:
+        n = math.hypot(ax, ay)
+        return ax * accel_max / n, ay * accel_max / n
+    ux, uy = vx / speed, vy / speed
+    along = ux * ax + uy * ay
+    cx, cy = ax - ux * along, ay - uy * along
+    cross = math.hypot(cx, cy)
+    if cross > accel_max:
+        return cx * accel_max / cross, cy * accel_max / cross
+    room = math.sqrt(max(accel_max * accel_max - cross * cross, 0.0))
+    along = max(-room, min(room, along))
+    return cx + ux * along, cy + uy * along
+
+
+@njit(cache=True)
+def _follow(f, prm, dt, tx, ty, tvx, tvy, tax, tay):
+    """PositionFollower.step with its state in ``f``: px, py, vx, vy, ex, ey, dx, dy, ix,
+    iy, lx, ly, carry, limit_x, limit_y (no wind: the planner's copters fly in still
+    air)."""
+    kp, kvp, kvi, kvd = prm[2], prm[7], prm[8], prm[9]
+    imax, accel_max, lean = prm[10], prm[13], prm[14]
+    alpha_e, alpha_d, quad, mom = prm[11], prm[12], prm[15], prm[16]
+    pos_limit = prm[3]
+    linear = pos_limit / (kp * kp) if kp > 0 and pos_limit > 0 else math.inf
+    px, py, vx, vy = f[0], f[1], f[2], f[3]
+    ex_f, ey_f, dx_f, dy_f = f[4], f[5], f[6], f[7]
+    ix, iy, lx, ly = f[8], f[9], f[10], f[11]
+    carry, limit_x, limit_y = f[12], f[13], f[14]
+    h = PSC_STEP_S
+    carry += dt
+    while carry >= h - 1e-12:
+        carry -= h
+        ex, ey = tx - px, ty - py
+        err = math.hypot(ex, ey)
+        if err > linear:
+            corr = _sqrt_controller(err, kp, pos_limit, h) / err
+        else:
+            corr = min(kp, 1.0 / h)
+        last_x, last_y = ex_f, ey_f
+        ex_f += (tvx + ex * corr - vx - ex_f) * alpha_e
+        ey_f += (tvy + ey * corr - vy - ey_f) * alpha_e
+        dx_f += ((ex_f - last_x) / h - dx_f) * alpha_d
+        dy_f += ((ey_f - last_y) / h - dy_f) * alpha_d
+        dix, diy = ex_f * kvi * h, ey_f * kvi * h
+        i_len = math.hypot(ix, iy)
+        ix, iy = ix + dix, iy + diy
+        if dix * limit_x + diy * limit_y > 0:
+            grown = math.hypot(ix, iy)
+            if grown > i_len:
+                ix, iy = ix * i_len / grown, iy * i_len / grown
+        i_len = math.hypot(ix, iy)
+        if i_len > imax:
+            ix, iy = ix * imax / i_len, iy * imax / i_len
+        ax = kvp * ex_f + ix + kvd * dx_f + tax
+        ay = kvp * ey_f + iy + kvd * dy_f + tay
+        limit_x = limit_y = 0.0
+        if ax * ax + ay * ay > accel_max * accel_max:
+            limit_x, limit_y = ax, ay
+            ax, ay = _limit_accel(tvx, tvy, ax, ay, accel_max)
+        lx += (ax - lx) * lean
+        ly += (ay - ly) * lean
+        rx, ry = vx, vy
+        speed = math.hypot(rx, ry)
+        d = quad * speed + mom
+        vx += (lx - rx * d) * h
+        vy += (ly - ry * d) * h
+        px += vx * h
+        py += vy * h
+    f[0], f[1], f[2], f[3] = px, py, vx, vy
+    f[4], f[5], f[6], f[7] = ex_f, ey_f, dx_f, dy_f
+    f[8], f[9], f[10], f[11] = ix, iy, lx, ly
+    f[12], f[13], f[14] = carry, limit_x, limit_y
+
+
+@njit(cache=True)
+def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, follow,
+        settled_m, settled_m_s, settle_steps):
+    """flight_path.fly_path_stepwise as one loop: ``(status, steps, times, positions,
+    reached)``, the first ``steps`` rows of ``times`` and ``positions`` filled (status
+    :data:`OUT_OF_TIME` when the mission was not flown within ``budget`` steps)."""
+    P = points.shape[0]
+    rows = budget + settle_steps + 1
+    times = np.empty(rows)
+    positions = np.empty((rows, 3))
+    reached = np.zeros(P)
+    radius, corner_accel, posxy_p = prm[0], prm[1], prm[2]
+    wp_accel, wp_jerk, jerk_xy, desired = prm[3], prm[4], prm[5], prm[6]
+    # WaypointNav state: the three legs (-1: an empty SCurve), their times and
+    # position_sq; origin, destination, target, its velocity and acceleration
+    prev, this, nxt = -1, -1, -1
+    prev_t = this_t = nxt_t = 0.0
+    prev_sq = this_sq = nxt_sq = 0.0
+    wp_reached, fast = True, False
+    origin = points[0].copy()
+    destination = points[0].copy()
+    target = points[0].copy()
+    target_vel = np.zeros(3)
+    target_accel = np.zeros(3)
+    offset_vel, offset_accel, track_scaler = desired, 0.0, 1.0
+    out = np.zeros((3, 3))
+    f = np.zeros(15)  # PositionFollower at rest on the first point
+    f[0], f[1] = points[0, 0], points[0, 1]
+    here = points[0].copy()
+    velocity = np.zeros(3)
+    times[0] = 0.0
+    positions[0] = points[0]
+    n = 1
+    k, t, waiting, wait_until = 1, 0.0, False, 0.0
+    # start(1): ModeAuto::do_nav_wp / set_next_wp (set_destination, set_destination_next)
+    prev, prev_t, prev_sq = this, this_t, this_sq
+    origin = destination.copy()
+    destination = points[k].copy()
+    this, this_t, this_sq = k, 0.0, 0.0
+    nxt, nxt_t, nxt_sq = -1, 0.0, 0.0
+    fast, wp_reached = False, False
+    if holds[k] <= 0 and k + 1 < P:
+        nxt, nxt_t, nxt_sq, fast = k + 1, 0.0, 0.0, True
+    done_all = False
+    for _step in range(budget):
+        t += dt
+        # WaypointNav.advance: _time_scale (Navigation.track_clock_step)
+        offset_vel += offset_accel * dt
+        want = _sqrt_controller(desired - offset_vel, jerk_xy / wp_accel, jerk_xy, dt)
+        want = max(-wp_accel, min(wp_accel, want))
+        offset_accel += max(-jerk_xy * dt, min(jerk_xy * dt, want - offset_accel))
+        scale = offset_vel / desired
+        # _track_scale
+        if follow:
+            speed = math.sqrt(target_vel[0] ** 2 + target_vel[1] ** 2 + target_vel[2] ** 2)
+            wanted = 1.0
+            if speed > 0:
+                track_error = 0.0
+                track_velocity = 0.0
+                for i in range(3):
+                    direction = target_vel[i] / speed
+                    track_error += (target[i] - here[i]) * direction
+                    track_velocity += velocity[i] * direction
+                wanted = min(max(0.05 + (track_velocity - posxy_p * track_error) / speed,
+                                 0.1), 1.0)
+            tc = wp_accel / wp_jerk if wp_jerk > 0 else 1.0
+            track_scaler += (wanted - track_scaler) * min(dt / tc, 1.0)
+        step = dt * scale * track_scaler
+        # SCurve.advance_target_along_track
+        out[:] = 0.0
+        prev_t, prev_sq = _advance_curve(pieces, planned, unit, prev, prev_t, step, out)
+        if prev >= 0:
+            for i in range(3):
+                out[0, i] -= track[prev, i]
+        this_t, this_sq = _advance_curve(pieces, planned, unit, this, this_t, step, out)
+        this_end = _time_end(pieces, planned, this)
+        done = this_t >= this_end or this_sq >= _track_sq(track, this)
+        left = this_end - this_t if (this >= 0 and planned[this]) else 0.0
+        if (fast and abs(nxt_t) < _EPS
+                and this_t >= _piece_end(pieces, planned, this, CONST)
+                - _piece_end(pieces, planned, nxt, ACCEL_MAX)
+                and this_sq >= 0.25 * _track_sq(track, this)):
+            _j, a1, v1, x1 = _state_at(pieces, planned, this, this_t + left / 2)
+            _j, a2, v2, x2 = _state_at(pieces, planned, nxt, left / 2)
+            tp0 = tp1 = tp2 = 0.0
+            tv0 = tv1 = ta0 = ta1 = 0.0
+            if this >= 0:
+                tp0 = unit[this, 0] * x1 - track[this, 0]
+                tp1 = unit[this, 1] * x1 - track[this, 1]
+                tp2 = unit[this, 2] * x1 - track[this, 2]
+                tv0, tv1 = unit[this, 0] * v1, unit[this, 1] * v1
+                ta0, ta1 = unit[this, 0] * a1, unit[this, 1] * a1
+            if nxt >= 0:
+                tp0 += unit[nxt, 0] * x2
+                tp1 += unit[nxt, 1] * x2
+                tp2 += unit[nxt, 2] * x2
+                tv0 += unit[nxt, 0] * v2
+                tv1 += unit[nxt, 1] * v2
+                ta0 += unit[nxt, 0] * a2
+                ta1 += unit[nxt, 1] * a2
+            speed_min = min(vel_max[this] if this >= 0 else 0.0,
+                            vel_max[nxt] if nxt >= 0 else 0.0)
+            if (left < _time_end(pieces, planned, nxt) / 2
+                    and math.sqrt(tp0 * tp0 + tp1 * tp1 + tp2 * tp2) < radius
+                    and math.hypot(tv0, tv1) < speed_min
+                    and math.hypot(ta0, ta1) < corner_accel):
+                nxt_t, nxt_sq = _advance_curve(pieces, planned, unit, nxt, nxt_t, step, out)
+        elif not abs(nxt_t) < _EPS:
+            nxt_t, nxt_sq = _advance_curve(pieces, planned, unit, nxt, nxt_t, step, out)
+            if nxt_t >= (this_end - this_t if (this >= 0 and planned[this]) else 0.0):
+                done = True
+        # back in WaypointNav.advance: the speed offset's acceleration, the time scale
+        for i in range(3):
+            pos_i = origin[i] + out[0, i]
+            vel_i = out[1, i]
+            offset = vel_i * (offset_accel / desired)
+            target[i] = pos_i
+            target_vel[i] = vel_i * scale
+            target_accel[i] = out[2, i] * scale * scale + offset
+        if not wp_reached and done:
+            if fast:
+                wp_reached = True
+            else:
+                gap = math.sqrt((here[0] - destination[0]) ** 2 + (here[1] - destination[1]) ** 2
+                                + (here[2] - destination[2]) ** 2)
+                if gap <= radius:
+                    wp_reached = True
+        # the copter follows (fly_path_stepwise)
+        if follow:
+            _follow(f, prm, dt, target[0], target[1], target_vel[0], target_vel[1],
+                    target_accel[0], target_accel[1])
+            here[0], here[1], here[2] = f[0], f[1], target[2]
+            velocity[0], velocity[1], velocity[2] = f[2], f[3], target_vel[2]
+        else:
+            here[:] = target
+        times[n] = t
+        positions[n] = here
+        n += 1
+        if not wp_reached:
+            continue
+        if holds[k] > 0 and not waiting:  # ModeAuto::verify_nav_wp: the hold
+            reached[k] = t
+            waiting, wait_until = True, t + holds[k]
+        if waiting and t < wait_until - 1e-9:
+            continue
+        if not waiting:
+            reached[k] = t
+        waiting = False
+        k += 1
+        if k == P:
+            done_all = True
+            break
+        # start(k): set_destination (reached, so no re-init), set_destination_next
+        prev, prev_t, prev_sq = this, this_t, this_sq
+        origin = destination.copy()
+        destination = points[k].copy()
+        if fast and not (nxt_t >= _time_end(pieces, planned, nxt)
+                         or nxt_sq >= _track_sq(track, nxt)):
+            this, this_t, this_sq = nxt, nxt_t, nxt_sq
+        else:
+            this, this_t, this_sq = k, 0.0, 0.0
+        nxt, nxt_t, nxt_sq = -1, 0.0, 0.0
+        fast, wp_reached = False, False
+        if holds[k] <= 0 and k + 1 < P:
+            nxt, nxt_t, nxt_sq, fast = k + 1, 0.0, 0.0, True
+    if not done_all:
+        return OUT_OF_TIME, n, times, positions, reached
+    if follow:  # the copter comes to rest on its goal (past it, and back)
+        gx, gy, gz = points[P - 1, 0], points[P - 1, 1], points[P - 1, 2]
+        for _s in range(settle_steps):
+            if (math.hypot(here[0] - gx, here[1] - gy) < settled_m
+                    and math.hypot(f[2], f[3]) < settled_m_s):
+                break
+            t += dt
+            _follow(f, prm, dt, gx, gy, 0.0, 0.0, 0.0, 0.0)
+            here[0], here[1], here[2] = f[0], f[1], gz
+            times[n] = t
+            positions[n] = here
+            n += 1
+    return OK, n, times, positions, reached

@@ -1,0 +1,53 @@
+"""The compiled flown-path loop (ardupilot.compiled) against the model's own objects
+(flight_path.fly_path_stepwise: WaypointNav, SCurve, PositionFollower, as the emulator
+flies them): the same path, to 1e-6 m, on random missions, holds, speeds and
+parameters; the objects are what tests/conformance holds to ArduCopter SITL."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ftlbo_mav.ardupilot.flight_path import fly_path, fly_path_stepwise
+from ftlbo_mav.ardupilot.navigation import vehicle_navigation
+from ftlbo_mav.ardupilot.poscontrol import Airframe
+
+
+def _same(a, b) -> None:
+    assert len(a.times) == len(b.times)
+    assert np.abs(a.times - b.times).max() < 1e-9
+    assert np.abs(a.positions - b.positions).max() < 1e-6
+    assert np.abs(a.reached - b.reached).max() < 1e-9
+
+
+def _mission(rng: np.random.Generator) -> np.ndarray:
+    count = int(rng.integers(2, 9))
+    steps = rng.normal(0.0, 1.0, (count - 1, 3)) * [25.0, 25.0, 1.5]
+    steps[rng.random(count - 1) < 0.15] *= 0.02  # some points almost on top of the last
+    return np.cumsum(np.vstack([[0.0, 0.0, 5.0], steps]), axis=0)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_missions_fly_the_same(seed):
+    rng = np.random.default_rng(seed)
+    points = _mission(rng)
+    holds = np.where(rng.random(len(points)) < 0.3, rng.integers(1, 3, len(points)), 0)
+    speed = [None, 3.0, 5.0, 9.0][seed % 4]
+    params = {} if seed % 3 == 0 else {
+        "WPNAV_ACCEL": float(rng.choice([100.0, 250.0, 400.0])),
+        "WPNAV_RADIUS": float(rng.choice([50.0, 200.0, 500.0])),
+        "WPNAV_JERK": float(rng.choice([1.0, 3.0])),
+        "PSC_VELXY_P": float(rng.choice([1.0, 2.0, 3.0])),
+    }
+    nav = vehicle_navigation(params)
+    airframe = None if seed % 5 == 4 else Airframe(drag_bcoef=float(rng.uniform(8.0, 30.0)))
+    _same(fly_path(points, nav=nav, speed_m_s=speed, holds_s=holds, airframe=airframe),
+          fly_path_stepwise(points, nav=nav, speed_m_s=speed, holds_s=holds, airframe=airframe))
+
+
+def test_a_mission_too_long_for_its_budget_is_refused_alike():
+    points = np.array([[0.0, 0.0, 5.0], [30.0, 0.0, 5.0]])
+    with pytest.raises(RuntimeError, match="not flown within"):
+        fly_path(points, speed_m_s=5.0, dt=0.02, holds_s=[0, -1e6])
+    with pytest.raises(RuntimeError, match="not flown within"):
+        fly_path_stepwise(points, speed_m_s=5.0, dt=0.02, holds_s=[0, -1e6])
