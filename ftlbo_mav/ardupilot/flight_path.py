@@ -175,22 +175,36 @@ def fly_path_stepwise(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     return FlownPath(np.array(times), np.array(positions), reached)
 
 
+def fly_groups(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
+               speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
+               dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME
+               ) -> tuple[list[FlownPath], np.ndarray, np.ndarray]:
+    """Every row of ``paths`` ``(N, P, 3)`` flown, as ``(shapes, group, shift)``: the model
+    is the same wherever a path lies (AC_WPNav works on offsets from its origin), so paths
+    that are translations of one another (a formation's, each UAV at a fixed offset) are
+    flown once, from the origin: path ``n`` is ``shapes[group[n]]`` moved by ``shift[n]``
+    ``(N, 3)`` (its first point)."""
+    paths = np.asarray(paths, float)
+    keys: dict[bytes, int] = {}
+    shapes: list[FlownPath] = []
+    group = np.empty(len(paths), int)
+    for n, path in enumerate(paths):
+        shape = np.round(path - path[0], 6)
+        key = shape.tobytes()
+        if key not in keys:
+            keys[key] = len(shapes)
+            shapes.append(fly_path(shape, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s,
+                                   dt=dt, airframe=airframe))
+        group[n] = keys[key]
+    return shapes, group, paths[:, 0].copy()
+
+
 def fly_paths(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
               speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
               dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME
               ) -> list[FlownPath]:
-    """:func:`fly_path` for every row of ``paths`` ``(N, P, 3)``. The model is the same
-    wherever a path lies (AC_WPNav works on offsets from its origin), so paths that are
-    translations of one another (a formation's, each UAV at a fixed offset) are flown once
-    and translated; any other is flown on its own."""
-    paths = np.asarray(paths, float)
-    flown: dict[bytes, FlownPath] = {}
-    out = []
-    for path in paths:
-        shape = np.round(path - path[0], 6)
-        key = shape.tobytes()
-        if key not in flown:
-            flown[key] = fly_path(shape, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s, dt=dt,
-                                  airframe=airframe)
-        out.append(flown[key].translated(path[0]))
-    return out
+    """:func:`fly_path` for every row of ``paths`` ``(N, P, 3)`` (translations of one
+    another flown once: :func:`fly_groups`)."""
+    shapes, group, shift = fly_groups(paths, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s,
+                                      dt=dt, airframe=airframe)
+    return [shapes[g].translated(s) for g, s in zip(group, shift)]

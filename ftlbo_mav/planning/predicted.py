@@ -18,10 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..ardupilot.flight_path import FlownPath, fly_paths
+from ..ardupilot.flight_path import FlownPath, fly_groups
 from ..ardupilot.navigation import Navigation
 from .feasibility import violations as segment_violations
 from .problem import PlanningProblem
+from .proximity import nearest_samples
 
 _TOL = 1e-6
 PUSH_MARGIN_M = 0.02
@@ -74,15 +75,63 @@ class Prediction:
         return self.reached[:, -1]
 
 
-def _common_clock(flown: list[FlownPath]) -> tuple[np.ndarray, np.ndarray]:
-    """Every UAV's positions on the longest clock (they share the step)."""
-    longest = max(flown, key=lambda f: len(f.times))
+def _common_clock(shapes: list[FlownPath], group: np.ndarray, shift: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Every UAV's positions ``(N, T, 3)`` on the longest clock (they share the step; a
+    UAV that has arrived stays at its goal)."""
+    longest = max(shapes, key=lambda f: len(f.times))
     T = len(longest.times)
-    out = np.empty((len(flown), T, 3))
-    for n, f in enumerate(flown):
-        out[n, : len(f.times)] = f.positions
-        out[n, len(f.times):] = f.positions[-1]
-    return longest.times, out
+    padded = np.empty((len(shapes), T, 3))
+    for g, f in enumerate(shapes):
+        padded[g, : len(f.times)] = f.positions
+        padded[g, len(f.times):] = f.positions[-1]
+    return longest.times, padded[group] + shift[:, None, :]
+
+
+def _clearances(padded: np.ndarray, group: np.ndarray, shift: np.ndarray,
+                centres: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per UAV its smallest distance to any cylinder's surface and where ``(N, 2)`` (time
+    index, obstacle index; the earliest, then the first obstacle, on a tie), and per
+    cylinder the smallest over the UAVs: from the nearest sample of each flown shape to
+    each cylinder's axis moved by minus the UAV's shift (:func:`.proximity.nearest_samples`),
+    never the full ``(N, T, K)`` array."""
+    N, K = len(group), len(radii)
+    surface = np.empty((N, K))
+    when = np.empty((N, K), int)
+    for g in range(len(padded)):
+        members = np.flatnonzero(group == g)
+        seen = (centres[None, :, :] - shift[members, None, :2]).reshape(-1, 2)
+        d, t = nearest_samples(padded[g, :, :2], seen)
+        surface[members] = d.reshape(len(members), K) - radii
+        when[members] = t.reshape(len(members), K)
+    clearance = surface.min(axis=1)
+    worst = np.empty((N, 2), int)
+    for n in range(N):
+        ties = np.flatnonzero(surface[n] == clearance[n])
+        k = int(ties[np.lexsort((ties, when[n, ties]))[0]])
+        worst[n] = when[n, k], k
+    return clearance, worst, surface.min(axis=0)
+
+
+def _separations(positions: np.ndarray, group: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """Per UAV its smallest 3D distance to any other at the same instant ``(N,)``: within
+    a group of translated paths that distance never changes (the difference of their
+    shifts); across groups it is measured one UAV at a time (memory ``(N, T)``)."""
+    N = len(group)
+    out = np.full(N, np.inf)
+    if N < 2:
+        return out
+    same = group[:, None] == group[None, :]
+    apart = np.linalg.norm(shift[:, None] - shift[None, :], axis=-1)
+    apart[~same] = np.inf
+    np.fill_diagonal(apart, np.inf)
+    out = apart.min(axis=1)
+    for n in range(N):
+        other = np.flatnonzero(~same[n])
+        if len(other):
+            gap = np.linalg.norm(positions[other] - positions[n][None], axis=-1)
+            out[n] = min(out[n], float(gap.min()))
+    return out
 
 
 def predict(paths: np.ndarray, *, model: FlightModel, centres: np.ndarray,
@@ -90,29 +139,22 @@ def predict(paths: np.ndarray, *, model: FlightModel, centres: np.ndarray,
     """Fly every UAV's path ``(N, P, 3)`` (holds ``(P,)`` whole seconds, default none)
     and measure it against the cylinders ``centres`` ``(K, 2)``, ``radii`` ``(K,)``
     (their own radii, no clearance)."""
-    flown = fly_paths(paths, nav=model.nav, speed_m_s=model.speed_m_s, holds_s=holds_s)
-    times, pos = _common_clock(flown)
-    N, T = pos.shape[:2]
-    K = len(radii)
-    if K:
-        d = np.linalg.norm(pos[:, :, None, :2] - np.asarray(centres, float)[None, None], axis=-1)
-        surface = d - np.asarray(radii, float)  # (N, T, K)
-        flat = surface.reshape(N, -1).argmin(axis=1)
-        worst = np.stack(np.unravel_index(flat, (T, K)), axis=1)
-        clearance = surface.reshape(N, -1).min(axis=1)
-        per_obstacle = surface.min(axis=(0, 1))
+    shapes, group, shift = fly_groups(paths, nav=model.nav, speed_m_s=model.speed_m_s,
+                                      holds_s=holds_s)
+    times, pos = _common_clock(shapes, group, shift)
+    N = pos.shape[0]
+    radii = np.asarray(radii, float)
+    if len(radii):
+        own = _common_clock(shapes, np.arange(len(shapes)), np.zeros((len(shapes), 3)))[1]
+        clearance, worst, per_obstacle = _clearances(own, group, shift,
+                                                     np.asarray(centres, float), radii)
     else:
         worst = np.full((N, 2), -1)
         clearance = np.full(N, np.inf)
         per_obstacle = np.zeros(0)
-    if N > 1:
-        gap = np.linalg.norm(pos[:, None] - pos[None, :], axis=-1)  # (N, N, T)
-        gap[np.arange(N), np.arange(N)] = np.inf
-        separation = gap.min(axis=(1, 2))
-    else:
-        separation = np.full(N, np.inf)
-    return Prediction(times=times, positions=pos,
-                      reached=np.array([f.reached for f in flown]), clearance=clearance,
+    separation = _separations(pos, group, shift)
+    reached = np.array([shapes[g].reached for g in group])
+    return Prediction(times=times, positions=pos, reached=reached, clearance=clearance,
                       obstacle_clearance=per_obstacle, separation=separation, worst=worst)
 
 

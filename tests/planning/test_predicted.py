@@ -99,3 +99,40 @@ def test_a_corner_stop_is_the_waypoints_hold_in_every_mission(example_path):
         wps = [it for it in items[2:] if it.command == 16]
         assert [it.param1 for it in wps] == list(holds)
     assert json.loads(files["plan.json"])["predicted"]["holds_s"] == [0, 1, 0, 0]
+
+
+def _measured_in_full(paths, model, centres, radii):
+    """The flight measured on the full (N, T, K) and (N, N, T) arrays: the oracle."""
+    from ftlbo_mav.ardupilot.flight_path import fly_paths
+
+    flown = fly_paths(paths, nav=model.nav, speed_m_s=model.speed_m_s)
+    T = max(len(f.times) for f in flown)
+    pos = np.stack([np.vstack([f.positions, np.repeat(f.positions[-1:], T - len(f.times), 0)])
+                    for f in flown])
+    surface = np.linalg.norm(pos[:, :, None, :2] - centres[None, None], axis=-1) - radii
+    flat = surface.reshape(len(paths), -1)
+    worst = np.stack(np.unravel_index(flat.argmin(axis=1), surface.shape[1:]), axis=1)
+    gap = np.linalg.norm(pos[:, None] - pos[None, :], axis=-1)
+    gap[np.arange(len(paths)), np.arange(len(paths))] = np.inf
+    return flat.min(axis=1), worst, surface.min(axis=(0, 1)), gap.min(axis=(1, 2))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_measures_are_those_of_the_full_arrays(seed):
+    """predict measures clearance and separation without the (N, T, K) array (nearest
+    samples per flown shape, separations per group of translated paths): the same
+    figures and the same worst instants as the full arrays, also for a UAV whose path
+    is not a translation of the others'."""
+    rng = np.random.default_rng(seed)
+    base = np.cumsum(np.vstack([[0, 0, 5], rng.normal(0, 20, (4, 3)) * [1, 1, 0.05]]), axis=0)
+    paths = base[None] + rng.normal(0, 3, (5, 3))[:, None] * [1, 1, 0.1]
+    if seed % 2:
+        paths[2, 2] += [3.0, 1.0, 0.0]
+    centres, radii = rng.uniform(-40, 40, (30, 2)), rng.uniform(1, 3, 30)
+    model = FlightModel(speed_m_s=5.0)
+    p = predict(paths, model=model, centres=centres, radii=radii)
+    clearance, worst, per_obstacle, separation = _measured_in_full(paths, model, centres, radii)
+    assert np.allclose(p.clearance, clearance, atol=1e-9)
+    assert (p.worst == worst).all()
+    assert np.allclose(p.obstacle_clearance, per_obstacle, atol=1e-9)
+    assert np.allclose(p.separation, separation, atol=1e-9)
