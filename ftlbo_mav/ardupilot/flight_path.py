@@ -28,11 +28,11 @@ airframe's drag, outside it in turns, past it where it stops (0.4-0.9 m on SITL 
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
 
-from . import compiled
 from .navigation import Navigation
 from .poscontrol import DEFAULT_AIRFRAME, Airframe, PositionFollower
 from .wpnav import WaypointNav
@@ -43,6 +43,10 @@ _MIN_PACE_M_S = 0.05  # for the step budget: no leg is flown slower on average
 # after its goal (the mission's NAV_LAND holds it there, ModeAuto::land_start) the path
 # goes on until the copter is at rest on the goal
 SETTLED_M, SETTLED_M_S, SETTLE_BUDGET_S = 0.01, 0.02, 15.0
+STEPWISE_UP_TO_S = 60.0
+"""Flights expected to last up to this many seconds (length over speed, and the holds)
+are flown stepwise until the compiled loop is loaded: numba's start-up in a new process
+(about 0.3 s) is what the stepwise loop takes for some 200 s of flight."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,10 +99,19 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     the drag the copter follows its target with (None: on its target).
 
     The model's arithmetic, compiled (:mod:`.compiled`): the same path as
-    :func:`fly_path_stepwise` flies with the model's objects, some 100 times faster."""
+    :func:`fly_path_stepwise` flies with the model's objects, 40 times faster; a short
+    flight (up to :data:`STEPWISE_UP_TO_S`) in a process that has not loaded the compiled
+    loop yet is flown stepwise, since numba's start-up costs more than that."""
     points, holds = _checked(points, holds_s)
     desired = WaypointNav(nav, points[0].copy(), speed_m_s).desired_speed
     budget = _budget(points, holds, nav, desired, dt)
+    length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    if (__package__ + ".compiled" not in sys.modules
+            and length / desired + holds.sum() <= STEPWISE_UP_TO_S):
+        return fly_path_stepwise(points, nav=nav, speed_m_s=speed_m_s, holds_s=holds, dt=dt,
+                                 airframe=airframe)
+    from . import compiled
+
     legs = compiled.legs_of(points, nav, desired)
     prm = compiled.nav_params(nav, airframe, desired)
     status, n, times, positions, reached = compiled.fly(
