@@ -28,7 +28,6 @@ airframe's drag, outside it in turns, past it where it stops (0.4-0.9 m on SITL 
 
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,7 +44,7 @@ _MIN_PACE_M_S = 0.05  # for the step budget: no leg is flown slower on average
 SETTLED_M, SETTLED_M_S, SETTLE_BUDGET_S = 0.01, 0.02, 15.0
 STEPWISE_UP_TO_S = 60.0
 """Flights expected to last up to this many seconds (length over speed, and the holds)
-are flown stepwise until the compiled loop is loaded: numba's start-up in a new process
+are flown stepwise, not compiled: numba's start-up in a new process
 (about 0.3 s) is what the stepwise loop takes for some 200 s of flight."""
 
 
@@ -100,14 +99,14 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
 
     The model's arithmetic, compiled (:mod:`.compiled`): the same path as
     :func:`fly_path_stepwise` flies with the model's objects, 40 times faster; a short
-    flight (up to :data:`STEPWISE_UP_TO_S`) in a process that has not loaded the compiled
-    loop yet is flown stepwise, since numba's start-up costs more than that."""
+    flight (up to :data:`STEPWISE_UP_TO_S`) is flown stepwise, since numba's start-up
+    costs more than that (the choice is by size alone, so a plan never depends on what
+    the process did before)."""
     points, holds = _checked(points, holds_s)
     desired = WaypointNav(nav, points[0].copy(), speed_m_s).desired_speed
     budget = _budget(points, holds, nav, desired, dt)
     length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
-    if (__package__ + ".compiled" not in sys.modules
-            and length / desired + holds.sum() <= STEPWISE_UP_TO_S):
+    if length / desired + holds.sum() <= STEPWISE_UP_TO_S:
         return fly_path_stepwise(points, nav=nav, speed_m_s=speed_m_s, holds_s=holds, dt=dt,
                                  airframe=airframe)
     from . import compiled

@@ -99,6 +99,12 @@ def segment_axis_distances(problem: PlanningProblem, paths: np.ndarray) -> np.nd
     return d.reshape(N, K, S, P - 1).transpose(2, 3, 0, 1)
 
 
+COMPILED_FROM = 400
+"""UAVs x cylinders from which the safety term runs compiled (:mod:`._cost_jit`, some 6
+times faster per distance, no temporaries); below, numpy's arrays (numba's start-up, 0.3 s
+in a new process, costs more than such problems save)."""
+
+
 def _safety(problem: PlanningProblem, paths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Eq. 9 and the total depth of the violations (0 when clear), each ``(S,)``."""
     S, P, _ = paths.shape
@@ -106,8 +112,13 @@ def _safety(problem: PlanningProblem, paths: np.ndarray) -> tuple[np.ndarray, np
     if K == 0:
         return np.zeros(S), np.zeros(S)
     J = P - 1
-    d = _axis_distances(problem, paths)  # (NK, S*J)
     radii = np.tile(problem.radii, problem.uav_count)[:, None]  # (NK, 1)
+    if problem.uav_count * K >= COMPILED_FROM:
+        from ._cost_jit import safety
+
+        return safety(np.ascontiguousarray(paths), _axes(problem), radii[:, 0],
+                      1.0 / (problem.waypoints * K))
+    d = _axis_distances(problem, paths)  # (NK, S*J)
     # Sum of R/d over n, j, k; where some d is 0 the student is inside (infinite) anyway.
     with np.errstate(divide="ignore"):
         ratio = np.divide(radii, d)
@@ -143,6 +154,8 @@ def _terms(problem: PlanningProblem, waypoints: np.ndarray) -> tuple[CostTerms, 
     S = waypoints.shape[0]
     per_student = (waypoints.shape[1] + 1) * max(problem.uav_count * len(problem.radii), 1)
     step = max(_CHUNK_ELEMENTS // per_student, 1)
+    if problem.uav_count * len(problem.radii) >= COMPILED_FROM:
+        step = S  # compiled: no temporaries to bound
     if S > step:  # bounded memory for big classes, many UAVs, obstacles or waypoints
         parts = [_terms(problem, waypoints[i : i + step]) for i in range(0, S, step)]
         terms = CostTerms(*(np.concatenate([p[0][i] for p in parts]) for i in range(4)))

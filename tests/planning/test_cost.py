@@ -147,3 +147,24 @@ def test_search_cost_ranks_shallower_violations_first_and_equals_cost_when_clear
     s_deep, s_shallow, s_clear = (search_cost(problem, w)[0] for w in (deep, shallow, clear))
     assert s_clear < s_shallow < s_deep
     assert s_clear == pytest.approx(cost_terms(problem, clear).total[0])
+
+
+def test_the_compiled_safety_term_is_numpys(monkeypatch):
+    """From COMPILED_FROM UAVs x cylinders the safety term runs compiled: the same costs
+    (to summation order) and the same depths as numpy's arrays, feasible or not."""
+    from ftlbo_mav.planning import cost as cost_module
+
+    rng = np.random.default_rng(3)
+    offsets = np.column_stack([rng.uniform(-2, 2, (40, 2)), np.zeros(40)])
+    problem = PlanningProblem(
+        start=np.array([5.0, 5.0, 4.0]), goal=np.array([195.0, 195.0, 4.0]), offsets=offsets,
+        centres=rng.uniform(20, 180, (12, 2)), radii=rng.uniform(0.5, 1.5, 12), h_min=2.0,
+        h_max=7.0, area_lower=np.zeros(2), area_upper=np.full(2, 200.0), waypoints=6,
+        weights=np.array([1.0, 1.0, 1.0]))
+    line = np.linspace(problem.start, problem.goal, 8)[1:-1]
+    waypoints = line[None] + rng.normal(0, 15, (40, 6, 3)) * [1, 1, 0]
+    compiled = cost_module.search_cost(problem, waypoints)
+    monkeypatch.setattr(cost_module, "COMPILED_FROM", 10**9)
+    arrays = cost_module.search_cost(problem, waypoints)
+    assert 0 < np.isfinite(cost_module.cost_terms(problem, waypoints).safety).sum() < 40
+    assert np.allclose(compiled, arrays, rtol=1e-12, atol=0)
