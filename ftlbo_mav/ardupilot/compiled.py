@@ -31,7 +31,7 @@ import numpy as np
 from .navigation import GRAVITY_M_S2, Navigation
 from .poscontrol import SEA_LEVEL_DENSITY, Airframe
 from .poscontrol import STEP_S as PSC_STEP_S
-from .scurve import ACCEL_MAX, CONST, DECEL_END, FALL, FLAT, PIECES, RISE, SCurve
+from .scurve import ACCEL_MAX, CONST, DECEL_END, FLAT, PIECES, RISE, SCurve
 
 try:
     from numba import njit
@@ -289,7 +289,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
     # position_sq; origin, destination, target, its velocity and acceleration
     prev, this, nxt = -1, -1, -1
     prev_t = this_t = nxt_t = 0.0
-    prev_sq = this_sq = nxt_sq = 0.0
+    _prev_sq = this_sq = nxt_sq = 0.0
     wp_reached, fast = True, False
     origin = points[0].copy()
     destination = points[0].copy()
@@ -307,7 +307,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
     n = 1
     k, t, waiting, wait_until = 1, 0.0, False, 0.0
     # start(1): ModeAuto::do_nav_wp / set_next_wp (set_destination, set_destination_next)
-    prev, prev_t, prev_sq = this, this_t, this_sq
+    prev, prev_t, _prev_sq = this, this_t, this_sq
     origin = destination.copy()
     destination = points[k].copy()
     this, this_t, this_sq = k, 0.0, 0.0
@@ -342,7 +342,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
         step = dt * scale * track_scaler
         # SCurve.advance_target_along_track
         out[:] = 0.0
-        prev_t, prev_sq = _advance_curve(pieces, planned, unit, prev, prev_t, step, out)
+        prev_t, _prev_sq = _advance_curve(pieces, planned, unit, prev, prev_t, step, out)
         if prev >= 0:
             for i in range(3):
                 out[0, i] -= track[prev, i]
@@ -425,7 +425,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
             done_all = True
             break
         # start(k): set_destination (reached, so no re-init), set_destination_next
-        prev, prev_t, prev_sq = this, this_t, this_sq
+        prev, prev_t, _prev_sq = this, this_t, this_sq
         origin = destination.copy()
         destination = points[k].copy()
         if fast and not (nxt_t >= _time_end(pieces, planned, nxt)
