@@ -28,10 +28,12 @@ import math
 
 import numpy as np
 
+from . import navigation, poscontrol, scurve
 from .navigation import GRAVITY_M_S2, Navigation
-from .poscontrol import SEA_LEVEL_DENSITY, Airframe
+from .poscontrol import SEA_LEVEL_DENSITY, Airframe, _filter_alpha
 from .poscontrol import STEP_S as PSC_STEP_S
-from .scurve import ACCEL_MAX, CONST, DECEL_END, FLAT, PIECES, RISE, SCurve
+from .scurve import ACCEL_MAX, CONST, DECEL_END, FLAT, PIECES, SCurve
+from .wpnav import WP_RADIUS_MIN
 
 try:
     from numba import njit
@@ -47,6 +49,11 @@ NAV_FIELDS = ("radius", "corner_accel", "psc_posxy_p", "wp_accel", "wp_jerk", "p
               "desired_speed", "psc_velxy_p", "psc_velxy_i", "psc_velxy_d", "psc_velxy_imax",
               "alpha_e", "alpha_d", "accel_max", "lean", "quad", "mom")
 OK, OUT_OF_TIME = 0, 1
+
+# the model's pure arithmetic, compiled as it stands (one source for both loops)
+_along = njit(cache=True)(scurve._along)
+_sqrt_controller = njit(cache=True)(navigation.sqrt_controller)
+_limit_accel = njit(cache=True)(poscontrol._limit_accel)
 
 
 def legs_of(points: np.ndarray, nav: Navigation, desired_speed: float) -> tuple:
@@ -77,9 +84,6 @@ def nav_params(nav: Navigation, airframe: Airframe | None, desired_speed: float)
     """The numbers :func:`fly` needs of ``nav``, the airframe and the speed, in the order
     of :data:`NAV_FIELDS` (as :class:`.wpnav.WaypointNav` and
     :class:`.poscontrol.PositionFollower` derive them)."""
-    from .poscontrol import _filter_alpha
-    from .wpnav import WP_RADIUS_MIN
-
     air = airframe if airframe is not None else Airframe()
     quad = 0.5 * air.air_density / air.drag_bcoef if air.drag_bcoef > 0 else 0.0
     mom = air.drag_mcoef * math.sqrt(air.air_density / SEA_LEVEL_DENSITY)
@@ -94,24 +98,6 @@ def nav_params(nav: Navigation, airframe: Airframe | None, desired_speed: float)
                   accel_max=GRAVITY_M_S2 * math.tan(nav.angle_max), lean=lean, quad=quad,
                   mom=mom)
     return np.array([values[name] for name in NAV_FIELDS], float)
-
-
-@njit(cache=True)
-def _along(kind, jerk, span, t, a0, v0, p0):
-    """scurve._along."""
-    if kind == FLAT:
-        return (jerk, a0 + jerk * t, v0 + a0 * t + jerk * t * t / 2,
-                p0 + v0 * t + a0 * t * t / 2 + jerk * t ** 3 / 6)
-    if span <= 0:
-        return 0.0, a0, v0, p0
-    h, w = jerk / 2, span / math.pi
-    s, c = math.sin(t / w), math.cos(t / w)
-    sign = 1.0 if kind == RISE else -1.0
-    j = h * (1 - sign * c)
-    a = a0 + h * (t - sign * w * s)
-    v = v0 + a0 * t + h * (t * t / 2 + sign * w * w * (c - 1))
-    p = p0 + v0 * t + a0 * t * t / 2 + h * (t ** 3 / 6 - sign * w * w * t + sign * w ** 3 * s)
-    return j, a, v, p
 
 
 @njit(cache=True)
@@ -173,43 +159,6 @@ def _advance_curve(pieces, planned, unit, leg, time, dt, out):
             out[1, i] += unit[leg, i] * v
             out[2, i] += unit[leg, i] * a
     return time, x * x
-
-
-@njit(cache=True)
-def _sqrt_controller(error, p, second_ord_lim, dt):
-    """navigation.sqrt_controller (AP_Math/control.cpp)."""
-    if second_ord_lim <= 0:
-        rate = error * p
-    elif p == 0:
-        rate = math.copysign(math.sqrt(2 * second_ord_lim * abs(error)), error)
-    else:
-        linear = second_ord_lim / (p * p)
-        if abs(error) > linear:
-            rate = math.copysign(math.sqrt(2 * second_ord_lim * (abs(error) - linear / 2)),
-                                 error)
-        else:
-            rate = error * p
-    if dt > 0:
-        rate = max(-abs(error) / dt, min(rate, abs(error) / dt))
-    return rate
-
-
-@njit(cache=True)
-def _limit_accel(vx, vy, ax, ay, accel_max):
-    """poscontrol._limit_accel (limit_accel_xy)."""
-    speed = math.hypot(vx, vy)
-    if speed < 1e-9:
-        n = math.hypot(ax, ay)
-        return ax * accel_max / n, ay * accel_max / n
-    ux, uy = vx / speed, vy / speed
-    along = ux * ax + uy * ay
-    cx, cy = ax - ux * along, ay - uy * along
-    cross = math.hypot(cx, cy)
-    if cross > accel_max:
-        return cx * accel_max / cross, cy * accel_max / cross
-    room = math.sqrt(max(accel_max * accel_max - cross * cross, 0.0))
-    along = max(-room, min(room, along))
-    return cx + ux * along, cy + uy * along
 
 
 @njit(cache=True)
