@@ -60,7 +60,8 @@ def _timing(timeout: float, retries: int, ready_timeout: float) -> Timing:
 
 
 def mission_files(folder: Path) -> list[Path]:
-    """``uav1.waypoints``, ``uav2.waypoints``, ... in UAV order; gaps are an error.
+    """``uav1.waypoints``, ``uav2.waypoints``, ... in UAV order; gaps are an error, and so
+    is a ``uav0.waypoints`` (or ``uav01``): the numbers start at 1, one per ``--sysid``.
 
     A folder with a ``plan.json`` must hold exactly the mission files it was written with
     (:func:`~ftlbo_mav.mission.export.check_plan_folder`): never a mix of two plans."""
@@ -68,10 +69,15 @@ def mission_files(folder: Path) -> list[Path]:
         doc, source = read_plan_json(folder)
         return check_plan_folder(folder, doc, source=source)
     found = {}
-    for p in folder.glob("uav*.waypoints"):
+    for p in sorted(folder.glob("uav*.waypoints")):
         m = re.fullmatch(r"uav(\d+)\.waypoints", p.name)
-        if m:
-            found[int(m.group(1))] = p
+        if not m:
+            continue
+        if m.group(1).startswith("0"):  # uav0, and uav01 that would stand in for uav1
+            raise BadInput(f"{p}: not a mission file name: UAV numbers start at 1 and have "
+                           "no leading zeros (uav1.waypoints goes to the first --sysid); "
+                           "rename or remove it; no vehicle was contacted")
+        found[int(m.group(1))] = p
     if not found:
         raise BadInput(f"{folder}: no uavN.waypoints files (write them with `ftlbo-mav plan`)")
     numbers = sorted(found)

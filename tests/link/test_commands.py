@@ -65,6 +65,19 @@ def test_upload_input_errors_exit_2_with_one_line(tmp_path, args, problem):
     assert len(result.output.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("name", ["uav0.waypoints", "uav01.waypoints"])
+def test_upload_of_a_folder_with_a_uav0_mission_is_refused_naming_it(tmp_path, name):
+    write_missions(tmp_path, 3)
+    (tmp_path / name).write_bytes((tmp_path / "uav1.waypoints").read_bytes())
+    result = CliRunner().invoke(main, ["upload", str(tmp_path), "--sysid", "1..3",
+                                       "--connect", "tcp:127.0.0.1:9"])
+    assert result.exit_code == 2, result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit)
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error:"), result.output
+    assert name in lines[0] and "start at 1" in lines[0]
+
+
 def test_download_from_nobody_is_a_clear_error(tmp_path):
     result = CliRunner().invoke(main, ["download", "--sysid", "4", "--connect",
                                        "tcp:127.0.0.1:9", "--discover-timeout", "0.3",
