@@ -252,6 +252,25 @@ def test_qgis_crs84_header_is_accepted():
     assert len(parse_obstacle_geojson(json.dumps(doc), frame=p.scenario.frame, source="q")) == 1
 
 
+@pytest.mark.parametrize("crs", ["EPSG:4326", "urn:ogc:def:crs:OGC:1.3:CRS84",
+                                 "urn:ogc:def:crs:EPSG::4326"])
+def test_a_plain_string_crs_naming_wgs84_is_accepted(crs):
+    p, _ = small_plan()
+    doc = {"type": "FeatureCollection", "crs": crs,
+           "features": [_point(109.1148, 12.2333, radius=2.0)]}
+    assert len(parse_obstacle_geojson(json.dumps(doc), frame=p.scenario.frame, source="q")) == 1
+
+
+@pytest.mark.parametrize("crs", ["EPSG:3405", "WGS84", "", "urn:ogc:def:crs:EPSG::3857"])
+def test_a_plain_string_crs_naming_anything_else_is_refused_naming_the_file(crs):
+    p, _ = small_plan()
+    doc = {"type": "FeatureCollection", "crs": crs,
+           "features": [_point(109.1148, 12.2333, radius=2.0)]}
+    with pytest.raises(ScenarioError) as err:
+        parse_obstacle_geojson(json.dumps(doc), frame=p.scenario.frame, source="trees.geojson")
+    assert str(err.value).startswith(f"trees.geojson: crs: is the string {crs!r}: must be WGS84")
+
+
 # --------------------------------------------------------------------------- scenario key
 
 
