@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -25,13 +25,26 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class Cylinder:
-    """A vertical cylinder obstacle (a tree, a pole), unbounded in height."""
+    """A vertical cylinder obstacle (a tree, a pole), unbounded in height.
+
+    ``origin`` says where it was read, for error messages: ``obstacles[2]`` (a table of
+    the scenario file) or ``gis/trees.geojson features[3]`` (a feature of an obstacles
+    file); empty for one built in code. It takes no part in comparisons."""
 
     lat_deg: float
     lon_deg: float
     radius_m: float
     name: str = ""
+    origin: str = field(default="", compare=False)
 
+    def describe(self, index: int) -> str:
+        """How a message names this obstacle, the scenario's ``index``-th:
+        ``gis/trees.geojson features[3] ('mango')``, or ``obstacles[index]`` without an
+        origin."""
+        where = self.origin or f"obstacles[{index}]"
+        if self.name and not where.endswith(self.name):  # not the default label again
+            return f"{where} ({self.name!r})"
+        return where
 
 
 def smallest_enclosing_circle(
@@ -135,7 +148,7 @@ def parse_obstacle_geojson(text: str, *, frame: LocalFrame, source: str) -> tupl
                 math.isfinite(radius) and radius > 0
             ):
                 raise error(f"a Point needs a 'radius' property in metres > 0, got {radius!r}")
-            cylinders.append(Cylinder(lat, lon, float(radius), label))
+            cylinders.append(Cylinder(lat, lon, float(radius), label, f"{source} {where}"))
         elif kind == "Polygon":
             if radius is not None:
                 raise error("'radius' is for Points; a Polygon becomes its smallest enclosing "
@@ -154,7 +167,8 @@ def parse_obstacle_geojson(text: str, *, frame: LocalFrame, source: str) -> tupl
             if r <= 0:
                 raise error("the Polygon has no area (all its positions coincide)")
             lat_c, lon_c, _ = frame.to_lla(np.append(centre, 0.0))
-            cylinders.append(Cylinder(float(lat_c), float(lon_c), r, label))
+            cylinders.append(Cylinder(float(lat_c), float(lon_c), r, label,
+                                      f"{source} {where}"))
         else:
             raise error(f"geometry type {kind!r} is not supported: use Point (with a radius "
                         "property in metres) or Polygon")

@@ -118,3 +118,42 @@ def test_the_vehicle_table_takes_arducopters_parameters(small_text):
                       ("WPNAV_JERK = 'fast'", "vehicle.WPNAV_JERK")):
         with pytest.raises(ScenarioError, match=said.replace(".", r"\.")):
             parse_scenario(small_text + f"[vehicle]\n{bad}\n")
+
+
+def _polygon_feature(lat_lon: list[tuple[float, float]], **props) -> dict:
+    ring = [[lon, lat] for lat, lon in lat_lon]
+    return {"type": "Feature", "properties": props,
+            "geometry": {"type": "Polygon", "coordinates": [ring + ring[:1]]}}
+
+
+@pytest.mark.parametrize("props, named", [
+    ({"name": "boundary"}, "gis/layer.geojson features[1] ('boundary') (radius"),
+    ({}, "gis/layer.geojson features[1] (radius"),
+])
+def test_a_polygon_over_the_whole_area_is_refused_naming_its_file_and_feature(
+        tmp_path, props, named):
+    import json
+
+    # a little beyond the area's corners (12.2331044..12.2335526, 109.1144313..109.1152252)
+    outline = [(12.2330, 109.1143), (12.2330, 109.1154), (12.2337, 109.1154),
+               (12.2337, 109.1143)]
+    far = _polygon_feature([(12.30, 109.20), (12.30, 109.21), (12.31, 109.21)])  # dropped
+    (tmp_path / "gis").mkdir()
+    (tmp_path / "gis" / "layer.geojson").write_text(json.dumps(
+        {"type": "FeatureCollection", "features": [far, _polygon_feature(outline, **props)]}))
+    path = tmp_path / "field.toml"
+    path.write_text('obstacles_file = "gis/layer.geojson"\n' + SMALL)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: start: puts UAV 1 "), message
+    assert f"from the axis of {tmp_path}/{named}" in message, message
+    assert "covers the whole area, start and goal included" in message, message
+
+
+def test_a_table_obstacle_on_the_start_is_named_by_its_table_and_name(small_text):
+    text = _replace(small_text, "lat = 12.2333\nlon = 109.1148\nradius = 3.0",
+                    'lat = 12.2332099\nlon = 109.1145340\nradius = 3.0\nname = "mango"')
+    with pytest.raises(ScenarioError, match=r"start: puts UAV 1 .* axis of obstacles\[0\] "
+                                            r"\('mango'\) \(radius 3 m"):
+        parse_scenario(text)

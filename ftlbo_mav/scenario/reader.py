@@ -232,7 +232,8 @@ def _read_obstacles(rows: Any, source: str) -> tuple[Cylinder, ...]:
         radius = t.number("radius", lo=0.0, hi=MAX_RADIUS_M, lo_open=True, unit="m")
         label = t.string("name", "")
         t.done()
-        cylinders.append(Cylinder(point.lat_deg, point.lon_deg, radius, label))
+        cylinders.append(Cylinder(point.lat_deg, point.lon_deg, radius, label,
+                                  f"obstacles[{i}]"))
     return tuple(cylinders)
 
 
@@ -536,11 +537,15 @@ def _check_point(s: Scenario, key: str, point, enu: np.ndarray) -> None:
             dist = np.hypot(*(centres - uav[:2]).T)
             k = int(np.argmin(dist - radii))
             if dist[k] <= radii[k] + s.clearance_m:
+                corners = np.array([lower, [lower[0], upper[1]], upper, [upper[0], lower[1]]])
+                covers = np.all(np.hypot(*(corners - centres[k]).T) <= radii[k] + s.clearance_m)
                 raise ScenarioError(
                     s.source,
                     key,
-                    f"puts UAV {n} {dist[k]:.2f} m from the axis of obstacles[{k}] "
-                    f"(radius {radii[k]:g} m + clearance {s.clearance_m:g} m)",
+                    f"puts UAV {n} {dist[k]:.2f} m from the axis of "
+                    f"{s.obstacles[k].describe(k)} (radius {radii[k]:g} m + clearance "
+                    f"{s.clearance_m:g} m)"
+                    + ("; it covers the whole area, start and goal included" if covers else ""),
                 )
 
 

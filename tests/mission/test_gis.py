@@ -305,7 +305,8 @@ def test_obstacle_from_file_is_checked_against_start(tmp_path):
     (tmp_path / "t.geojson").write_text(_collection(_point(109.1145051, 12.2332099, radius=1.0)))
     path = tmp_path / "field.toml"
     path.write_text('obstacles_file = "t.geojson"\n' + SMALL)
-    with pytest.raises(ScenarioError, match=r"start: puts UAV 1 .* obstacles\[1\]"):
+    with pytest.raises(ScenarioError,
+                       match=r"start: puts UAV 1 .* axis of \S*t\.geojson features\[0\] "):
         load_scenario(path)
 
 
