@@ -73,6 +73,13 @@ def test_sim_options_are_bad_input(option, value):
     assert option in line
 
 
+@pytest.mark.parametrize("address", ["nowhere.invalid:14550", "a..b:14550"])
+def test_sim_refuses_a_udp_out_host_that_does_not_resolve(address):
+    # .invalid never resolves (RFC 6761): no lookup of anything real is needed
+    line = one_line_exit_2(["sim", "--base-port", "0", "--count", "1", "--udp-out", address])
+    assert "--udp-out" in line and address in line and "does not resolve" in line
+
+
 def test_sim_refuses_a_silent_vehicle_it_does_not_run():
     assert "1..3" in one_line_exit_2(["sim", "--base-port", "0", "--silent", "7"])
 

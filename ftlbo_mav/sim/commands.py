@@ -6,6 +6,8 @@ when the command runs, so the CLI starts as fast as before.
 
 from __future__ import annotations
 
+import socket
+
 import click
 
 from ..ardupilot.storage import SITL_MISSION_CAPACITY
@@ -15,6 +17,21 @@ from ..errors import FtlboError
 from ..link.endpoints import BadInput
 from ..link.signing import load_key
 from .server import MAX_TIME_SCALE
+
+
+def resolve_udp_out(host: str, port: int) -> tuple[str, int]:
+    """``--udp-out HOST:PORT`` -> the IPv4 address it is sent to, looked up once, before
+    anything starts (the shared socket is bound on 127.0.0.1, so IPv4 only). A host that
+    does not resolve is a :class:`click.BadParameter` naming it: the emulator would
+    otherwise run on and send nothing anywhere."""
+    try:
+        found = socket.getaddrinfo(host, port, socket.AF_INET, socket.SOCK_DGRAM)
+    except (socket.gaierror, UnicodeError) as exc:
+        why = getattr(exc, "strerror", None) or str(exc)
+        raise click.BadParameter(f"{host}:{port}: the host {host!r} does not resolve to an "
+                                 f"IPv4 address ({why}); give an IPv4 address or a name "
+                                 "this machine resolves", param_hint="'--udp-out'") from None
+    return found[0][4][0], port
 
 
 @click.command()
@@ -81,6 +98,8 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
     from .server import Simulator
     from .vehicle import VehicleOptions
 
+    if udp_out is not None:
+        udp_out = resolve_udp_out(*udp_out)
     if scenario:
         homes = scenario_homes(load_scenario(scenario))
         if count is not None and count != len(homes):
