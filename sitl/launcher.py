@@ -38,6 +38,17 @@ def sitl_command(binary: str | Path, *, instance: int, home: tuple[float, float,
     ]
 
 
+def _check_workdir(workdir: Path) -> None:
+    """:class:`BadInput` when ``workdir`` (or the nearest part of it that exists) is not a
+    directory: the instances' folders could not be made in it. Checked before any process
+    is started."""
+    existing = next((p for p in (workdir, *workdir.parents) if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        inside = "" if existing == workdir else f" (in --workdir {workdir})"
+        raise BadInput(f"{existing}: is a file, not a directory{inside}: give --workdir a "
+                       "directory (it is made if missing) for the instances' files")
+
+
 class SitlSwarm:
     """N ArduCopter SITL processes; ``urls[i]`` reaches system id i+1.
 
@@ -71,6 +82,8 @@ class SitlSwarm:
         self.model, self.speedup = model, speedup
         self.ready_timeout_s = ready_timeout_s
         self._workdir = Path(workdir) if workdir else None
+        if self._workdir is not None:
+            _check_workdir(self._workdir)
         self._own_workdir = workdir is None
         self.processes: list[subprocess.Popen] = []
         self.urls = default_urls(len(self.homes))

@@ -146,3 +146,24 @@ def test_a_binary_that_exits_at_once_is_named_at_once(tmp_path):
         with SitlSwarm(binary=binary, homes=default_homes(1), workdir=tmp_path / "run"):
             pass
     assert time.monotonic() - t0 < 10.0
+
+
+@pytest.mark.parametrize("inside", ["", "run/here"])
+def test_a_workdir_that_is_a_file_exits_2_before_anything_starts(tmp_path, inside):
+    import subprocess
+
+    marker = tmp_path / "started"
+    binary = tmp_path / "arducopter"
+    binary.write_text(f"#!/bin/sh\ntouch {marker}\nsleep 30\n")
+    binary.chmod(0o755)
+    afile = tmp_path / "notes.txt"
+    afile.write_text("not a folder\n")
+    workdir = afile / inside if inside else afile
+    proc = subprocess.run([sys.executable, "-m", "sitl", "--count", "1", "--binary", str(binary),
+                           "--workdir", str(workdir)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 2, proc.stderr
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith(f"error: {afile}: is a file, not a directory"), line
+    assert not marker.exists()  # no SITL was started
+    assert afile.read_text() == "not a folder\n"
