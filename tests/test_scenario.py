@@ -157,3 +157,44 @@ def test_a_table_obstacle_on_the_start_is_named_by_its_table_and_name(small_text
     with pytest.raises(ScenarioError, match=r"start: puts UAV 1 .* axis of obstacles\[0\] "
                                             r"\('mango'\) \(radius 3 m"):
         parse_scenario(text)
+
+
+def _area(text: str, corner_a, corner_b, start, goal) -> str:
+    """SMALL with its area, start and goal moved (and no obstacle)."""
+    text = _replace(text, "corner_a = [12.2335526, 109.1144313]", f"corner_a = {list(corner_a)}")
+    text = _replace(text, "corner_b = [12.2331044, 109.1152252]", f"corner_b = {list(corner_b)}")
+    text = _replace(text, "lat = 12.2332099\nlon = 109.1145051", "lat = {}\nlon = {}".format(
+        *start))
+    text = _replace(text, "lat = 12.233474\nlon = 109.1151763", "lat = {}\nlon = {}".format(
+        *goal))
+    return _replace(text, "[[obstacles]]\nlat = 12.2333\nlon = 109.1148\nradius = 3.0\n", "")
+
+
+@pytest.mark.parametrize("corners, start, goal, field, words", [
+    (((12.2335, 179.999), (12.2331, -179.999)), (12.2333, 179.9995), (12.2333, -179.9995),
+     "area.corner_b", ("across the antimeridian", "not supported", "lat/lon box")),
+    (((12.2335, -179.9995), (12.2331, 179.9995)), (12.2333, 179.9998), (12.2333, -179.9998),
+     "area.corner_b", ("across the antimeridian",)),
+    (((89.9995, 0.0), (90.0, 10.0)), (89.9997, 1.0), (89.9998, 2.0),
+     "area.corner_b[0]", ("latitude 90 is a pole", "not supported", "east/north frame")),
+    (((-90.0, 0.0), (-89.9995, 10.0)), (-89.9997, 1.0), (-89.9998, 2.0),
+     "area.corner_a[0]", ("latitude -90 is a pole",)),
+])
+def test_an_area_across_the_antimeridian_or_at_a_pole_is_refused_saying_why(
+        tmp_path, corners, start, goal, field, words):
+    path = tmp_path / "far.toml"
+    path.write_text(_area(SMALL, *corners, start, goal))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert info.value.field == field, str(info.value)
+    for word in words:
+        assert word in info.value.problem, str(info.value)
+    result = CliRunner().invoke(main, ["plan", str(path), "-o", str(tmp_path / "out")])
+    assert result.exit_code == 2 and result.stderr.count("\n") == 1, result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_area_beside_the_antimeridian_is_still_read(small_text):
+    s = parse_scenario(_area(small_text, (12.2335, 179.9992), (12.2331, 180.0),
+                             (12.2333, 179.99925), (12.2333, 179.99995)))
+    assert s.uav_count == 3

@@ -82,6 +82,7 @@ def parse_scenario(
     area = root.table("area")
     lat_a, lon_a = area.lat_lon("corner_a")
     lat_b, lon_b = area.lat_lon("corner_b")
+    _check_corners_on_the_globe(area, lat_a=lat_a, lon_a=lon_a, lat_b=lat_b, lon_b=lon_b)
     if lat_a == lat_b or lon_a == lon_b:
         raise area.error("corner_b", "must differ from corner_a in both latitude and longitude")
     h_min = area.number("min_altitude", lo=0.0, hi=MAX_ALTITUDE_M, lo_open=True, unit="m")
@@ -150,6 +151,27 @@ def parse_scenario(
         scenario = _with_lanes(scenario, survey)
     _check_geometry(scenario)
     return scenario
+
+
+def _check_corners_on_the_globe(area: Table, *, lat_a: float, lon_a: float, lat_b: float,
+                                lon_b: float) -> None:
+    """The area is the lat/lon box between its corners, from the smaller longitude to the
+    larger, with the local ENU frame at its south-west corner: an area across the
+    antimeridian or at a pole cannot be one (it would be refused later as "start: outside
+    the area", which says nothing of why)."""
+    if abs(lon_a - lon_b) > 180.0:
+        raise area.error("corner_b", f"longitude {lon_b:g} is {abs(lon_a - lon_b):g} degrees "
+                         f"from corner_a's {lon_a:g}: an area across the antimeridian (180 "
+                         "degrees longitude) is not supported: the area is the lat/lon box "
+                         "from the smaller longitude to the larger, with the local ENU frame "
+                         "at its south-west corner, and here that box goes the long way round "
+                         "the globe (split the survey at 180 degrees)")
+    for key, lat in (("corner_a", lat_a), ("corner_b", lat_b)):
+        if abs(lat) >= 90.0:
+            raise area.error(f"{key}[0]", f"latitude {lat:g} is a pole: an area at a pole is "
+                             "not supported: every longitude meets there, so the lat/lon box "
+                             "is no rectangle in the local east/north frame (keep the area "
+                             "off the pole)")
 
 
 def _check_area_size(s: Scenario) -> None:
