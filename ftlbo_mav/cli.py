@@ -65,15 +65,17 @@ def _terminate(_signum, _frame) -> None:
 
 
 def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
-    """``--formats geojson,kml,plan`` or ``all`` -> a tuple of FORMATS names."""
+    """``--formats geojson,kml,plan`` or ``all`` -> a tuple of FORMATS names. ``all``
+    among other names (``all,kml``) is still every format: a name it already holds is
+    redundant, not wrong (an unknown name beside it is still refused)."""
     if value is None:
         return ()
     names = [v.strip().lower() for v in value.split(",") if v.strip()]
     if not names:
         raise click.BadParameter(f"names no format; give a comma-separated list of "
                                  f"{', '.join(FORMATS)}, or all (or leave --formats out)")
-    if names == ["all"]:
-        return FORMATS
+    if "all" in names:
+        names = list(FORMATS) + [n for n in names if n != "all"]  # in FORMATS order
     unknown = [n for n in names if n not in FORMATS]
     if unknown:
         raise click.BadParameter(

@@ -69,6 +69,20 @@ def test_unknown_format_is_a_usage_error(small_path, tmp_path):
     assert not (tmp_path / "x").exists()
 
 
+def test_formats_all_beside_other_names_is_every_format(small_path, tmp_path):
+    everything = tmp_path / "all"
+    assert _plan(small_path, everything, "--formats", "all").exit_code == 0
+    for value in ("all,kml", "kml, ALL"):
+        out = tmp_path / value.replace(",", "_").replace(" ", "")
+        result = _plan(small_path, out, "--formats", value)
+        assert result.exit_code == 0, result.output
+        assert sorted(p.name for p in out.iterdir()) == sorted(
+            p.name for p in everything.iterdir())
+    result = _plan(small_path, tmp_path / "x", "--formats", "all,shp")
+    assert result.exit_code == 2 and "unknown format 'shp'" in result.output
+    assert not (tmp_path / "x").exists()
+
+
 def test_infeasible_plan_gets_gis_files_but_no_plan_files(tmp_path):
     wall = "".join(
         f"[[obstacles]]\nlat = {12.2331044 + k * 0.00008:.7f}\nlon = 109.11485\nradius = 5.0\n"
