@@ -31,6 +31,7 @@ from .predicted import (
 )
 from .problem import PlanningProblem, problem_from_scenario
 from .seeds import RouteChains, seed_waypoints
+from .window import WINDOW_FROM, leg_sizes, leg_window
 
 AUTO_TARGET = 0.005
 """``waypoints = "auto"``: a leg's plan may be this much (relative) above its bound."""
@@ -48,7 +49,10 @@ paper's 10."""
 class Leg:
     """One leg of a plan: the centroid from one route point (start or via) to the next.
 
-    ``problem``: the leg's own problem (its start, goal and waypoint count ``m``).
+    ``problem``: the leg's own problem (its start, goal and waypoint count ``m``), on
+    which its violations are found. ``searched``: the problem the optimizer searched,
+    when that was the leg's window (:mod:`.window`: the obstacles it can reach, the area
+    near it); the cost is that problem's. None: ``problem`` itself.
     ``centroid``: ``(m+2, 3)`` metres ENU. ``tried``: with ``waypoints = "auto"``, the
     waypoint counts planned, in order (the last one kept is ``waypoints``); else empty.
     ``evaluations`` and ``seconds`` count every try.
@@ -65,10 +69,16 @@ class Leg:
     seconds: float
     lower_bound_length: float | None = None
     tried: tuple[int, ...] = ()
+    searched: PlanningProblem | None = None
 
     @property
     def waypoints(self) -> int:
         return self.problem.waypoints
+
+    @property
+    def cost_problem(self) -> PlanningProblem:
+        """The problem the leg's cost is measured on (the searched one)."""
+        return self.searched if self.searched is not None else self.problem
 
     @property
     def feasible(self) -> bool:
@@ -347,7 +357,7 @@ def _with_centroid(leg: Leg, centroid: np.ndarray) -> Leg:
     if np.array_equal(centroid, leg.centroid):
         return leg
     best = centroid[None, 1:-1]
-    terms = CostTerms(*(float(t[0]) for t in cost_terms(leg.problem, best)))
+    terms = CostTerms(*(float(t[0]) for t in cost_terms(leg.cost_problem, best)))
     return replace(leg, centroid=centroid, cost=terms,
                    violations=tuple(violations(leg.problem, centroid)))
 
@@ -403,13 +413,20 @@ def check_size(scenario: Scenario, settings: PlannerSettings, *, repeats: int = 
             + f"{settings.students} students x {'auto' if auto else m} waypoints x "
             f"{settings.iterations} iterations x {legs} leg{'s' if legs > 1 else ''} x "
             f"{scenario.uav_count} UAVs x {max(len(scenario.obstacles), 1)} obstacles")
+    if len(scenario.obstacles) >= WINDOW_FROM:
+        what += " (each leg among those within its reach)"
     memory = settings.students * m * 3 * 8 * _POPULATION_COPIES
     if memory > MEMORY_LIMIT_BYTES:
         raise PlanTooLarge(f"{scenario.source}: {what} would need about "
                            f"{memory / 2**30:.1f} GiB for the optimizer's class (at most "
                            f"{MEMORY_LIMIT_BYTES / 2**30:g} GiB): fewer students or waypoints")
-    work = (float(repeats) * settings.students * settings.iterations * legs * (typical + 1)
-            * scenario.uav_count * max(len(scenario.obstacles), 1))
+    # each leg among the obstacles it is planned among (its window, .window); with auto,
+    # a leg whose straight line is clear is planned with one waypoint
+    obstacles, straight = leg_sizes(problem_from_scenario(scenario, waypoints=1),
+                                    scenario.route_enu())
+    per_leg = np.where(straight, 1, typical) if auto else np.full(len(obstacles), typical)
+    work = (float(repeats) * settings.students * settings.iterations * scenario.uav_count
+            * float(((per_leg + 1) * np.maximum(obstacles, 1)).sum()))
     if work > WORK_LIMIT:
         raise PlanTooLarge(f"{scenario.source}: {what} is {work:.1e} segment-obstacle checks "
                            f"(at most {WORK_LIMIT:.0e}, about 20 minutes here): fewer "
@@ -481,23 +498,29 @@ def plan_leg(
     """
     auto = settings.waypoints == AUTO
     t_routes = time.perf_counter()
-    routes = shortest_routes(problem, count=SEED_ROUTES)
-    bound = lower_bound(problem, routes[0]) if routes else None
-    chains = [RouteChains(problem, r) for r in routes] if auto else None
+    window = leg_window(problem, count=SEED_ROUTES,
+                        routes=lambda p, count: shortest_routes(p, count=count))
+    searched = None if window.problem is problem else window.problem
+    where = window.problem
+    routes = (window.routes if window.routes is not None
+              else shortest_routes(problem, count=SEED_ROUTES))
+    bound = lower_bound(where, routes[0]) if routes else None
+    chains = [RouteChains(where, r) for r in routes] if auto else None
     choice = _auto_count(chains[0], bound) if auto and routes else None
     route_seconds = time.perf_counter() - t_routes
     if not routes and notice is not None:
         notice(NO_ROUTE)
     seeded = getattr(OPTIMIZERS[settings.algorithm], "wants_seeds", False)
     if not auto:
-        leg = _optimize(problem, settings, rng, routes, None, progress)
+        leg = _optimize(problem, settings, rng, routes, None, progress, searched=searched)
         extra = route_seconds if seeded else 0.0
         return replace(leg, start_name=names[0], goal_name=names[1], lower_bound_length=bound,
                        seconds=leg.seconds + extra)
     first = choice if choice is not None else AUTO_NO_ROUTE
     tries: list[Leg] = []
     for m in range(first, min(first + AUTO_TRIES, AUTO_MAX + 1)):
-        leg = _optimize(replace(problem, waypoints=m), settings, rng, routes, chains, progress)
+        leg = _optimize(replace(problem, waypoints=m), settings, rng, routes, chains, progress,
+                        searched=None if searched is None else replace(searched, waypoints=m))
         tries.append(replace(leg, lower_bound_length=bound))
         if bound is None or (leg.feasible and leg.cost.length <= (1 + AUTO_TARGET) * bound):
             break
@@ -527,8 +550,11 @@ def _auto_count(chains: RouteChains, bound: float) -> int | None:
 
 
 def _optimize(problem: PlanningProblem, settings: PlannerSettings, rng: np.random.Generator,
-              routes: list, chains: list | None, progress: Progress | None) -> Leg:
-    """One optimizer run on ``problem`` (its ``waypoints``); names and bound left blank."""
+              routes: list, chains: list | None, progress: Progress | None, *,
+              searched: PlanningProblem | None = None) -> Leg:
+    """One optimizer run on ``searched`` (default ``problem``; its ``waypoints``), the
+    result's violations found on ``problem``; names and bound left blank."""
+    whole, problem = problem, searched if searched is not None else problem
     m = problem.waypoints
     lower, upper = problem.bounds()
 
@@ -557,13 +583,14 @@ def _optimize(problem: PlanningProblem, settings: PlannerSettings, rng: np.rando
     return Leg(
         start_name="start",
         goal_name="goal",
-        problem=problem,
+        problem=whole,
         centroid=centroid,
         cost=terms,
-        violations=tuple(violations(problem, centroid)),
+        violations=tuple(violations(whole, centroid)),
         history=np.where(result.history >= INFEASIBLE, np.inf, result.history),
         evaluations=result.evaluations,
         seconds=seconds,
+        searched=searched,
     )
 
 

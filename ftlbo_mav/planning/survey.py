@@ -26,6 +26,11 @@ END_CLEARANCE_M = 0.01
 """A lane end moved off an obstacle stops this far outside its disc (the disc's radius
 already holds the clearance; a via point must be strictly outside)."""
 
+SPACING_TOLERANCE = 1e-3
+"""A rectangle a hair wider than a whole number of spacings (by less than this share of
+one spacing: a millimetre in 7 m, what a corner's lat/lon rounding or the frame's
+curvature adds) gets no lane more: its lanes are that share further apart than asked."""
+
 MIN_LANE_M = 1.0
 """Lanes shorter than this (a corner of an oblique rectangle, a lane blocked to its
 ends) are dropped."""
@@ -149,12 +154,13 @@ def lane_offsets(*, lower: np.ndarray, upper: np.ndarray, spacing_m: float,
                  heading_deg: float) -> np.ndarray:
     """The lanes' across coordinates ``(K,)``: ``K = ceil(width / spacing) + 1`` evenly
     from one side (:func:`across_extent`) to the other, so never more than ``spacing_m``
-    apart; one lane when the rectangle is no wider than a lane."""
+    apart (within :data:`SPACING_TOLERANCE`); one lane when the rectangle is no wider
+    than a lane."""
     first, last = across_extent(lower=lower, upper=upper, heading_deg=heading_deg)
     width = last - first
     if width <= 1e-9:
         return np.array([first])
-    gaps = max(int(math.ceil(width / spacing_m - 1e-9)), 1)
+    gaps = max(int(math.ceil(width / spacing_m - SPACING_TOLERANCE)), 1)
     return first + np.arange(gaps + 1) * (width / gaps)
 
 

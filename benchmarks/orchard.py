@@ -1,0 +1,178 @@
+"""A real orchard: the whole ``ftlbo-mav plan`` process on a survey of thousands of trees.
+
+Plain ``python benchmarks/orchard.py`` (``--quick``: the 5,000- and 20,000-tree orchards
+once each; ``--trees N``: one orchard of about N trees). The orchard is written here
+(``orchard_files``) as a tree-detection tool exports one: a GeoJSON of Points, one per
+tree, each with its canopy ``radius`` (1 m), in north-south rows 7 m apart, trees 3 m
+apart along a row, 12 m headlands at both ends. Three UAVs fly in a column (4 m apart,
+north-south, one behind the other) through every aisle: ``[survey] spacing = 7``, the
+lanes on the aisles' centre lines (one west of the first row and one east of the last),
+``waypoints = "auto"``, the default planner and outputs. The 4,800-tree orchard (60 rows
+of 80, 427 m x 264 m, 11 ha) has 61 lanes; the 20,000-tree one (125 rows of 160) 126.
+
+Printed per orchard: trees, lanes, legs, wall seconds from process start to exit, the
+peak resident memory of the ``plan`` process, whether the plan is feasible and its
+predicted clearance, and the load average at the start (the machine is shared).
+
+The goals (issue 30): about 5,000 trees <= 30 s, 20,000 trees <= 120 s, memory < 2 GiB.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from planner import table  # the benchmarks' one table printer (run as a script, beside it)
+
+from ftlbo_mav.geo import LocalFrame
+
+ROOT = Path(__file__).resolve().parents[1]
+LAT0, LON0 = 12.2331044, 109.1144313  # the example's south-west corner
+
+ROW_SPACING_M = 7.0
+TREE_SPACING_M = 3.0
+HEADLAND_M = 12.0
+CANOPY_RADIUS_M = 1.0
+GOALS = {5_000: 30.0, 20_000: 120.0}
+MEMORY_GOAL_MIB = 2048.0
+
+
+def layout(trees: int) -> tuple[int, int]:
+    """Rows and trees per row for about ``trees`` trees, the rows 5/3 as long as the
+    orchard is wide at 5,000 trees (60 x 80) and keeping that shape."""
+    if trees == 5_000:
+        return 60, 80
+    if trees == 20_000:
+        return 125, 160
+    rows = max(1, round((trees * 0.75) ** 0.5))
+    return rows, max(1, round(trees / rows))
+
+
+def orchard_files(folder: Path, *, rows: int, per_row: int) -> Path:
+    """Write ``orchard.geojson`` and ``orchard.toml`` into ``folder``; the scenario's path."""
+    width = (rows + 1) * ROW_SPACING_M
+    length = 2 * HEADLAND_M + (per_row - 1) * TREE_SPACING_M
+
+    frame = LocalFrame(LAT0, LON0)  # the scenario's own: its origin the south-west corner
+
+    def ll(e: float, n: float) -> tuple[float, float]:
+        lat, lon, _ = frame.to_lla([e, n, 0.0])
+        return float(lat), float(lon)
+
+    e, n = np.meshgrid((np.arange(rows) + 1) * ROW_SPACING_M,
+                       HEADLAND_M + np.arange(per_row) * TREE_SPACING_M, indexing="ij")
+    lat, lon, _ = frame.to_lla(np.stack([e, n, np.zeros_like(e)], axis=-1))
+    features = []
+    for r in range(rows):
+        for t in range(per_row):
+            features.append(
+                f'{{"type": "Feature", "properties": {{"name": "row {r + 1} tree {t + 1}", '
+                f'"radius": {CANOPY_RADIUS_M}}}, "geometry": {{"type": "Point", '
+                f'"coordinates": [{lon[r, t]:.8f}, {lat[r, t]:.8f}]}}}}')
+    (folder / "orchard.geojson").write_text(
+        '{"type": "FeatureCollection", "name": "orchard", "features": [\n'
+        + ",\n".join(features) + "\n]}\n")
+    margin = ROW_SPACING_M / 2
+    start, goal = ll(margin, 5.0), ll(width - margin, length - 5.0 if rows % 2 == 0 else 5.0)
+    text = "\n".join([
+        f'name = "Orchard of {rows * per_row} trees, {rows} rows"',
+        'obstacles_file = "orchard.geojson"',
+        "[area]", f"corner_a = [{LAT0}, {LON0}]",
+        "corner_b = [{:.8f}, {:.8f}]".format(*ll(width, length)),
+        "min_altitude = 2.0", "max_altitude = 7.0",
+        "[start]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*start),
+        "[goal]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*goal),
+        "[formation]", "offsets = [[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]",
+        "clearance = 1.0",
+        "[survey]", f"spacing = {ROW_SPACING_M}", "heading = 0.0", f"margin = {margin}",
+        "[planner]", 'waypoints = "auto"', "seed = 0",
+        "[mission]", "speed = 3.0", 'end_action = "land"', ""])
+    path = folder / "orchard.toml"
+    path.write_text(text)
+    return path
+
+
+def _peak_rss_mib() -> float:
+    """The largest resident set of any child waited for so far (Linux: KiB)."""
+    return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
+
+
+def run_orchard(trees: int, *, timeout_s: float = 600.0) -> dict:
+    """Plan the orchard of about ``trees`` trees once, in a fresh process."""
+    rows, per_row = layout(trees)
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        scenario = orchard_files(folder, rows=rows, per_row=per_row)
+        t0 = time.perf_counter()
+        try:
+            # the peak memory of this child alone: a fresh interpreter that runs it and
+            # reports its own children's maximum
+            proc = subprocess.run(
+                [sys.executable, "-c",
+                 "import resource, subprocess, sys; "
+                 "p = subprocess.run(sys.argv[1:]); "
+                 "print('peak_rss_kib', resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,"
+                 " file=sys.stderr); sys.exit(p.returncode)",
+                 sys.executable, "-m", "ftlbo_mav", "plan", str(scenario), "-o",
+                 str(folder / "out")],
+                capture_output=True, text=True, cwd=ROOT, timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            return {"what": f"orchard {trees} trees", "trees": rows * per_row,
+                    "seconds": None, "timeout_s": timeout_s}
+        seconds = time.perf_counter() - t0
+        out = proc.stdout + proc.stderr
+        peak = re.search(r"peak_rss_kib (\d+)", proc.stderr)
+        clearance = re.search(r"flown path \(predicted\): clearance ([\d.]+) m", out)
+        legs = re.search(r"(\d+) legs?,", out)
+        plan = folder / "out" / "plan.json"
+        lanes = len(json.loads(plan.read_text()).get("survey", {}).get("lanes", [])) \
+            if plan.is_file() else None
+        return {"what": f"orchard {trees} trees", "trees": rows * per_row, "rows": rows,
+                "lanes": lanes, "legs": int(legs.group(1)) if legs else None,
+                "seconds": round(seconds, 2),
+                "peak_rss_mib": round(int(peak.group(1)) / 1024.0, 1) if peak else None,
+                "exit": proc.returncode, "feasible": proc.returncode == 0 and "feasible;" in out,
+                "clearance_m": float(clearance.group(1)) if clearance else None,
+                "last": out.strip().splitlines()[-3:]}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="5,000 and 20,000 trees once")
+    parser.add_argument("--trees", type=int, action="append", default=[],
+                        help="an orchard of about this many trees (repeatable)")
+    parser.add_argument("--json", default="orchard-benchmark.json", help="output JSON path")
+    parser.add_argument("--timeout", type=float, default=600.0, help="seconds per plan")
+    args = parser.parse_args()
+    sizes = args.trees or [5_000, 20_000]
+    load = os.getloadavg()
+    print(f"load average at start: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)
+    rows = []
+    for trees in sizes:
+        row = run_orchard(trees, timeout_s=args.timeout)
+        rows.append(row)
+        print(json.dumps({k: v for k, v in row.items() if k != "last"}), flush=True)
+        if not row.get("feasible"):
+            print("  " + "\n  ".join(row.get("last", [])), flush=True)
+    print(table(["trees", "lanes", "legs", "plan s", "goal s", "peak MiB", "feasible",
+                 "clearance m"],
+                [[r["trees"], r.get("lanes"), r.get("legs"),
+                  f"{r['seconds']:.1f}" if r["seconds"] is not None
+                  else f"timeout > {r['timeout_s']:g}",
+                  f"<= {GOALS[s]:g}" if s in GOALS else "", r.get("peak_rss_mib"),
+                  "yes" if r.get("feasible") else "no", r.get("clearance_m")]
+                 for s, r in zip(sizes, rows)]))
+    Path(args.json).write_text(json.dumps({"load": load, "rows": rows}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
