@@ -70,10 +70,12 @@ def load() -> str:
     return f"{one:.2f} {five:.2f} {fifteen:.2f}"
 
 
-def table(headers: list[str], rows: list[list]) -> str:
+def table(headers: list[str], rows: list[list], *, left: tuple[int, ...] = ()) -> str:
+    """Columns right-aligned, those numbered in ``left`` left-aligned."""
     cells = [[str(h) for h in headers]] + [[str(c) for c in r] for r in rows]
     widths = [max(len(row[i]) for row in cells) for i in range(len(headers))]
-    lines = ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in cells]
+    lines = ["  ".join(c.ljust(w) if i in left else c.rjust(w)
+                       for i, (c, w) in enumerate(zip(row, widths))) for row in cells]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
 
@@ -287,6 +289,47 @@ def bench_dense_auto(repeats: int = 5) -> dict:
     return dict(wall_median_s=statistics.median(walls), wall_max_s=max(walls),
                 ratio=p.length_ratio, waypoints=p.legs[0].waypoints, feasible=p.feasible,
                 repeats=repeats)
+
+
+# ----------------------------------------------------------------------- goals
+
+
+def quick_figures(repeats: int = 3) -> dict:
+    """The figures benchmarks/goals.py holds to the planner's goals, measured now in this
+    process (after one warm-up plan): medians over ``repeats`` runs (seeds 0.. where a
+    seed matters) of the example's ``plan()`` (wall and ``Plan.seconds``), of the
+    example's ``plan()`` at the paper's settings, of ``Plan.seconds`` of the ten-UAV
+    formation (``--only flown``), the path evaluations per second of 3 UAVs, 10 waypoints
+    and 6 cylinders, and ``waypoints = "auto"`` on the dense 100-tree field (wall median
+    and the worst seed's length over the bound)."""
+    scenario = load_scenario(EXAMPLE)
+    plan(scenario)  # warm up imports, caches and the compiled loops
+
+    def timed(run) -> tuple[float, object]:
+        t0 = time.perf_counter()
+        p = run()
+        return time.perf_counter() - t0, p
+
+    example = [timed(lambda: plan(scenario)) for _ in range(repeats)]
+    paper = [timed(lambda s=seed: plan(scenario, seed=s, **PAPER)) for seed in range(repeats)]
+    ten = load_scenario(FLOWN_MAPS[-1])
+    ten_uavs = [plan(ten) for _ in range(repeats)]
+    dense = field(obstacles=100, uavs=3, waypoints=10)
+    auto = [run_map(dense, waypoints="auto", seed=seed) for seed in range(repeats)]
+    return {
+        "repeats": repeats,
+        "example_wall_s": statistics.median(w for w, _ in example),
+        "example_plan_seconds": statistics.median(p.seconds for _, p in example),
+        "paper_settings_wall_s": statistics.median(w for w, _ in paper),
+        "ten_uavs_scenario": FLOWN_MAPS[-1].name, "ten_uavs_count": ten.uav_count,
+        "ten_uavs_plan_seconds": statistics.median(p.seconds for p in ten_uavs),
+        "evaluations_per_s": evaluations_per_second(field(obstacles=6, uavs=3, waypoints=10),
+                                                    repeats=repeats),
+        "dense_auto_wall_s": statistics.median(w for w, _ in auto),
+        "dense_auto_ratio_max": max(p.length_ratio if p.length_ratio is not None else math.inf
+                                    for _, p in auto),
+        "dense_auto_feasible": sum(p.feasible for _, p in auto),
+    }
 
 
 # ----------------------------------------------------------------------- 4. mealpy

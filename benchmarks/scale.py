@@ -24,6 +24,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -81,23 +82,47 @@ def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) ->
     return "\n".join(lines) + "\n"
 
 
+def plan_process(path: Path, out: Path, *, timeout_s: float | None = None) -> dict:
+    """One fresh ``python -m ftlbo_mav plan path -o out -q``: wall seconds from process
+    start to exit, its peak resident memory (``os.wait4``'s ``ru_maxrss``, MiB), exit code
+    (None when killed after ``timeout_s``), whether it said feasible, files written and its
+    last output line."""
+    with tempfile.TemporaryFile("w+") as log:
+        t0 = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", "ftlbo_mav", "plan", str(path), "-o",
+                                 str(out), "-q"], stdout=log, stderr=subprocess.STDOUT,
+                                text=True, cwd=ROOT)
+        timer = threading.Timer(timeout_s, proc.kill) if timeout_s else None
+        if timer:
+            timer.start()
+        _, status, usage = os.wait4(proc.pid, 0)
+        seconds = time.perf_counter() - t0
+        if timer:
+            timer.cancel()
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        log.seek(0)
+        text = log.read()
+    killed = proc.returncode < 0
+    lines = text.strip().splitlines()
+    return {"seconds": seconds, "peak_rss_mib": usage.ru_maxrss / 1024,
+            "returncode": None if killed else proc.returncode, "timed_out": killed,
+            "feasible": proc.returncode == 0 and "feasible;" in text,
+            "files": len(list(out.iterdir())) if out.is_dir() else 0,
+            "last_line": lines[-1] if lines else ""}
+
+
 def run_plan(text: str, repeats: int) -> dict:
     """Time ``python -m ftlbo_mav plan`` on the scenario ``text``: median wall seconds."""
-    times, feasible, files, last = [], None, 0, ""
+    times, feasible, files = [], None, 0
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "scenario.toml"
         path.write_text(text)
         for r in range(repeats):
-            out = Path(tmp) / f"out{r}"
-            t0 = time.perf_counter()
-            proc = subprocess.run([sys.executable, "-m", "ftlbo_mav", "plan", str(path), "-o",
-                                   str(out), "-q"], capture_output=True, text=True, cwd=ROOT)
-            times.append(time.perf_counter() - t0)
-            last = (proc.stdout + proc.stderr).strip().splitlines()
-            feasible = proc.returncode == 0 and "feasible;" in proc.stdout
-            files = len(list(out.iterdir())) if out.is_dir() else 0
-            if proc.returncode not in (0, 1):
-                raise SystemExit(f"plan failed ({proc.returncode}): {last[-1] if last else ''}")
+            run = plan_process(path, Path(tmp) / f"out{r}")
+            times.append(run["seconds"])
+            feasible, files = run["feasible"], run["files"]
+            if run["returncode"] not in (0, 1):
+                raise SystemExit(f"plan failed ({run['returncode']}): {run['last_line']}")
     return {"seconds": statistics.median(times), "runs": [round(t, 3) for t in times],
             "feasible": bool(feasible), "files": files}
 

@@ -1,0 +1,351 @@
+"""Every speed goal beside the figure measured now, met or missed, in one table.
+
+Plain ``python benchmarks/goals.py`` (at most about 5 minutes on a 2-core machine). It runs
+the quick form of each benchmark, once each unless a row says otherwise, and prints one
+table: each goal with where it was set (an issue or a benchmark's docstring), its limit,
+the figure measured in this run, the peak memory of the process measured where there is
+one, and met or missed; and the load average at the start and at the end, since the
+machine is shared. ``--json FILE`` writes the same rows as JSON. The exit code is 0 even
+when a goal is missed (this is a report); ``--strict`` makes it 1 when one is missed.
+
+- Whole ``ftlbo-mav plan`` processes (issue 30; issue 21's older limits on the same
+  runs): the scenarios of ``benchmarks/scale.py`` (``scenario_text``: 10 UAVs on its
+  100 m field, 50 and 200 on its 400 m field, 20 trees; its 400 m field with 320 trees
+  for every size), each a fresh ``python -m ftlbo_mav plan SCENARIO -o DIR -q``, wall
+  seconds from process start to exit and peak resident memory (``os.wait4``), one run
+  each, killed after ``--timeout`` seconds. The 320-tree rows run last, on what is left
+  of the 5 minutes (a row starts only with at least its limit left, and is killed when
+  the budget ends); ``--all`` lifts the budget.
+- ``plan()`` in this process (``benchmarks/planner.py``'s ``quick_figures``): the example,
+  at the paper's settings, the ten-UAV formation, path evaluations per second, and
+  ``waypoints = "auto"`` on the dense 100-tree field; medians of 3.
+- The flown-path prediction: ``fly_path`` on the example's first UAV path flown out and
+  back, after a warm-up call, median of 7, scaled to 60 s of flight.
+- The mission upload under loss (``benchmarks/link.py``'s virtual-time part, 30 seeds).
+- The orchard survey (``benchmarks/orchard.py --quick --json FILE``, when that script
+  exists), after the 20-tree rows and before the 320-tree ones, when at least its two
+  limits (150 s) are left of the budget.
+- Goals that need ArduPilot SITL or a flight of minutes are listed, not run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from planner import EXAMPLE, quick_figures, table  # the benchmarks' one table printer
+from scale import plan_process, scenario_text
+
+ROOT = Path(__file__).resolve().parents[1]
+ORCHARD = ROOT / "benchmarks" / "orchard.py"
+BUDGET_S = 290.0  # seconds from the start after which no child runs (--all: no limit)
+MEMORY_MIB = 2048.0  # issue 30: under 2 GiB everywhere
+
+# (UAVs, trees, field side m, issue 30's limit s, issue 21's limit s or None)
+TWENTY_TREES = [(10, 20, 100.0, 1.0, 1.5), (50, 20, 400.0, 3.0, 5.0),
+                (200, 20, 400.0, 15.0, 30.0)]
+DENSE = [(10, 320, 400.0, 1.0, None), (50, 320, 400.0, 3.0, None),
+         (200, 320, 400.0, 15.0, None)]
+
+NOT_RUN = [  # (goal, source, limit, result, note)
+    ("abort reaches every vehicle", "issue 9", "<= 1 s", "needs SITL",
+     "three SITL copters in flight"),
+    ("the example's legs flown on SITL", "issue 11", "<= 26 s", "needs SITL",
+     "benchmarks/flight.py on SITL"),
+    ("leaving the plan detected; the others stop", "issue 20", "<= 1 s (heartbeat 2 s)",
+     "needs SITL", "a flight with a fault"),
+    ("fly ends after a fault; Ctrl-C/abort, dead links", "issue 20", "<= 60 s; <= 2 s",
+     "needs SITL", "a flight with a fault"),
+    ("the emulator flies 50 vehicles", "issue 21", "real time", "not run",
+     "a flight of minutes"),
+]
+
+
+def load() -> list[float]:
+    return [round(x, 2) for x in os.getloadavg()]
+
+
+def row(goal: str, source: str, limit: str, measured: str, met: bool | None, *,
+        status: str | None = None, value: float | None = None,
+        limit_value: float | None = None, peak_rss_mib: float | None = None,
+        note: str = "") -> dict:
+    return {"goal": goal, "source": source, "limit": limit, "measured": measured,
+            "value": value, "limit_value": limit_value, "peak_rss_mib": peak_rss_mib,
+            "status": status or ("met" if met else "missed"), "note": note}
+
+
+# ----------------------------------------------------------------------- plan processes
+
+
+def plan_rows(cases, *, timeout_s: float, deadline: float) -> list[dict]:
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for uavs, trees, side, limit, older in cases:
+            goal = f"plan process: {uavs} UAVs, {trees} trees, {side:g} m"
+            left = deadline - time.monotonic()
+            if left < limit + 1.0:
+                rows.append(row(goal, "issue 30", f"<= {limit:g} s", "not run", None,
+                                status="not measured", limit_value=limit,
+                                note="5-minute budget spent: --all runs it"))
+                continue
+            wait = min(timeout_s, left)
+            path = Path(tmp) / f"{uavs}-{trees}.toml"
+            path.write_text(scenario_text(uavs=uavs, obstacles=trees, side_m=side))
+            run = plan_process(path, Path(tmp) / f"out-{uavs}-{trees}", timeout_s=wait)
+            mib = run["peak_rss_mib"]
+            if run["timed_out"]:
+                rows.append(row(goal, "issue 30", f"<= {limit:g} s", f"timeout > {wait:.0f} s",
+                                False, limit_value=limit, peak_rss_mib=mib,
+                                note="killed" + ("" if wait >= timeout_s else
+                                                 " at the end of the 5-minute budget")))
+                print(f"  {goal}: timeout > {wait:.0f} s", flush=True)
+                continue
+            seconds = run["seconds"]
+            note = ("feasible" if run["feasible"] else
+                    f"exit {run['returncode']}: {run['last_line'][:60]}")
+            ok = run["returncode"] in (0, 1)
+            rows.append(row(goal, "issue 30", f"<= {limit:g} s", f"{seconds:.2f} s",
+                            ok and seconds <= limit, value=seconds, limit_value=limit,
+                            peak_rss_mib=mib, note=note))
+            if older is not None:
+                rows.append(row(goal, "issue 21", f"<= {older:g} s", f"{seconds:.2f} s",
+                                ok and seconds <= older, value=seconds, limit_value=older,
+                                peak_rss_mib=mib, note="the same run"))
+            print(f"  {goal}: {seconds:.2f} s, {mib:.0f} MiB", flush=True)
+    return rows
+
+
+# ----------------------------------------------------------------------- in this process
+
+
+def planner_rows() -> list[dict]:
+    f = quick_figures(repeats=3)
+    n = f"median of {f['repeats']}"
+    w, ratio = f["dense_auto_wall_s"], f["dense_auto_ratio_max"]
+    return [
+        row("example: plan() wall", "issue 30", "<= 0.1 s", f"{f['example_wall_s']:.3f} s",
+            f["example_wall_s"] <= 0.1, value=f["example_wall_s"], limit_value=0.1, note=n),
+        row("example: Plan.seconds (planning time)", "issue 19, planner.py",
+            "<= 0.2 s", f"{f['example_plan_seconds']:.3f} s", f["example_plan_seconds"] <= 0.2,
+            value=f["example_plan_seconds"], limit_value=0.2, note=n),
+        row(f"{f['ten_uavs_scenario']} ({f['ten_uavs_count']} UAVs): Plan.seconds",
+            "issue 19, planner.py", "<= 1 s", f"{f['ten_uavs_plan_seconds']:.3f} s",
+            f["ten_uavs_plan_seconds"] <= 1.0, value=f["ten_uavs_plan_seconds"],
+            limit_value=1.0, note=n),
+        row("example: plan() wall, paper's settings",
+            "issue 3", "<= 0.3 s", f"{f['paper_settings_wall_s']:.3f} s",
+            f["paper_settings_wall_s"] <= 0.3, value=f["paper_settings_wall_s"],
+            limit_value=0.3,
+            note=f"{n}, seeds 0..{f['repeats'] - 1}; 100 students, 10 wp, 150 it."),
+        row("cost: paths/s, 3 UAVs, 10 wp, 6 trees", "issue 3",
+            ">= 150,000 /s", f"{f['evaluations_per_s']:,.0f} /s",
+            f["evaluations_per_s"] >= 150_000, value=f["evaluations_per_s"],
+            limit_value=150_000, note=f"best of {f['repeats']} x 0.3 s"),
+        row("dense 100 trees, auto wp: plan() wall", "issue 30", "<= 1.5 s",
+            f"{w:.2f} s", w <= 1.5, value=w, limit_value=1.5,
+            note=f"{n}, seeds 0..{f['repeats'] - 1}"),
+        row("dense 100 trees, auto wp: length/bound", "issue 30", "<= 1.001",
+            f"{ratio:.4f}", ratio <= 1.001, value=ratio, limit_value=1.001,
+            note=f"worst seed; feasible {f['dense_auto_feasible']}/{f['repeats']}"),
+        row("dense 100 trees, auto wp: wall; length/bound", "issue 13",
+            "< 2 s; <= 1.01", f"{w:.2f} s; {ratio:.4f}", w < 2.0 and ratio <= 1.01,
+            value=w, limit_value=2.0, note="the same runs"),
+    ]
+
+
+def flown_path_rows(repeats: int = 7) -> list[dict]:
+    """``fly_path`` on the example's first UAV path out and back (a flight of some 50 s),
+    as ``plan()`` calls it, and with the compiled loop forced: median of ``repeats`` after
+    one warm-up call each, in milliseconds per 60 s flown."""
+    from ftlbo_mav.ardupilot import flight_path
+    from ftlbo_mav.planning.planner import plan
+    from ftlbo_mav.scenario import load_scenario
+
+    path = plan(load_scenario(EXAMPLE)).uav_paths[0]
+    points = np.vstack([path, path[-2::-1]])
+
+    def timed() -> tuple[float, float]:
+        flown = flight_path.fly_path(points)  # warm-up
+        walls = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            flight_path.fly_path(points)
+            walls.append(time.perf_counter() - t0)
+        return statistics.median(walls), flown.seconds
+
+    wall, flown_s = timed()
+    stepwise_up_to = flight_path.STEPWISE_UP_TO_S
+    flight_path.STEPWISE_UP_TO_S = 0.0
+    try:
+        compiled, _ = timed()
+    finally:
+        flight_path.STEPWISE_UP_TO_S = stepwise_up_to
+    per_60 = wall * 1e3 * 60.0 / flown_s
+    compiled_60 = compiled * 1e3 * 60.0 / flown_s
+    return [
+        row("prediction: 60 s flight, 1 UAV (fly_path)",
+            "issue 30", "<= 12 ms", f"{per_60:.1f} ms", per_60 <= 12.0, value=per_60,
+            limit_value=12.0,
+            note=f"{wall * 1e3:.1f} ms for {flown_s:.1f} s flown (the example's uav1 out "
+                 f"and back), median of {repeats}"),
+        row("prediction: the same, compiled loop forced", "issue 30",
+            "<= 12 ms", f"{compiled_60:.1f} ms", compiled_60 <= 12.0, value=compiled_60,
+            limit_value=12.0, note=f"STEPWISE_UP_TO_S = 0; fly_path flies <= {stepwise_up_to:g} "
+                                   "s (length/speed) stepwise"),
+    ]
+
+
+def link_rows(seeds: int = 30) -> list[dict]:
+    from link import virtual_time
+
+    cases = virtual_time(seeds)
+    total = seeds * len(cases)
+    done = sum(c["ours_completed"] for c in cases)
+    plain = sum(c["plain_completed"] for c in cases)
+    ratios = [c["ours_mean_s"] / c["plain_mean_s"] for c in cases
+              if c["plain_mean_s"] and c["ours_mean_s"] is not None]
+    names = ", ".join(c["link"] for c in cases)
+    return [
+        row("upload 15 items under loss: completed", "issue 4, link.py", f"{total}/{total}",
+            f"{done}/{total}", done == total, value=done, limit_value=total,
+            note=f"virtual time, {seeds} seeds of each: {names}"),
+        row("upload under loss: ours vs plain uploader", "issue 4, link.py",
+            "faster, more done", f"ours/plain {min(ratios):.2f}-{max(ratios):.2f}",
+            len(ratios) == len(cases) and max(ratios) <= 1.0 and done > plain,
+            value=max(ratios) if ratios else None, limit_value=1.0,
+            note=f"mean s of completed uploads; plain completed {plain}/{total}"),
+    ]
+
+
+# ----------------------------------------------------------------------- orchard
+
+
+ORCHARD_GOALS = [("orchard 5000 trees", "orchard survey, ~5,000 trees, 3 UAVs", 30.0),
+                 ("orchard 20000 trees", "orchard survey, 20,000 trees, 3 UAVs", 120.0)]
+
+
+def orchard_rows(*, deadline: float) -> list[dict]:
+    def missing(why: str) -> list[dict]:
+        return [row(goal, "issue 30", f"<= {limit:g} s", "not measured", None,
+                    status="not measured", limit_value=limit, note=why)
+                for _, goal, limit in ORCHARD_GOALS]
+
+    if not ORCHARD.exists():
+        return missing("benchmarks/orchard.py missing")
+    left = deadline - time.monotonic()
+    if left < sum(limit for _, _, limit in ORCHARD_GOALS):
+        return missing("5-minute budget spent: --all runs it")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "orchard.json"
+        try:
+            proc = subprocess.run([sys.executable, str(ORCHARD), "--quick", "--json", str(out)],
+                                  cwd=ROOT, capture_output=True, text=True, timeout=left)
+        except subprocess.TimeoutExpired:
+            return missing(f"benchmarks/orchard.py timeout > {left:.0f} s")
+        if proc.returncode != 0 or not out.exists():
+            last = (proc.stdout + proc.stderr).strip().splitlines()[-1:] or [""]
+            return missing(f"benchmarks/orchard.py exit {proc.returncode}: {last[0][:60]}")
+        entries = {e["what"]: e for e in json.loads(out.read_text())}
+    rows = []
+    for what, goal, limit in ORCHARD_GOALS:
+        e = entries.get(what)
+        if e is None:
+            rows += [r for r in missing(f"no entry {what!r} in orchard.py's JSON")
+                     if r["goal"] == goal]
+            continue
+        s, mib = float(e["seconds"]), float(e["peak_rss_mib"])
+        rows.append(row(goal, "issue 30", f"<= {limit:g} s", f"{s:.2f} s", s <= limit,
+                        value=s, limit_value=limit, peak_rss_mib=mib,
+                        note="benchmarks/orchard.py --quick"))
+    return rows
+
+
+# ----------------------------------------------------------------------- the report
+
+
+def memory_row(rows: list[dict]) -> dict:
+    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    peaks = [(r["peak_rss_mib"], r["goal"]) for r in rows if r["peak_rss_mib"] is not None]
+    peaks.append((own, "this process (plan() rows)"))
+    mib, where = max(peaks)
+    return row("peak memory (RSS), every process measured", "issue 30", "< 2048 MiB",
+               f"{mib:.0f} MiB", mib < MEMORY_MIB, value=mib, limit_value=MEMORY_MIB,
+               note=f"largest: {where}")
+
+
+def printed(doc: dict) -> str:
+    def mib(v):
+        return f"{v:.0f}" if v is not None else ""
+
+    rows = [[r["goal"], r["source"], r["limit"], r["measured"], mib(r["peak_rss_mib"]),
+             r["status"].upper() if r["status"] == "missed" else r["status"], r["note"]]
+            for r in doc["rows"]]
+    counts = {s: sum(r["status"] == s for r in doc["rows"])
+              for s in ("met", "missed", "not measured")}
+    others = len(doc["rows"]) - sum(counts.values())
+    return "\n".join([
+        f"load average at start (1/5/15 min): {' '.join(map(str, doc['load_start']))}; "
+        f"{doc['cpus']} CPUs",
+        "",
+        "\n".join(line.rstrip() for line in table(
+            ["goal", "source", "limit", "measured", "peak RSS MiB", "result", "note"], rows,
+            left=(0, 1, 5, 6)).splitlines()),
+        "",
+        f"{counts['met']} met, {counts['missed']} missed, {counts['not measured']} not "
+        f"measured, {others} not run here (SITL / flights)",
+        f"load average at end (1/5/15 min): {' '.join(map(str, doc['load_end']))}; "
+        f"{doc['seconds']:.0f} s in all",
+    ])
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", metavar="FILE", help="also write the rows as JSON")
+    parser.add_argument("--strict", action="store_true", help="exit 1 when a goal is missed")
+    parser.add_argument("--all", action="store_true",
+                        help="no 5-minute budget: every row runs (up to --timeout each)")
+    parser.add_argument("--timeout", type=float, default=120.0,
+                        help="seconds before a plan process is killed (default 120)")
+    args = parser.parse_args()
+    t0 = time.monotonic()
+    deadline = t0 + (BUDGET_S if not args.all else 3600.0)
+    doc = {"load_start": load(), "cpus": os.cpu_count(), "python": sys.version.split()[0]}
+    print(f"load average at start: {' '.join(map(str, doc['load_start']))}", flush=True)
+    rows = []
+    print("plan() in this process ...", flush=True)
+    rows += planner_rows()
+    print("flown-path prediction ...", flush=True)
+    rows += flown_path_rows()
+    print("mission upload, virtual time ...", flush=True)
+    rows += link_rows()
+    print("plan processes, 20 trees ...", flush=True)
+    rows += plan_rows(TWENTY_TREES, timeout_s=args.timeout, deadline=deadline)
+    print("orchard ...", flush=True)
+    rows += orchard_rows(deadline=deadline)
+    print("plan processes, 320 trees ...", flush=True)
+    rows += plan_rows(DENSE, timeout_s=args.timeout, deadline=deadline)
+    rows.append(memory_row(rows))
+    rows += [row(goal, source, limit, "-", None, status=status, note=note)
+             for goal, source, limit, status, note in NOT_RUN]
+    doc["rows"] = rows
+    doc["load_end"] = load()
+    doc["seconds"] = time.monotonic() - t0
+    print()
+    print(printed(doc))
+    if args.json:
+        Path(args.json).write_text(json.dumps(doc, indent=1) + "\n")
+        print(f"wrote {args.json}")
+    return 1 if args.strict and any(r["status"] == "missed" for r in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
