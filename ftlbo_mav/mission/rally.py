@@ -271,8 +271,7 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
     lo, hi = chunk.min(axis=0), chunk.max(axis=0)
     hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
     if hit.any():
-        d = segment_distance(chunk[:, None], line_a[hit][None], line_b[hit][None])
-        ok &= d.min(axis=1) >= sep
+        ok &= _clear_of_lines(chunk, line_a[hit], line_b[hit], sep)
     live = np.flatnonzero(ok)
     i, step = 0, 4
     while i < len(live):
@@ -282,6 +281,23 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
             return int(live[i + int(np.argmax(good))])
         i, step = i + len(sub), 2 * step
     return None
+
+
+COMPILED_FROM = 1_000_000
+"""Candidate x line pairs from which :func:`_clear_of_lines` runs compiled (a survey's
+return lines are tens of thousands of segments; numba's start-up, 0.3 s, costs more
+than smaller searches take)."""
+
+
+def _clear_of_lines(q: np.ndarray, a: np.ndarray, b: np.ndarray, sep: float) -> np.ndarray:
+    """``(C,)`` whether each of the points ``q (C, 2)`` keeps ``sep`` from every segment
+    ``a``-``b`` ``(S, 2)``."""
+    if len(q) * len(a) >= COMPILED_FROM:
+        from ._rally_jit import clear_of_segments
+
+        return clear_of_segments(np.ascontiguousarray(q, float), np.ascontiguousarray(a, float),
+                                 np.ascontiguousarray(b, float), float(sep))
+    return segment_distance(q[:, None], a[None], b[None]).min(axis=1) >= sep
 
 
 def _own_lines_clear(cand: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,

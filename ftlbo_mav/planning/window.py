@@ -39,11 +39,11 @@ from .problem import PlanningProblem
 
 WINDOW_FROM = 200
 """Cylinders from which legs are planned in their windows (below: among all)."""
-WINDOW_SLACK = 0.02
+WINDOW_SLACK = 0.005
 """The reach is this much longer than the shortest route (relative), so that plans a
 little longer than the bound (``waypoints = "auto"`` keeps them within 0.5%) lie in the
 window too."""
-WINDOW_MIN_M = 2.0
+WINDOW_MIN_M = 1.0
 """And at least this much longer (metres): short legs get room to bend."""
 MAX_WIDENINGS = 8
 """Times the reach is widened at most before the window is the whole problem."""
