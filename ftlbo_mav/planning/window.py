@@ -34,7 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .geometric import Discs, Route, centroid_rectangle, formation_discs, segments_clear
+from .geometric import Discs, Route, centroid_rectangle, segments_clear
 from .problem import PlanningProblem
 
 WINDOW_FROM = 200
@@ -101,14 +101,21 @@ def _all(problem: PlanningProblem) -> Window:
     return Window(problem, np.arange(len(problem.radii)), math.inf)
 
 
+def every_disc(problem: PlanningProblem) -> Discs:
+    """Every formation disc of ``problem``, none left out (:func:`.geometric.formation_discs`
+    drops the ones that change no route, at a cost; a segment clear of these is clear of
+    those)."""
+    N, K = problem.uav_count, len(problem.radii)
+    axes = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(-1, 2)
+    return Discs(axes, np.tile(problem.radii, N), np.tile(np.arange(K), N),
+                 np.repeat(np.arange(N), K))
+
+
 def straight_clear(problem: PlanningProblem) -> bool:
     """Whether the formation flies from start to goal in a straight line without
     entering any cylinder's disc (every UAV's segment against every cylinder)."""
-    axes = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(-1, 2)
-    radii = np.tile(problem.radii, problem.uav_count)
-    none = np.zeros(len(radii), int)
     return bool(segments_clear(problem.start[None, :2], problem.goal[None, :2],
-                               Discs(axes, radii, none, none))[0])
+                               every_disc(problem))[0])
 
 
 def leg_window(problem: PlanningProblem, *, routes, count: int = 1) -> Window:
@@ -126,7 +133,7 @@ def leg_window(problem: PlanningProblem, *, routes, count: int = 1) -> Window:
     rect_lo, rect_hi = centroid_rectangle(problem)
     if _inside(a, rect_lo, rect_hi) and _inside(b, rect_lo, rect_hi) and straight_clear(problem):
         window = cut(problem, _reach(straight))
-        line = Route(straight, np.array([a, b]), (None,), formation_discs(window.problem))
+        line = Route(straight, np.array([a, b]), (None,), every_disc(window.problem))
         return replace(window, routes=[line])
     reach = _reach(straight)
     for _ in range(MAX_WIDENINGS):
