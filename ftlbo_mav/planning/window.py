@@ -44,7 +44,9 @@ WINDOW_SLACK = 0.005
 little longer than the bound (``waypoints = "auto"`` keeps them within 0.5%) lie in the
 window too."""
 WINDOW_MIN_M = 1.0
-"""And at least this much longer (metres): short legs get room to bend."""
+"""And at least this much longer (metres): short legs get room to bend. A leg whose
+straight line is clear has that line for its route, and its window reaches this much
+beyond the line's length alone (the plans kept lie along the line)."""
 MAX_WIDENINGS = 8
 """Times the reach is widened at most before the window is the whole problem."""
 
@@ -132,7 +134,8 @@ def leg_window(problem: PlanningProblem, *, routes, count: int = 1) -> Window:
     straight = float(np.hypot(*(b - a)))
     rect_lo, rect_hi = centroid_rectangle(problem)
     if _inside(a, rect_lo, rect_hi) and _inside(b, rect_lo, rect_hi) and straight_clear(problem):
-        window = cut(problem, _reach(straight))
+        # the route is the line whatever the window; the plans kept lie along it
+        window = cut(problem, straight + WINDOW_MIN_M)
         line = Route(straight, np.array([a, b]), (None,), every_disc(window.problem))
         return replace(window, routes=[line])
     reach = _reach(straight)
@@ -158,8 +161,9 @@ def leg_sizes(problem: PlanningProblem, points: np.ndarray) -> tuple[np.ndarray,
     K = len(problem.radii)
     if K < WINDOW_FROM:
         return np.full(len(legs), K), straight
-    return np.array([len(cut(leg, _reach(float(np.hypot(*(leg.goal[:2] - leg.start[:2])))))
-                         .kept) for leg in legs]), straight
+    reach = [float(np.hypot(*(leg.goal[:2] - leg.start[:2]))) for leg in legs]
+    reach = [r + WINDOW_MIN_M if clear else _reach(r) for r, clear in zip(reach, straight)]
+    return np.array([len(cut(leg, r).kept) for leg, r in zip(legs, reach)]), straight
 
 
 def _reach(length: float) -> float:
