@@ -6,18 +6,18 @@ from ``a`` to ``b`` of length at most ``L`` lies inside the ellipse with foci ``
 ``b`` whose points have ``|p - a| + |p - b| <= L``. The window of reach ``L`` is the
 leg's problem with
 
-- only the cylinders one of whose formation discs (:func:`.geometric.formation_discs`:
-  centre ``c_k - offset_n``, radius ``R_k``) can meet that ellipse
-  (``|c - a| + |c - b| <= L + 2 R``, the triangle inequality), and
 - the area cut down to the ellipse's bounding box (the centroid's box, the UAVs' area
-  around it), so the optimizer's waypoints, and with them every candidate's segments,
-  stay inside it.
+  around it), so the optimizer's waypoints, and with them every candidate's segments
+  (the box is convex and holds start and goal), stay inside it, and
+- only the cylinders one of whose formation discs (:func:`.geometric.formation_discs`:
+  centre ``c_k - offset_n``, radius ``R_k``) reaches into that box.
 
-For paths no longer than ``L`` the window and the whole problem agree on every
-obstacle. So when the window's shortest route is at most ``L`` long it is the whole
-problem's shortest route, and the lower bound is exact (:func:`leg_window` widens the
-reach until it is). A plan of the leg that is longer than ``L`` may pass an obstacle the
-window left out; its feasibility is therefore always judged on the whole problem.
+For every path inside the box the window and the whole problem agree on every
+obstacle: a candidate is clear in the window exactly when it is clear. Paths no longer
+than ``L`` lie in the ellipse, so in the box: when the window's shortest route is at
+most ``L`` long it is the whole problem's shortest route, and the lower bound is exact
+(:func:`leg_window` widens the reach until it is). A plan's feasibility is still judged
+on the whole problem (after :mod:`.predicted` moves corners, a point may leave the box).
 
 The safety term of the cost (the paper's eq. 9, a mean of ``R/d`` over the obstacles)
 is then the mean over the window's obstacles: the ones the leg's candidates can come
@@ -47,6 +47,10 @@ WINDOW_MIN_M = 1.0
 """And at least this much longer (metres): short legs get room to bend. A leg whose
 straight line is clear has that line for its route, and its window reaches this much
 beyond the line's length alone (the plans kept lie along the line)."""
+WINDOW_SHARE = 0.5
+"""A leg whose straight line is blocked is planned among all cylinders when its window
+would still hold more than this share of them (its route then needs one tangent graph,
+not one per widening)."""
 MAX_WIDENINGS = 8
 """Times the reach is widened at most before the window is the whole problem."""
 
@@ -84,13 +88,13 @@ def ellipse_box(a: np.ndarray, b: np.ndarray, reach: float) -> tuple[np.ndarray,
 
 def cut(problem: PlanningProblem, reach: float) -> Window:
     """The window of ``problem``'s leg (start to goal) of reach ``reach`` metres."""
-    a, b = problem.start[:2], problem.goal[:2]
-    axes = problem.centres[None, :, :] - problem.offsets[:, None, :2]  # (N, K, 2)
-    ends = np.hypot(*(axes - a).transpose(2, 0, 1)) + np.hypot(*(axes - b).transpose(2, 0, 1))
-    kept = np.flatnonzero((ends <= reach + 2.0 * problem.radii).any(axis=0))
-    lo, hi = ellipse_box(a, b, reach)
+    lo, hi = ellipse_box(problem.start, problem.goal, reach)
     rect_lo, rect_hi = centroid_rectangle(problem)
     lo, hi = np.maximum(lo, rect_lo), np.minimum(hi, rect_hi)
+    # every cylinder one of whose formation discs reaches into the centroid's box
+    axes = problem.centres[None, :, :] - problem.offsets[:, None, :2]  # (N, K, 2)
+    gap = np.maximum(np.maximum(lo - axes, axes - hi), 0.0)
+    kept = np.flatnonzero((np.hypot(gap[..., 0], gap[..., 1]) < problem.radii).any(axis=0))
     # the UAVs' area around the centroid's box (PlanningProblem.bounds takes it back off)
     off_lo, off_hi = problem.offsets.min(axis=0)[:2], problem.offsets.max(axis=0)[:2]
     sub = replace(problem, centres=problem.centres[kept], radii=problem.radii[kept],
@@ -141,6 +145,8 @@ def leg_window(problem: PlanningProblem, *, routes, count: int = 1) -> Window:
     reach = _reach(straight)
     for _ in range(MAX_WIDENINGS):
         window = cut(problem, reach)
+        if len(window.kept) > WINDOW_SHARE * len(problem.radii):
+            break  # hardly smaller than the whole: a graph here and another there cost more
         found = routes(window.problem, count)
         if found and found[0].length * (1 + WINDOW_SLACK) <= reach + 1e-9:
             return replace(window, routes=found)
@@ -163,7 +169,8 @@ def leg_sizes(problem: PlanningProblem, points: np.ndarray) -> tuple[np.ndarray,
         return np.full(len(legs), K), straight
     reach = [float(np.hypot(*(leg.goal[:2] - leg.start[:2]))) for leg in legs]
     reach = [r + WINDOW_MIN_M if clear else _reach(r) for r, clear in zip(reach, straight)]
-    return np.array([len(cut(leg, r).kept) for leg, r in zip(legs, reach)]), straight
+    kept = np.array([len(cut(leg, r).kept) for leg, r in zip(legs, reach)])
+    return np.where(~straight & (kept > WINDOW_SHARE * K), K, kept), straight
 
 
 def _reach(length: float) -> float:
