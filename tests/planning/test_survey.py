@@ -227,3 +227,13 @@ def test_the_shipped_survey_has_lanes_trees_and_the_papers_triangle():
     assert len(s.survey.lanes) % 2 == 1
     route = s.route_enu()
     assert np.hypot(*(route[-1, :2] - route[-2, :2])) < 2.0
+
+
+def test_a_width_a_hair_over_whole_spacings_gets_no_lane_more():
+    # 420 m between the outer lanes' lines at spacing 7 is 61 lanes; a millimetre more
+    # (a corner's lat/lon rounding) is still 61, 1 cm more (over 0.1% of a spacing) is 62
+    for width, lanes in ((420.0, 61), (420.001, 61), (420.01, 62), (419.9, 61)):
+        offsets = lane_offsets(lower=np.array([0.0, 0.0]), upper=np.array([width, 100.0]),
+                               spacing_m=7.0, heading_deg=0.0)
+        assert len(offsets) == lanes, (width, len(offsets))
+        assert lane_spacing(offsets) <= 7.0 * (1 + 1e-3)
