@@ -1,9 +1,11 @@
 """``plan(scenario) -> Plan``: the centroid path, every UAV's path, cost and feasibility.
 
 A scenario's route runs start -> via points -> goal; each leg between two route points
-is planned on its own (:func:`plan_leg`) and the legs are joined into one path
-(:func:`combine`). Pure computation: no files, no printing (progress goes to optional
-callbacks).
+is planned on its own (:func:`plan_leg`; among many trees in its window, :mod:`.window`)
+and the legs are joined into one path (:func:`combine`). Every plan then goes through
+one loop, :func:`until_kept`: plan, predict the flown path, repair what the prediction
+found (corner stops, a survey swinging out of the area), until kept. Pure computation:
+no files, no printing (progress goes to optional callbacks).
 """
 
 from __future__ import annotations
@@ -199,30 +201,81 @@ def plan(
     settings = replace(settings, **{k: v for k, v in overrides.items() if v is not None})
     _check_settings(settings)
     check_size(scenario, settings)
-    best = _plan_replanning(scenario, settings, progress=progress, notice=notice, on_leg=on_leg)
+    base = problem_from_scenario(scenario, waypoints=_count(settings))
+
+    def attempt(current: Scenario, widened: np.ndarray, first: bool) -> Plan:
+        problem = problem_from_scenario(current, waypoints=_count(settings)) \
+            if current is not scenario else base
+        legs = _plan_legs(current, settings, replace(problem, radii=problem.radii + widened),
+                          progress=progress if first else None,
+                          notice=notice if first else None, on_leg=on_leg if first else None)
+        return fly_as_arducopter(combine(current, settings, legs))
+
+    return until_kept(scenario, len(base.radii), attempt)
+
+
+Attempt = Callable[[Scenario, np.ndarray, bool], Plan]
+"""``attempt(scenario, widened, first)``: the route of ``scenario`` planned with its
+obstacles ``widened`` ``(K,)`` metres, judged on the flown path (:func:`fly_as_arducopter`);
+``first``: the first attempt (the one that reports progress)."""
+
+
+def until_kept(scenario: Scenario, obstacles: int, attempt: Attempt, *,
+               relay: bool = True) -> Plan:
+    """Plan, predict, repair, until kept: the one loop every plan goes through.
+
+    1. ``attempt``: plan the route and predict its flown path (the corners the copters
+       cut moved, or made stops, until the clearance is kept);
+    2. keep the best plan so far (:func:`_better`: feasible, fewer corner stops, shorter
+       flight);
+    3. repair what the prediction found, the first that applies, and go to 1:
+
+       - corners where the copters had to stop: the obstacles they fell short of are
+         widened by that much, so the polyline keeps away from them and its corners can
+         be flown through (at most :data:`REPLANS` times);
+       - a survey whose copters swing out of the area where they turn into or out of a
+         lane: the lanes are laid that much (and :data:`SURVEY_RELAY_MARGIN_M`) further in
+         (at most :data:`SURVEY_RELAYS` times, and only while the plans get better);
+
+       else stop. The plan kept carries every attempt's ``seconds``, the re-plans made
+    (``replans``) and how far in its lanes were laid (``lanes_inset_m``).
+    """
+    current, widened = scenario, np.zeros(obstacles)
     inset_lo, inset_hi = np.zeros(2), np.zeros(2)
-    for _ in range(SURVEY_RELAYS):
-        out_lo, out_hi = _area_excursion(best)
-        if scenario.survey is None or not scenario.survey.lanes or (
-                out_lo.max() <= 0 and out_hi.max() <= 0):
+    best: Plan | None = None
+    replans = relays = 0
+    seconds = 0.0
+    relaid = False
+    while True:
+        result = attempt(current, widened, best is None)
+        seconds += result.seconds
+        result = replace(result, replans=replans,
+                         lanes_inset_m=float(max(inset_lo.max(), inset_hi.max())))
+        better = best is None or _better(result, best)
+        if better:
+            best = result
+        elif relaid:  # laying the lanes further in did not help: keep what was best
             break
-        # the copters swing out of the area where they turn into or out of a lane: the
-        # lanes are laid that much (and a little) further in, and the route planned again
-        inset_lo = inset_lo + np.where(out_lo > 0, out_lo + SURVEY_RELAY_MARGIN_M, 0.0)
-        inset_hi = inset_hi + np.where(out_hi > 0, out_hi + SURVEY_RELAY_MARGIN_M, 0.0)
-        relaid = relay_lanes(scenario, inset_lower_m=inset_lo, inset_upper_m=inset_hi)
-        again = _plan_replanning(relaid, settings, progress=None, notice=None, on_leg=None)
-        again = replace(again, seconds=again.seconds + best.seconds,
-                        lanes_inset_m=float(max(inset_lo.max(), inset_hi.max())))
-        if not _better(again, best):
-            break
-        best, scenario = again, relaid
-    return best
+        stopped = result.stopped_for
+        if (replans < REPLANS and result.corner_stops and stopped is not None
+                and stopped.any()):
+            widened, replans, relaid = widened + stopped, replans + 1, False
+            continue
+        out_lo, out_hi = _area_excursion(result)
+        if (relay and relays < SURVEY_RELAYS and current.survey is not None
+                and current.survey.lanes and (out_lo.max() > 0 or out_hi.max() > 0)):
+            inset_lo = inset_lo + np.where(out_lo > 0, out_lo + SURVEY_RELAY_MARGIN_M, 0.0)
+            inset_hi = inset_hi + np.where(out_hi > 0, out_hi + SURVEY_RELAY_MARGIN_M, 0.0)
+            current = relay_lanes(scenario, inset_lower_m=inset_lo, inset_upper_m=inset_hi)
+            relays, relaid = relays + 1, True
+            continue
+        break
+    return replace(best, seconds=seconds, replans=max(best.replans, replans))
 
 
 SURVEY_RELAYS = 2
 """Times at most the survey's lanes are laid again, further inside the area, when the
-copters are predicted to swing out of it (:func:`plan`)."""
+copters are predicted to swing out of it (:func:`until_kept`)."""
 SURVEY_RELAY_MARGIN_M = 0.05
 
 
@@ -233,42 +286,6 @@ def _area_excursion(p: Plan) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(2), np.zeros(2)
     beyond = beyond_area(p.problem, p.prediction.positions).reshape(-1, 4).max(axis=0)
     return beyond[:2], beyond[2:]
-
-
-def _plan_replanning(scenario: Scenario, settings: PlannerSettings, *,
-                     progress: Progress | None, notice: Callable[[str], None] | None,
-                     on_leg: LegDone | None) -> Plan:
-    """The route planned, judged on the flown path, and planned again (at most
-    :data:`REPLANS` times) while the copters had to stop at corners."""
-    base = problem_from_scenario(scenario, waypoints=_count(settings))
-
-    def attempt(problem: PlanningProblem, quiet: bool) -> Plan:  # progress once, first plan
-        legs = _plan_legs(scenario, settings, problem, progress=None if quiet else progress,
-                          notice=None if quiet else notice, on_leg=None if quiet else on_leg)
-        return fly_as_arducopter(combine(scenario, settings, legs))
-
-    return _replanning(base, attempt)
-
-
-def _replanning(base: PlanningProblem, attempt: Callable[[PlanningProblem, bool], Plan]) -> Plan:
-    """``attempt(problem, quiet)`` on ``base``, then again (at most :data:`REPLANS` times)
-    with the obstacles widened by what the corner stops fell short of them, while there
-    were stops; the best plan, its ``seconds`` all of theirs."""
-    extra = np.zeros(len(base.radii))
-    best: Plan | None = None
-    for k in range(REPLANS + 1):
-        result = attempt(replace(base, radii=base.radii + extra), k > 0)
-        replans = replace(result, replans=k, seconds=result.seconds
-                          + (best.seconds if best is not None else 0.0))
-        if best is None or _better(replans, best):
-            best = replans
-        else:
-            best = replace(best, seconds=replans.seconds, replans=k)
-        stopped = result.stopped_for
-        if result.corner_stops == 0 or stopped is None or not stopped.any():
-            break
-        extra = extra + stopped
-    return best
 
 
 REPLANS = 2
@@ -468,13 +485,13 @@ def solve(
     # problem's radii include the scenario's clearance and allowance (problem_from_scenario)
     own = problem.radii - scenario.clearance_m - scenario.mission.corner_allowance_m
 
-    def attempt(widened: PlanningProblem, quiet: bool) -> Plan:
+    def attempt(_scenario: Scenario, widened: np.ndarray, first: bool) -> Plan:
         rng = np.random.default_rng(settings.seed)
-        leg = plan_leg(widened, settings, rng=rng, progress=None if quiet else progress,
-                       notice=None if quiet else notice)
+        leg = plan_leg(replace(problem, radii=problem.radii + widened), settings, rng=rng,
+                       progress=progress if first else None, notice=notice if first else None)
         return fly_as_arducopter(combine(scenario, settings, [leg]), own_radii=own)
 
-    return _replanning(problem, attempt)
+    return until_kept(scenario, len(problem.radii), attempt, relay=False)
 
 
 def plan_leg(
