@@ -28,6 +28,9 @@ airframe's drag, outside it in turns, past it where it stops (0.4-0.9 m on SITL 
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,7 +48,34 @@ SETTLED_M, SETTLED_M_S, SETTLE_BUDGET_S = 0.01, 0.02, 15.0
 STEPWISE_UP_TO_S = 60.0
 """Flights expected to last up to this many seconds (length over speed, and the holds)
 are flown stepwise, not compiled: numba's start-up in a new process
-(about 0.3 s) is what the stepwise loop takes for some 200 s of flight."""
+(about 0.3 s) is what the stepwise loop takes for some 200 s of flight. Inside
+:func:`stepwise_budget` the seconds are counted over all the flights flown there."""
+
+_STEPWISE_LEFT: ContextVar[float | None] = ContextVar("stepwise_left", default=None)
+
+
+@contextmanager
+def stepwise_budget(seconds: float = STEPWISE_UP_TO_S) -> Iterator[None]:
+    """Within: flights are flown stepwise while together they are expected to last at
+    most ``seconds``, and compiled from the first that would go over (one plan, which
+    predicts its flights again and again while it keeps the clearance, pays numba's
+    start-up once the stepwise loop would cost more). What the flights before did
+    inside, not what the process did before, decides; the two loops fly the same path
+    (within 1e-6 m, ``tests/ardupilot/test_compiled.py``)."""
+    token = _STEPWISE_LEFT.set(seconds)
+    try:
+        yield
+    finally:
+        _STEPWISE_LEFT.reset(token)
+
+
+def _stepwise(expected_s: float) -> bool:
+    """Whether a flight expected to last ``expected_s`` is flown stepwise (and counted)."""
+    left = _STEPWISE_LEFT.get()
+    if left is None:
+        return expected_s <= STEPWISE_UP_TO_S
+    _STEPWISE_LEFT.set(left - expected_s if expected_s <= left else 0.0)
+    return expected_s <= left
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,14 +129,15 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
 
     The model's arithmetic, compiled (:mod:`.compiled`): the same path as
     :func:`fly_path_stepwise` flies with the model's objects, 40 times faster; a short
-    flight (up to :data:`STEPWISE_UP_TO_S`) is flown stepwise, since numba's start-up
-    costs more than that (the choice is by size alone, so a plan never depends on what
-    the process did before)."""
+    flight (up to :data:`STEPWISE_UP_TO_S`, or within what is left of a
+    :func:`stepwise_budget`) is flown stepwise, since numba's start-up costs more than
+    that (the choice is by size, so a plan never depends on what the process did
+    before)."""
     points, holds = _checked(points, holds_s)
     desired = WaypointNav(nav, points[0].copy(), speed_m_s).desired_speed
     budget = _budget(points, holds, nav, desired, dt)
     length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
-    if length / desired + holds.sum() <= STEPWISE_UP_TO_S:
+    if _stepwise(length / desired + float(holds.sum())):
         return fly_path_stepwise(points, nav=nav, speed_m_s=speed_m_s, holds_s=holds, dt=dt,
                                  airframe=airframe)
     from . import compiled

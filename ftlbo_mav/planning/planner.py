@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..ardupilot.flight_path import stepwise_budget
 from ..errors import BadInput
 from ..scenario import AUTO, PlannerSettings, Scenario, relay_lanes
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
@@ -240,6 +241,11 @@ def until_kept(scenario: Scenario, obstacles: int, attempt: Attempt, *,
        else stop. The plan kept carries every attempt's ``seconds``, the re-plans made
     (``replans``) and how far in its lanes were laid (``lanes_inset_m``).
     """
+    with stepwise_budget():  # every flight this plan predicts counts toward one budget
+        return _until_kept(scenario, obstacles, attempt, relay=relay)
+
+
+def _until_kept(scenario: Scenario, obstacles: int, attempt: Attempt, *, relay: bool) -> Plan:
     current, widened = scenario, np.zeros(obstacles)
     inset_lo, inset_hi = np.zeros(2), np.zeros(2)
     best: Plan | None = None
