@@ -51,3 +51,28 @@ def test_a_mission_too_long_for_its_budget_is_refused_alike():
         fly_path(points, speed_m_s=5.0, dt=0.02, holds_s=[0, -1e6])
     with pytest.raises(RuntimeError, match="not flown within"):
         fly_path_stepwise(points, speed_m_s=5.0, dt=0.02, holds_s=[0, -1e6])
+
+
+def test_a_plans_flights_share_one_stepwise_budget(monkeypatch):
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    stepwise = []
+    real = fp.fly_path_stepwise
+
+    def counted(*args, **kwargs):
+        stepwise.append(True)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(fp, "fly_path_stepwise", counted)
+    points = np.array([[0.0, 0.0, 5.0], [40.0, 0.0, 5.0]])  # 40 m at 10 m/s: 4 s expected
+    alone = [fp.fly_path(points, speed_m_s=10.0) for _ in range(3)]
+    assert len(stepwise) == 3  # alone, each is short: stepwise
+    stepwise.clear()
+    with fp.stepwise_budget(10.0):
+        inside = [fp.fly_path(points, speed_m_s=10.0) for _ in range(4)]
+    assert len(stepwise) == 2  # 4 s + 4 s fit in 10 s; the third and after are compiled
+    for a, b in zip(alone, inside):
+        _same(a, b)
+    stepwise.clear()
+    fp.fly_path(points, speed_m_s=10.0)
+    assert len(stepwise) == 1  # outside the budget again: by the flight's size
