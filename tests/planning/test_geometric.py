@@ -278,3 +278,21 @@ def test_a_large_formation_keeps_only_the_rim_of_each_blob_and_the_same_route():
     dist, _, _ = graph.dijkstra(0)
     route = shortest_route(problem)
     assert route is not None and route.length == pytest.approx(dist[1], rel=1e-9)
+
+
+def test_the_grid_finds_the_same_touching_pairs_as_the_sort():
+    from ftlbo_mav.planning import geometric as G
+
+    rng = np.random.default_rng(5)
+    for count, side in ((2500, 400.0), (3000, 60.0)):  # sparse, and piled on each other
+        centres = rng.uniform(0.0, side, (count, 2))
+        radii = rng.uniform(0.5, 5.0, count)
+        i, j = G._touching_pairs_grid(centres, radii)
+        order = np.argsort(centres[:, 0], kind="stable")  # the sort by east, as below
+        xs = centres[order, 0]
+        reach = radii[order] + radii.max() + 1e-6
+        a, b = G._ranges(np.searchsorted(xs, xs - reach), np.searchsorted(xs, xs + reach,
+                                                                          side="right"))
+        si, sj = G._touching(centres, radii, order[a], order[b])
+        assert set(zip(i.tolist(), j.tolist())) == set(zip(si.tolist(), sj.tolist()))
+        assert len(i) == len(si) and np.all(np.diff(i) >= 0)
