@@ -296,3 +296,26 @@ def test_the_grid_finds_the_same_touching_pairs_as_the_sort():
         si, sj = G._touching(centres, radii, order[a], order[b])
         assert set(zip(i.tolist(), j.tolist())) == set(zip(si.tolist(), sj.tolist()))
         assert len(i) == len(si) and np.all(np.diff(i) >= 0)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_graph_made_a_chunk_at_a_time_is_the_same_graph(monkeypatch, seed):
+    from ftlbo_mav.planning import geometric as G
+
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform([5.0, 5.0], [95.0, 55.0], (60, 2))
+    far = np.minimum(np.hypot(*(centres - [2.0, 30.0]).T), np.hypot(*(centres - [98.0, 30.0]).T))
+    problem = field(start=np.array([2.0, 30.0, 4.0]), goal=np.array([98.0, 30.0, 4.0]),
+                    offsets=np.array([[0.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]]),
+                    centres=centres[far > 8.0], radii=rng.uniform(1.0, 3.0, (far > 8.0).sum()),
+                    area_lower=np.array([0.0, 0.0]), area_upper=np.array([100.0, 60.0]))
+    whole = G.shortest_routes(problem, count=4)
+    graph = G._Graph(problem, G.formation_discs(problem))
+    monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 1)
+    monkeypatch.setattr(G, "_PAIR_CHUNK", 97)  # many chunks
+    chunked = G.shortest_routes(problem, count=4)
+    again = G._Graph(problem, G.formation_discs(problem))
+    assert len(again.points) == len(graph.points)
+    assert sum(map(len, again.edges)) == sum(map(len, graph.edges))
+    assert [r.length for r in chunked] == pytest.approx([r.length for r in whole], rel=1e-12)
+    np.testing.assert_allclose(chunked[0].nodes, whole[0].nodes, atol=1e-9)

@@ -1,0 +1,84 @@
+"""The tangent graph's costly test compiled (numba): millions of candidate segments against
+thousands of discs, through a grid of the discs (:func:`.geometric.segments_clear` from
+:data:`.geometric.GRID_CLEAR_FROM`). Imported only for such problems, so that a small plan
+does not pay numba's start-up."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import prange
+
+from ..ardupilot.compiled import njit
+
+
+@njit(cache=True)
+def disc_grid(centres, radii, lo0, lo1, cell, nx, ny):
+    """Square cells of side ``cell`` from ``(lo0, lo1)``, ``nx`` by ``ny``: the discs whose
+    bounding box meets each cell, as ``starts (nx*ny + 1,)`` and ``items``."""
+    C = centres.shape[0]
+    counts = np.zeros(nx * ny + 1, np.int64)
+    for k in range(C):
+        x0 = max(int((centres[k, 0] - radii[k] - lo0) / cell), 0)
+        x1 = min(int((centres[k, 0] + radii[k] - lo0) / cell), nx - 1)
+        y0 = max(int((centres[k, 1] - radii[k] - lo1) / cell), 0)
+        y1 = min(int((centres[k, 1] + radii[k] - lo1) / cell), ny - 1)
+        for gy in range(y0, y1 + 1):
+            for gx in range(x0, x1 + 1):
+                counts[gy * nx + gx + 1] += 1
+    starts = np.cumsum(counts)
+    items = np.empty(starts[-1], np.int64)
+    fill = starts[:-1].copy()
+    for k in range(C):
+        x0 = max(int((centres[k, 0] - radii[k] - lo0) / cell), 0)
+        x1 = min(int((centres[k, 0] + radii[k] - lo0) / cell), nx - 1)
+        y0 = max(int((centres[k, 1] - radii[k] - lo1) / cell), 0)
+        y1 = min(int((centres[k, 1] + radii[k] - lo1) / cell), ny - 1)
+        for gy in range(y0, y1 + 1):
+            for gx in range(x0, x1 + 1):
+                items[fill[gy * nx + gx]] = k
+                fill[gy * nx + gx] += 1
+    return starts, items
+
+
+@njit(cache=True, parallel=True)
+def clear_through_grid(p, q, centres, radii, starts, items, lo0, lo1, cell, nx, ny, tol):
+    """``(E,)``: True where the segment ``p[e] -> q[e]`` enters no disc's interior (the
+    test of :func:`.geometric.segments_clear`, the same arithmetic), each segment walked
+    in steps of half a cell, every disc of the 3 x 3 cells around each step tested once."""
+    E, C = p.shape[0], centres.shape[0]
+    clear = np.ones(E, np.bool_)
+    stamp = np.full(C, -1, np.int64)  # the last segment each disc was tested against
+    for e in prange(E):
+        ax, ay = p[e, 0], p[e, 1]
+        bx, by = q[e, 0] - ax, q[e, 1] - ay
+        seg2 = max(bx * bx + by * by, 1e-18)
+        steps = int(math.sqrt(bx * bx + by * by) / (0.5 * cell)) + 1
+        blocked = False
+        for s in range(steps + 1):
+            f = s / steps
+            gx = int(math.floor((ax + f * bx - lo0) / cell))
+            gy = int(math.floor((ay + f * by - lo1) / cell))
+            for yy in range(max(gy - 1, 0), min(gy + 2, ny)):
+                for xx in range(max(gx - 1, 0), min(gx + 2, nx)):
+                    c = yy * nx + xx
+                    for m in range(starts[c], starts[c + 1]):
+                        k = items[m]
+                        if stamp[k] == e:
+                            continue
+                        stamp[k] = e  # a race with another segment only repeats a test
+                        cx, cy = centres[k, 0] - ax, centres[k, 1] - ay
+                        t = min(max((cx * bx + cy * by) / seg2, 0.0), 1.0)
+                        d = math.hypot(cx - t * bx, cy - t * by)
+                        if d < radii[k] * (1 - tol) - tol:
+                            blocked = True
+                            break
+                    if blocked:
+                        break
+                if blocked:
+                    break
+            if blocked:
+                break
+        clear[e] = not blocked
+    return clear
