@@ -118,8 +118,12 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     keep = ~drop
     discs = Discs(centres[keep], radii[keep], cylinder[keep], uav[keep])
     lower, upper = centroid_rectangle(problem)
-    covered = np.array([_circle_covered(iv) for iv in _forbidden_intervals(discs, lower,
-                                                                            upper)], bool)
+    # the kept discs' touching pairs are the kept pairs (renumbered), not a second search
+    both_kept = keep[i] & keep[j]
+    number = np.cumsum(keep) - 1
+    pairs = number[i[both_kept]], number[j[both_kept]]
+    covered = np.array([_circle_covered(iv) for iv in _forbidden_intervals(
+        discs, lower, upper, pairs=pairs)], bool)
     if covered.any() and not covered.all():
         discs = Discs(discs.centres[~covered], discs.radii[~covered],
                       discs.cylinder[~covered], discs.uav[~covered])
@@ -388,12 +392,14 @@ def _in_rectangle(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> n
     return ((points >= lower - tol) & (points <= upper + tol)).all(axis=-1)
 
 
-def _forbidden_intervals(discs: Discs, lower, upper) -> list[list[tuple[float, float]]]:
+def _forbidden_intervals(discs: Discs, lower, upper, *, pairs=None
+                         ) -> list[list[tuple[float, float]]]:
     """Per disc, angular intervals ``(centre, half_width)`` of its circle that lie inside
-    another disc or outside the rectangle (open intervals)."""
+    another disc or outside the rectangle (open intervals); ``pairs``: the discs'
+    touching pairs when known (:func:`_touching_pairs`)."""
     C = len(discs.radii)
     out: list[list[tuple[float, float]]] = [[] for _ in range(C)]
-    for i, centre, half in zip(*_covered_arcs(discs)):
+    for i, centre, half in zip(*_covered_arcs(discs, pairs=pairs)):
         out[i].append((float(centre), float(half)))
     for n in range(C):
         ci, ri_n = discs.centres[n], discs.radii[n]
@@ -412,10 +418,11 @@ def _forbidden_intervals(discs: Discs, lower, upper) -> list[list[tuple[float, f
     return out
 
 
-def _covered_arcs(discs: Discs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _covered_arcs(discs: Discs, *, pairs=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The arcs of each disc's circle inside another disc (open): ``disc (A,)``,
-    ``centre (A,)`` angle and ``half (A,)`` width, ``half = pi`` for a whole circle."""
-    i, j = _touching_pairs(discs.centres, discs.radii)
+    ``centre (A,)`` angle and ``half (A,)`` width, ``half = pi`` for a whole circle
+    (``pairs``: the touching pairs, when known)."""
+    i, j = _touching_pairs(discs.centres, discs.radii) if pairs is None else pairs
     v = discs.centres[j] - discs.centres[i]
     d = np.hypot(v[:, 0], v[:, 1])
     ri, rj = discs.radii[i], discs.radii[j]
