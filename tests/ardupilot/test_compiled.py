@@ -76,3 +76,29 @@ def test_a_plans_flights_share_one_stepwise_budget(monkeypatch):
     stepwise.clear()
     fp.fly_path(points, speed_m_s=10.0)
     assert len(stepwise) == 1  # outside the budget again: by the flight's size
+
+
+@pytest.mark.parametrize("name", ["nha-trang-orchard", "orchard-survey", "six-tree-slalom"])
+def test_the_shipped_plans_fly_the_same_compiled_and_stepwise(name):
+    # issue 30: old (the objects' loop) and new (compiled) agree within 1 mm on the
+    # shipped plans, every UAV's mission as planned (its speed, its holds)
+    from ftlbo_mav.planning.planner import flight_model, plan
+    from ftlbo_mav.scenario import load_scenario
+
+    from ..conftest import ROOT
+
+    p = plan(load_scenario(ROOT / "missions" / f"{name}.toml"))
+    model = flight_model(p.scenario)
+    for path in p.uav_paths:
+        kwargs = dict(nav=model.nav, speed_m_s=model.speed_m_s, holds_s=p.holds_s)
+        old, new = fly_path_stepwise(path, **kwargs), _compiled(path, **kwargs)
+        assert len(old.times) == len(new.times)
+        assert np.abs(old.positions - new.positions).max() < 1e-3
+        assert np.abs(old.reached - new.reached).max() < 1e-9
+
+
+def _compiled(points, **kwargs):
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    with fp.stepwise_budget(0.0):  # nothing left for the stepwise loop: compiled
+        return fp.fly_path(points, **kwargs)

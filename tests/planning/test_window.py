@@ -132,13 +132,16 @@ def _orchard(folder, *, rows: int, per_row: int):
     width, length = (rows + 1) * 7.0, 24.0 + (per_row - 1) * 3.0
     (lat_b,), (lon_b,), _ = frame.to_lla([[width, length, 0.0]])
     (s_lat,), (s_lon,), _ = frame.to_lla([[3.5, 5.0, 0.0]])
+    # the goal beyond the last lane's end (north with an odd number of lanes)
+    (g_lat,), (g_lon,), _ = frame.to_lla([[width - 3.5, length - 5.0 if rows % 2 == 0 else 5.0,
+                                           0.0]])
     path = folder / "orchard.toml"
     path.write_text("\n".join([
         'name = "orchard"', 'obstacles_file = "trees.geojson"',
         "[area]", f"corner_a = [{lat0}, {lon0}]", f"corner_b = [{lat_b:.8f}, {lon_b:.8f}]",
         "min_altitude = 2.0", "max_altitude = 7.0",
         "[start]", f"lat = {s_lat:.8f}", f"lon = {s_lon:.8f}", "alt = 4.0",
-        "[goal]", f"lat = {s_lat:.8f}", f"lon = {s_lon:.8f}", "alt = 4.0",
+        "[goal]", f"lat = {g_lat:.8f}", f"lon = {g_lon:.8f}", "alt = 4.0",
         "[formation]", "offsets = [[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]",
         "clearance = 1.0",
         "[survey]", "spacing = 7.0", "heading = 0.0", "margin = 3.5",
@@ -158,3 +161,24 @@ def test_the_admission_check_counts_each_leg_among_its_window(tmp_path):
     # a plan that is too large for what it really does is still refused, saying so
     with pytest.raises(Exception, match="within its reach"):
         check_size(scenario, replace(settings, students=2000, iterations=2000))
+
+
+def test_an_orchard_survey_is_planned_lane_by_lane_in_windows(tmp_path):
+    # 240 trees in 8 rows (from WINDOW_FROM on, windows): every aisle flown, each lane
+    # planned among the trees beside it, the flown path predicted against every tree
+    from ftlbo_mav.planning.planner import plan
+
+    scenario = _orchard(tmp_path, rows=8, per_row=30)
+    assert len(scenario.obstacles) == 240 >= W.WINDOW_FROM
+    p = plan(scenario)
+    assert p.feasible, p.violations
+    lanes = [leg for leg in p.legs if leg.start_name.endswith("start")
+             and leg.goal_name.endswith("end")]
+    assert len(lanes) == len(p.scenario.survey.lanes) == 9
+    for leg in lanes:  # a lane among the two rows beside it and their neighbours' edges
+        assert leg.searched is not None and len(leg.searched.radii) <= 4 * 30
+        assert leg.length_ratio <= 1.005  # "auto": within 0.5% of its bound
+    # the prediction measures every tree, and keeps the clearance from each of them
+    assert len(p.prediction.obstacle_clearance) == 240
+    assert p.prediction.obstacle_clearance.min() >= scenario.clearance_m - 1e-6
+    assert p.prediction.reached.shape[1] == len(p.centroid)  # every lane's ends reached
