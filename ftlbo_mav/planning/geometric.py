@@ -344,6 +344,7 @@ def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, up
     their ends ``p``, ``q``. The segments :class:`_Graph` keeps from all candidates at once
     (the same tests), in another order."""
     grid = _grid(discs)
+    marked = _buried_bins(discs)
     t_disc, t_angle, keys_p, keys_q, ps, qs = [], [], [], [], [], []
     count = 0
 
@@ -354,7 +355,7 @@ def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, up
         alive = np.ones(len(pk), bool)
         for keys, disc, ang in ((pk, disc_p, ang_p), (pq, disc_q, ang_q)):
             on = keys >= 0
-            alive[on] &= ~_buried(discs, disc[on], ang[on])
+            alive[on] &= ~_buried(discs, disc[on], ang[on], marked=marked)
         pk, pq = pk[alive], pq[alive]
         disc_p, ang_p, disc_q, ang_q = disc_p[alive], ang_p[alive], disc_q[alive], ang_q[alive]
         p = np.where((pk >= 0)[:, None], _on_circle(discs, disc_p, ang_p), fixed_p)
@@ -439,11 +440,22 @@ def _covered_arcs(discs: Discs, *, pairs=None) -> tuple[np.ndarray, np.ndarray, 
 
 
 def _buried(discs: Discs, disc: np.ndarray, angle: np.ndarray, *, bins: int = 64,
-            margin: float = 1e-3) -> np.ndarray:
+            margin: float = 1e-3, marked: np.ndarray | None = None) -> np.ndarray:
     """Which tangent points ``(disc, angle)`` (T,) lie well inside another disc: those in
     an angular bin (``bins`` per circle) wholly inside a covered arc shrunk by ``margin``
     radians at both ends. Every segment from such a point enters that disc; a quick
-    first cut before :func:`segments_clear`, never a verdict on a point near an edge."""
+    first cut before :func:`segments_clear`, never a verdict on a point near an edge.
+    ``marked``: :func:`_buried_bins`, when already known."""
+    if marked is None:
+        marked = _buried_bins(discs, bins=bins, margin=margin)
+    width = _TWO_PI / bins
+    k = np.floor((angle % _TWO_PI) / width).astype(int) % bins
+    return marked[disc, k]
+
+
+def _buried_bins(discs: Discs, *, bins: int = 64, margin: float = 1e-3) -> np.ndarray:
+    """``(C, bins)``: the angular bins of each circle wholly inside a covered arc shrunk by
+    ``margin`` (see :func:`_buried`)."""
     C = len(discs.radii)
     idx, centre, half = _covered_arcs(discs)
     width = _TWO_PI / bins
@@ -457,9 +469,7 @@ def _buried(discs: Discs, disc: np.ndarray, angle: np.ndarray, *, bins: int = 64
     np.add.at(diff, (idx[ok], first[ok]), 1)
     np.add.at(diff, (idx[ok], np.minimum(last[ok] + 1, 2 * bins)), -1)
     run = np.cumsum(diff, axis=1)
-    marked = (run[:, :bins] + run[:, bins:2 * bins]) > 0
-    k = np.floor((angle % _TWO_PI) / width).astype(int) % bins
-    return marked[disc, k]
+    return (run[:, :bins] + run[:, bins:2 * bins]) > 0
 
 
 def _arc_free(start: float, sweep: float, intervals) -> bool:
