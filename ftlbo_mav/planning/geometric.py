@@ -303,10 +303,11 @@ def segments_clear(p: np.ndarray, q: np.ndarray, discs: Discs, *,
     return clear
 
 
-GRID_CLEAR_FROM = 2e8
+GRID_CLEAR_FROM = 2e6
 """Segments x discs from which :func:`segments_clear` walks each segment through a grid
 of the discs, compiled (:mod:`._geometric_jit`; the tangent graph of 10 UAVs among 320
-trees: 12 million candidate bitangents, 2,500 discs)."""
+trees: 12 million candidate bitangents, 2,500 discs; the seeds' candidate links of the
+dense 100-tree field). Below, numba's start-up costs more than the test."""
 
 
 def _clear_through_grid(p: np.ndarray, q: np.ndarray, discs: Discs, grid=None) -> np.ndarray:
