@@ -82,3 +82,91 @@ def clear_through_grid(p, q, centres, radii, starts, items, lo0, lo1, cell, nx, 
                 break
         clear[e] = not blocked
     return clear
+
+
+@njit(cache=True)
+def arcs_free(start, sweep, lo, hi, centres, halves):
+    """``(A,)``: whether each ccw arc ``(start, start + sweep)`` of a circle misses every
+    forbidden interval of that circle, ``centres[lo[a]:hi[a]]`` and ``halves`` likewise
+    (:func:`.geometric._arc_free`, the same arithmetic)."""
+    two_pi = 2.0 * math.pi
+    free = np.ones(len(start), np.bool_)
+    for a in range(len(start)):
+        for m in range(lo[a], hi[a]):
+            half = halves[m]
+            if half >= math.pi:
+                free[a] = False
+                break
+            s = (centres[m] - half - start[a]) % two_pi
+            if s < sweep[a] - 1e-9 or s + 2 * half > two_pi + 1e-9:
+                free[a] = False
+                break
+    return free
+
+
+@njit(cache=True)
+def _less(d1, n1, d2, n2):
+    return d1 < d2 or (d1 == d2 and n1 < n2)
+
+
+@njit(cache=True)
+def dijkstra(indptr, indices, weights, straight, source, leg_penalty):
+    """Dijkstra over a graph in CSR form, as :meth:`.geometric._Graph.dijkstra` runs it
+    over its lists (the same relaxation, and a binary heap of ``(distance, node)`` that
+    sifts as Python's heapq does, so ties fall alike): distances, predecessors and the
+    edge each node was reached by (-1: none)."""
+    n = len(indptr) - 1
+    dist = np.full(n, np.inf)
+    prev = np.full(n, -1, np.int64)
+    via = np.full(n, -1, np.int64)
+    done = np.zeros(n, np.bool_)
+    hd = np.empty(len(indices) + 1)
+    hn = np.empty(len(indices) + 1, np.int64)
+    size = 0
+    dist[source] = 0.0
+    hd[0], hn[0] = 0.0, source
+    size = 1
+    while size:
+        # heappop: the last item replaces the root, then _siftup (to a leaf, then down)
+        d, u = hd[0], hn[0]
+        size -= 1
+        if size:
+            ld, ln = hd[size], hn[size]
+            pos, end = 0, size
+            child = 1
+            while child < end:
+                right = child + 1
+                if right < end and not _less(hd[child], hn[child], hd[right], hn[right]):
+                    child = right
+                hd[pos], hn[pos] = hd[child], hn[child]
+                pos = child
+                child = 2 * pos + 1
+            hd[pos], hn[pos] = ld, ln
+            while pos > 0:  # _siftdown(heap, 0, pos)
+                parent = (pos - 1) >> 1
+                if _less(ld, ln, hd[parent], hn[parent]):
+                    hd[pos], hn[pos] = hd[parent], hn[parent]
+                    pos = parent
+                    continue
+                break
+            hd[pos], hn[pos] = ld, ln
+        if done[u]:
+            continue
+        done[u] = True
+        for e in range(indptr[u], indptr[u + 1]):
+            v = indices[e]
+            nd = d + weights[e] + (leg_penalty if straight[e] else 0.0)
+            if nd < dist[v] - 1e-12:
+                dist[v], prev[v], via[v] = nd, u, e
+                # heappush: append, then _siftdown(heap, 0, size)
+                pos = size
+                size += 1
+                while pos > 0:
+                    parent = (pos - 1) >> 1
+                    if _less(nd, v, hd[parent], hn[parent]):
+                        hd[pos], hn[pos] = hd[parent], hn[parent]
+                        pos = parent
+                        continue
+                    break
+                hd[pos], hn[pos] = nd, v
+    return dist, prev, via

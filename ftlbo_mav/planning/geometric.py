@@ -331,6 +331,12 @@ def _grid(discs: Discs):
     return starts, items, float(lo[0]), float(lo[1]), cell, nx, ny
 
 
+ARRAY_GRAPH_FROM = 20_000
+"""Graph nodes from which the tangent graph is held in arrays and searched compiled
+(:mod:`._geometric_jit`: the same edges in the same order, the same heap), not in lists
+of Python tuples (an orchard's way back across its rows: 100,000 nodes, 4.7 million heap
+operations)."""
+
 CHUNKED_GRAPH_FROM = 1000
 """Discs from which the tangent graph's candidate segments are made and tested a chunk
 of disc pairs at a time (:func:`_clear_segments`), keeping only the clear ones: 2,500
@@ -616,20 +622,27 @@ class _Graph:
             [start, goal])
         self.node_disc = np.concatenate([[-1, -1], t_disc[used]]).astype(int)
         self.node_angle = np.concatenate([[0.0, 0.0], t_angle[used] % _TWO_PI])
-        edges: list[list[tuple[int, float, Arc | None]]] = [[] for _ in range(len(self.points))]
         lengths = np.hypot(*(q - p).T)
-        for a, b, w in zip(node_of[seg_p], node_of[seg_q], lengths):
-            edges[a].append((b, float(w), None))
-            edges[b].append((a, float(w), None))
-
-        # Arcs between neighbouring tangent points on each disc.
+        a_seg, b_seg = node_of[seg_p], node_of[seg_q]
+        # Arcs between neighbouring tangent points on each disc: the nodes of each disc in
+        # angle order, each to the next and the last to the first
         forbidden = _forbidden_intervals(discs, lower, upper)
         order = np.lexsort((self.node_angle, self.node_disc))
         order = order[self.node_disc[order] >= 0]
-        for disc in np.unique(self.node_disc[order]):
-            on = order[self.node_disc[order] == disc]
+        groups = np.flatnonzero(np.diff(self.node_disc[order])) + 1
+        self._csr = None
+        if len(self.points) >= ARRAY_GRAPH_FROM:
+            self.edges = None
+            self._arrays(a_seg, b_seg, lengths, order, groups, forbidden, discs)
+            return
+        edges: list[list[tuple[int, float, Arc | None]]] = [[] for _ in range(len(self.points))]
+        for a, b, w in zip(a_seg, b_seg, lengths):
+            edges[a].append((b, float(w), None))
+            edges[b].append((a, float(w), None))
+        for on in np.split(order, groups):
             if len(on) < 2:
                 continue
+            disc = int(self.node_disc[on[0]])
             r = float(discs.radii[disc])
             for a, b in zip(on, np.roll(on, -1)):
                 sweep = (self.node_angle[b] - self.node_angle[a]) % _TWO_PI
@@ -644,10 +657,59 @@ class _Graph:
                 edges[b].append((int(a), r * sweep, Arc(int(disc), start_a + sweep, -sweep)))
         self.edges = edges
 
+    def _arrays(self, a_seg, b_seg, lengths, order, groups, forbidden, discs) -> None:
+        """The same edges as the lists of :meth:`_build`, in the same order per node, as
+        arrays (CSR) for the compiled search (:data:`ARRAY_GRAPH_FROM`)."""
+        from ._geometric_jit import arcs_free
+
+        # each node's neighbour in angle order on its disc (groups of 2 or more)
+        nxt = np.roll(order, -1)
+        begin = np.concatenate([[0], groups])
+        end = np.concatenate([groups, [len(order)]])
+        nxt[end - 1] = order[begin]  # the last of a disc to its first
+        size = np.repeat(end - begin, end - begin)
+        a_arc, b_arc = order[size >= 2], nxt[size >= 2]
+        disc = self.node_disc[a_arc]
+        start_a = self.node_angle[a_arc]
+        sweep = (self.node_angle[b_arc] - start_a) % _TWO_PI
+        zero = sweep <= 1e-12
+        counts = np.array([len(f) for f in forbidden], np.int64)
+        first = np.concatenate([[0], np.cumsum(counts)])
+        flat = [iv for f in forbidden for iv in f]
+        iv_centre = np.array([c for c, _ in flat], float)
+        iv_half = np.array([h for _, h in flat], float)
+        free = arcs_free(start_a, sweep, first[disc], first[disc + 1], iv_centre, iv_half)
+        keep = zero | free
+        a_arc, b_arc, disc, start_a = a_arc[keep], b_arc[keep], disc[keep], start_a[keep]
+        sweep, zero = sweep[keep], zero[keep]
+        weight_arc = np.where(zero, 0.0, discs.radii[disc] * sweep)
+        # directed edges in the lists' order: a->b then b->a, the segments, then the arcs
+        src = np.column_stack([np.concatenate([a_seg, a_arc]),
+                               np.concatenate([b_seg, b_arc])]).ravel()
+        dst = np.column_stack([np.concatenate([b_seg, b_arc]),
+                               np.concatenate([a_seg, a_arc])]).ravel()
+        w = np.repeat(np.concatenate([lengths, weight_arc]), 2)
+        is_arc = np.repeat(np.concatenate([np.zeros(len(a_seg), bool), ~zero]), 2)
+        arc_disc = np.repeat(np.concatenate([np.full(len(a_seg), -1), disc]), 2)
+        arc_start = np.column_stack([np.concatenate([np.zeros(len(a_seg)), start_a]),
+                                     np.concatenate([np.zeros(len(a_seg)), start_a + sweep])
+                                     ]).ravel()
+        arc_sweep = np.column_stack([np.concatenate([np.zeros(len(a_seg)), sweep]),
+                                     np.concatenate([np.zeros(len(a_seg)), -sweep])]).ravel()
+        by = np.argsort(src, kind="stable")
+        indptr = np.concatenate([[0], np.cumsum(np.bincount(src, minlength=len(self.points)))])
+        self._csr = (indptr.astype(np.int64), dst[by].astype(np.int64), w[by], ~is_arc[by])
+        self._arc = (is_arc[by], arc_disc[by], arc_start[by], arc_sweep[by])
+
     def dijkstra(self, source: int, *, leg_penalty: float = 0.0
                  ) -> tuple[np.ndarray, np.ndarray, list]:
         """Distances, predecessors and arcs from ``source``; ``leg_penalty`` metres are
         added to every straight segment (routes with fewer legs)."""
+        if self._csr is not None:
+            from ._geometric_jit import dijkstra
+
+            dist, prev, edge = dijkstra(*self._csr, source, float(leg_penalty))
+            return dist, prev, _Via(edge, *self._arc)
         n = len(self.points)
         dist = np.full(n, np.inf)
         prev = np.full(n, -1)
@@ -669,6 +731,21 @@ class _Graph:
 
     def route(self, nodes: list[int], arcs: list[Arc | None], length: float) -> Route:
         return Route(float(length), self.points[nodes], tuple(arcs), self.discs)
+
+
+class _Via:
+    """Per node, the :class:`Arc` it was reached along, or None (a straight segment): the
+    compiled search's edges (:meth:`_Graph.dijkstra`) read as the lists' ``via``."""
+
+    def __init__(self, edge, is_arc, disc, start, sweep) -> None:
+        self.edge, self.is_arc, self.disc, self.start, self.sweep = (edge, is_arc, disc, start,
+                                                                     sweep)
+
+    def __getitem__(self, node: int) -> Arc | None:
+        e = self.edge[node]
+        if e < 0 or not self.is_arc[e]:
+            return None
+        return Arc(int(self.disc[e]), float(self.start[e]), float(self.sweep[e]))
 
 
 def _walk(prev, via, end: int) -> tuple[list[int], list[Arc | None]]:

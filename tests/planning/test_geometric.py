@@ -319,3 +319,29 @@ def test_the_graph_made_a_chunk_at_a_time_is_the_same_graph(monkeypatch, seed):
     assert sum(map(len, again.edges)) == sum(map(len, graph.edges))
     assert [r.length for r in chunked] == pytest.approx([r.length for r in whole], rel=1e-12)
     np.testing.assert_allclose(chunked[0].nodes, whole[0].nodes, atol=1e-9)
+
+
+@pytest.mark.parametrize("penalty", [0.0, 5.0])
+def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
+    from ftlbo_mav.planning import geometric as G
+
+    rng = np.random.default_rng(7)
+    centres = rng.uniform([5.0, 5.0], [95.0, 55.0], (45, 2))
+    far = np.minimum(np.hypot(*(centres - [2.0, 30.0]).T), np.hypot(*(centres - [98.0, 30.0]).T))
+    problem = field(start=np.array([2.0, 30.0, 4.0]), goal=np.array([98.0, 30.0, 4.0]),
+                    offsets=np.array([[0.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]]),
+                    centres=centres[far > 8.0], radii=rng.uniform(1.0, 3.0, (far > 8.0).sum()),
+                    area_lower=np.array([0.0, 0.0]), area_upper=np.array([100.0, 60.0]))
+    discs = G.formation_discs(problem)
+    lists = G._Graph(problem, discs)
+    monkeypatch.setattr(G, "ARRAY_GRAPH_FROM", 1)
+    arrays = G._Graph(problem, discs)
+    assert lists._csr is None and arrays._csr is not None
+    assert len(arrays._csr[1]) == sum(map(len, lists.edges))
+    for source in (0, 1):
+        d1, p1, v1 = lists.dijkstra(source, leg_penalty=penalty)
+        d2, p2, v2 = arrays.dijkstra(source, leg_penalty=penalty)
+        np.testing.assert_array_equal(d1, d2)
+        np.testing.assert_array_equal(p1, p2)
+        assert [v1[n] for n in range(len(d1))] == [v2[n] for n in range(len(d2))]
+    assert G.shortest_routes(problem, count=4)[0].length > 0
