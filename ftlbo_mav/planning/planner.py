@@ -238,8 +238,10 @@ def until_kept(scenario: Scenario, obstacles: int, attempt: Attempt, *,
          lane: the lanes are laid that much (and :data:`SURVEY_RELAY_MARGIN_M`) further in
          (at most :data:`SURVEY_RELAYS` times, and only while the plans get better);
 
-       else stop. The plan kept carries every attempt's ``seconds``, the re-plans made
-    (``replans``) and how far in its lanes were laid (``lanes_inset_m``).
+       else stop.
+
+    The plan kept carries every attempt's ``seconds``, the re-plans made (``replans``)
+    and how far in its lanes were laid (``lanes_inset_m``).
     """
     with stepwise_budget():  # every flight this plan predicts counts toward one budget
         return _until_kept(scenario, obstacles, attempt, relay=relay)
