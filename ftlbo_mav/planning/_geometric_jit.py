@@ -170,3 +170,53 @@ def dijkstra(indptr, indices, weights, straight, source, leg_penalty):
                     break
                 hd[pos], hn[pos] = nd, v
     return dist, prev, via
+
+
+@njit(cache=True)
+def circles_covered(first, centre, half):
+    """``(C,)``: whether the open intervals ``(centre, half)`` of each circle,
+    ``[first[c], first[c + 1])``, cover the whole of it
+    (:func:`.geometric._circle_covered`, the same walk)."""
+    two_pi = 2.0 * math.pi
+    C = len(first) - 1
+    out = np.zeros(C, np.bool_)
+    for c in range(C):
+        lo, hi = first[c], first[c + 1]
+        n = hi - lo
+        if n == 0:
+            continue
+        a = np.empty(n)
+        b = np.empty(n)
+        whole = False
+        for m in range(n):
+            h = half[lo + m]
+            if h >= math.pi:
+                whole = True
+                break
+            a[m] = (centre[lo + m] - h) % two_pi
+            b[m] = a[m] + 2 * h
+        if whole:
+            out[c] = True
+            continue
+        for m in range(1, n):  # sort the spans as Python sorts its tuples (a, then b)
+            x, y = a[m], b[m]
+            k = m - 1
+            while k >= 0 and (a[k] > x or (a[k] == x and b[k] > y)):
+                a[k + 1], b[k + 1] = a[k], b[k]
+                k -= 1
+            a[k + 1], b[k + 1] = x, y
+        begin, reach = a[0], b[0]
+        covered = False
+        for step in range(1, 2 * n):  # spans[1:], then every span a turn later
+            if step < n:
+                x, y = a[step], b[step]
+            else:
+                x, y = a[step - n] + two_pi, b[step - n] + two_pi
+            if x >= reach - 1e-9:
+                break
+            reach = max(reach, y)
+            if reach > begin + two_pi + 1e-9:
+                covered = True
+                break
+        out[c] = covered
+    return out

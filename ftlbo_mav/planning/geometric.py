@@ -122,8 +122,11 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     both_kept = keep[i] & keep[j]
     number = np.cumsum(keep) - 1
     pairs = number[i[both_kept]], number[j[both_kept]]
-    covered = np.array([_circle_covered(iv) for iv in _forbidden_intervals(
-        discs, lower, upper, pairs=pairs)], bool)
+    if len(discs.radii) >= COMPILED_COVERAGE_FROM:
+        covered = _circles_covered(discs, lower, upper, pairs=pairs)
+    else:
+        covered = np.array([_circle_covered(iv) for iv in _forbidden_intervals(
+            discs, lower, upper, pairs=pairs)], bool)
     if covered.any() and not covered.all():
         discs = Discs(discs.centres[~covered], discs.radii[~covered],
                       discs.cylinder[~covered], discs.uav[~covered])
@@ -215,6 +218,38 @@ def _neighbours(discs: Discs, count: int = 6) -> np.ndarray:
     keep = rank < count
     out[i[keep], rank[keep]] = j[keep]
     return out
+
+
+COMPILED_COVERAGE_FROM = 5000
+"""Discs from which :func:`formation_discs` tests which circles are covered compiled
+(:func:`._geometric_jit.circles_covered`), not one Python walk per disc (200 UAVs among
+320 trees: 40,000 walks, 6 s)."""
+
+
+def _circles_covered(discs: Discs, lower, upper, *, pairs=None) -> np.ndarray:
+    """``(C,)``: :func:`_circle_covered` of every disc's :func:`_forbidden_intervals`,
+    the intervals made as arrays and the walks compiled."""
+    from ._geometric_jit import circles_covered
+
+    C = len(discs.radii)
+    idx, centre, half = _covered_arcs(discs, pairs=pairs)
+    parts_i, parts_c, parts_h = [idx], [centre], [half]
+    r = discs.radii
+    for normal_angle, h in ((math.pi, discs.centres[:, 0] - lower[0]),
+                            (0.0, upper[0] - discs.centres[:, 0]),
+                            (-0.5 * math.pi, discs.centres[:, 1] - lower[1]),
+                            (0.5 * math.pi, upper[1] - discs.centres[:, 1])):
+        out = h <= -r  # the whole disc beyond the side
+        cut = (h < r) & ~out
+        k = np.flatnonzero(out | cut)
+        parts_i.append(k)
+        parts_c.append(np.where(out[k], 0.0, normal_angle))
+        with np.errstate(invalid="ignore"):
+            parts_h.append(np.where(out[k], math.pi, np.arccos(np.clip(h[k] / r[k], -1, 1))))
+    i, c, hw = (np.concatenate(x) for x in (parts_i, parts_c, parts_h))
+    by = np.argsort(i, kind="stable")
+    first = np.concatenate([[0], np.cumsum(np.bincount(i, minlength=C))]).astype(np.int64)
+    return circles_covered(first, c[by].astype(float), hw[by].astype(float))
 
 
 def _circle_covered(intervals) -> bool:

@@ -345,3 +345,19 @@ def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
         np.testing.assert_array_equal(p1, p2)
         assert [v1[n] for n in range(len(d1))] == [v2[n] for n in range(len(d2))]
     assert G.shortest_routes(problem, count=4)[0].length > 0
+
+
+def test_the_compiled_coverage_is_the_python_walks():
+    from ftlbo_mav.planning import geometric as G
+
+    rng = np.random.default_rng(11)
+    for count, side in ((400, 40.0), (600, 120.0)):  # piled up, and apart; some at the sides
+        centres = rng.uniform(-3.0, side + 3.0, (count, 2))
+        discs = G.Discs(centres, rng.uniform(0.5, 4.0, count), np.zeros(count, int),
+                        np.zeros(count, int))
+        lower, upper = np.array([0.0, 0.0]), np.array([side, side])
+        walks = np.array([G._circle_covered(iv)
+                          for iv in G._forbidden_intervals(discs, lower, upper)], bool)
+        compiled = G._circles_covered(discs, lower, upper)
+        assert 0 < walks.sum() < count
+        np.testing.assert_array_equal(compiled, walks)
