@@ -14,16 +14,21 @@ from ..ardupilot.compiled import njit
 
 
 @njit(cache=True)
+def _cells(x, y, r, lo0, lo1, cell, nx, ny):
+    """The cells ``(x0, x1, y0, y1)``, inclusive, that the bounding box of the disc at
+    ``(x, y)`` of radius ``r`` meets."""
+    return (max(int((x - r - lo0) / cell), 0), min(int((x + r - lo0) / cell), nx - 1),
+            max(int((y - r - lo1) / cell), 0), min(int((y + r - lo1) / cell), ny - 1))
+
+
+@njit(cache=True)
 def disc_grid(centres, radii, lo0, lo1, cell, nx, ny):
     """Square cells of side ``cell`` from ``(lo0, lo1)``, ``nx`` by ``ny``: the discs whose
     bounding box meets each cell, as ``starts (nx*ny + 1,)`` and ``items``."""
     C = centres.shape[0]
     counts = np.zeros(nx * ny + 1, np.int64)
     for k in range(C):
-        x0 = max(int((centres[k, 0] - radii[k] - lo0) / cell), 0)
-        x1 = min(int((centres[k, 0] + radii[k] - lo0) / cell), nx - 1)
-        y0 = max(int((centres[k, 1] - radii[k] - lo1) / cell), 0)
-        y1 = min(int((centres[k, 1] + radii[k] - lo1) / cell), ny - 1)
+        x0, x1, y0, y1 = _cells(centres[k, 0], centres[k, 1], radii[k], lo0, lo1, cell, nx, ny)
         for gy in range(y0, y1 + 1):
             for gx in range(x0, x1 + 1):
                 counts[gy * nx + gx + 1] += 1
@@ -31,10 +36,7 @@ def disc_grid(centres, radii, lo0, lo1, cell, nx, ny):
     items = np.empty(starts[-1], np.int64)
     fill = starts[:-1].copy()
     for k in range(C):
-        x0 = max(int((centres[k, 0] - radii[k] - lo0) / cell), 0)
-        x1 = min(int((centres[k, 0] + radii[k] - lo0) / cell), nx - 1)
-        y0 = max(int((centres[k, 1] - radii[k] - lo1) / cell), 0)
-        y1 = min(int((centres[k, 1] + radii[k] - lo1) / cell), ny - 1)
+        x0, x1, y0, y1 = _cells(centres[k, 0], centres[k, 1], radii[k], lo0, lo1, cell, nx, ny)
         for gy in range(y0, y1 + 1):
             for gx in range(x0, x1 + 1):
                 items[fill[gy * nx + gx]] = k

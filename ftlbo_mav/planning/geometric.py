@@ -228,28 +228,10 @@ COMPILED_COVERAGE_FROM = 5000
 
 def _circles_covered(discs: Discs, lower, upper, *, pairs=None) -> np.ndarray:
     """``(C,)``: :func:`_circle_covered` of every disc's :func:`_forbidden_intervals`,
-    the intervals made as arrays and the walks compiled."""
+    the intervals as arrays and the walks compiled."""
     from ._geometric_jit import circles_covered
 
-    C = len(discs.radii)
-    idx, centre, half = _covered_arcs(discs, pairs=pairs)
-    parts_i, parts_c, parts_h = [idx], [centre], [half]
-    r = discs.radii
-    for normal_angle, h in ((math.pi, discs.centres[:, 0] - lower[0]),
-                            (0.0, upper[0] - discs.centres[:, 0]),
-                            (-0.5 * math.pi, discs.centres[:, 1] - lower[1]),
-                            (0.5 * math.pi, upper[1] - discs.centres[:, 1])):
-        out = h <= -r  # the whole disc beyond the side
-        cut = (h < r) & ~out
-        k = np.flatnonzero(out | cut)
-        parts_i.append(k)
-        parts_c.append(np.where(out[k], 0.0, normal_angle))
-        with np.errstate(invalid="ignore"):
-            parts_h.append(np.where(out[k], math.pi, np.arccos(np.clip(h[k] / r[k], -1, 1))))
-    i, c, hw = (np.concatenate(x) for x in (parts_i, parts_c, parts_h))
-    by = np.argsort(i, kind="stable")
-    first = np.concatenate([[0], np.cumsum(np.bincount(i, minlength=C))]).astype(np.int64)
-    return circles_covered(first, c[by].astype(float), hw[by].astype(float))
+    return circles_covered(*_forbidden_arrays(discs, lower, upper, pairs=pairs))
 
 
 def _circle_covered(intervals) -> bool:
@@ -440,25 +422,36 @@ def _forbidden_intervals(discs: Discs, lower, upper, *, pairs=None
     """Per disc, angular intervals ``(centre, half_width)`` of its circle that lie inside
     another disc or outside the rectangle (open intervals); ``pairs``: the discs'
     touching pairs when known (:func:`_touching_pairs`)."""
+    first, centre, half = _forbidden_arrays(discs, lower, upper, pairs=pairs)
+    return [[(float(c), float(h)) for c, h in zip(centre[a:b], half[a:b])]
+            for a, b in zip(first[:-1], first[1:])]
+
+
+def _forbidden_arrays(discs: Discs, lower, upper, *, pairs=None
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_forbidden_intervals` as arrays: disc ``c``'s intervals are
+    ``centre[first[c]:first[c + 1]]`` and ``half`` likewise (``first (C + 1,)``), the
+    arcs inside other discs first, then the rectangle's sides west, east, south, north."""
     C = len(discs.radii)
-    out: list[list[tuple[float, float]]] = [[] for _ in range(C)]
-    for i, centre, half in zip(*_covered_arcs(discs, pairs=pairs)):
-        out[i].append((float(centre), float(half)))
-    for n in range(C):
-        ci, ri_n = discs.centres[n], discs.radii[n]
-        for normal_angle, h in (
-            (math.pi, ci[0] - lower[0]),
-            (0.0, upper[0] - ci[0]),
-            (-0.5 * math.pi, ci[1] - lower[1]),
-            (0.5 * math.pi, upper[1] - ci[1]),
-        ):
-            if h >= ri_n:
-                continue
-            if h <= -ri_n:
-                out[n].append((0.0, math.pi))
-                continue
-            out[n].append((normal_angle, math.acos(h / ri_n)))
-    return out
+    idx, centre, half = _covered_arcs(discs, pairs=pairs)
+    parts_i, parts_c, parts_h = [idx], [centre], [half]
+    r = discs.radii
+    for normal_angle, h in ((math.pi, discs.centres[:, 0] - lower[0]),
+                            (0.0, upper[0] - discs.centres[:, 0]),
+                            (-0.5 * math.pi, discs.centres[:, 1] - lower[1]),
+                            (0.5 * math.pi, upper[1] - discs.centres[:, 1])):
+        beyond = np.flatnonzero(h <= -r)  # the whole circle beyond the side
+        cut = np.flatnonzero((h < r) & (h > -r))
+        k = np.concatenate([beyond, cut])
+        parts_i.append(k)
+        parts_c.append(np.concatenate([np.zeros(len(beyond)), np.full(len(cut), normal_angle)]))
+        # math.acos, one by one: the few discs a side cuts
+        parts_h.append(np.array([math.pi] * len(beyond)
+                                + [math.acos(x) for x in (h[cut] / r[cut]).tolist()], float))
+    i, c, hw = (np.concatenate(x) for x in (parts_i, parts_c, parts_h))
+    by = np.argsort(i, kind="stable")
+    first = np.concatenate([[0], np.cumsum(np.bincount(i, minlength=C))]).astype(np.int64)
+    return first, c[by].astype(float), hw[by].astype(float)
 
 
 def _covered_arcs(discs: Discs, *, pairs=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -661,15 +654,16 @@ class _Graph:
         a_seg, b_seg = node_of[seg_p], node_of[seg_q]
         # Arcs between neighbouring tangent points on each disc: the nodes of each disc in
         # angle order, each to the next and the last to the first
-        forbidden = _forbidden_intervals(discs, lower, upper)
         order = np.lexsort((self.node_angle, self.node_disc))
         order = order[self.node_disc[order] >= 0]
         groups = np.flatnonzero(np.diff(self.node_disc[order])) + 1
         self._csr = None
         if len(self.points) >= ARRAY_GRAPH_FROM:
             self.edges = None
-            self._arrays(a_seg, b_seg, lengths, order, groups, forbidden, discs)
+            self._arrays(a_seg, b_seg, lengths, order, groups,
+                         _forbidden_arrays(discs, lower, upper), discs)
             return
+        forbidden = _forbidden_intervals(discs, lower, upper)
         edges: list[list[tuple[int, float, Arc | None]]] = [[] for _ in range(len(self.points))]
         for a, b, w in zip(a_seg, b_seg, lengths):
             edges[a].append((b, float(w), None))
@@ -694,7 +688,8 @@ class _Graph:
 
     def _arrays(self, a_seg, b_seg, lengths, order, groups, forbidden, discs) -> None:
         """The same edges as the lists of :meth:`_build`, in the same order per node, as
-        arrays (CSR) for the compiled search (:data:`ARRAY_GRAPH_FROM`)."""
+        arrays (CSR) for the compiled search (:data:`ARRAY_GRAPH_FROM`); ``forbidden``:
+        :func:`_forbidden_arrays`."""
         from ._geometric_jit import arcs_free
 
         # each node's neighbour in angle order on its disc (groups of 2 or more)
@@ -708,11 +703,7 @@ class _Graph:
         start_a = self.node_angle[a_arc]
         sweep = (self.node_angle[b_arc] - start_a) % _TWO_PI
         zero = sweep <= 1e-12
-        counts = np.array([len(f) for f in forbidden], np.int64)
-        first = np.concatenate([[0], np.cumsum(counts)])
-        flat = [iv for f in forbidden for iv in f]
-        iv_centre = np.array([c for c, _ in flat], float)
-        iv_half = np.array([h for _, h in flat], float)
+        first, iv_centre, iv_half = forbidden
         free = arcs_free(start_a, sweep, first[disc], first[disc + 1], iv_centre, iv_half)
         keep = zero | free
         a_arc, b_arc, disc, start_a = a_arc[keep], b_arc[keep], disc[keep], start_a[keep]

@@ -34,6 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .cost import _axes
 from .geometric import Discs, Route, centroid_rectangle, segments_clear
 from .problem import PlanningProblem
 
@@ -92,7 +93,7 @@ def cut(problem: PlanningProblem, reach: float) -> Window:
     rect_lo, rect_hi = centroid_rectangle(problem)
     lo, hi = np.maximum(lo, rect_lo), np.minimum(hi, rect_hi)
     # every cylinder one of whose formation discs reaches into the centroid's box
-    axes = problem.centres[None, :, :] - problem.offsets[:, None, :2]  # (N, K, 2)
+    axes = _axes(problem).reshape(problem.uav_count, -1, 2)  # (N, K, 2)
     gap = np.maximum(np.maximum(lo - axes, axes - hi), 0.0)
     kept = np.flatnonzero((np.hypot(gap[..., 0], gap[..., 1]) < problem.radii).any(axis=0))
     # the UAVs' area around the centroid's box (PlanningProblem.bounds takes it back off)
@@ -112,8 +113,7 @@ def every_disc(problem: PlanningProblem) -> Discs:
     drops the ones that change no route, at a cost; a segment clear of these is clear of
     those)."""
     N, K = problem.uav_count, len(problem.radii)
-    axes = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(-1, 2)
-    return Discs(axes, np.tile(problem.radii, N), np.tile(np.arange(K), N),
+    return Discs(_axes(problem), np.tile(problem.radii, N), np.tile(np.arange(K), N),
                  np.repeat(np.arange(N), K))
 
 

@@ -298,17 +298,23 @@ def test_the_grid_finds_the_same_touching_pairs_as_the_sort():
         assert len(i) == len(si) and np.all(np.diff(i) >= 0)
 
 
+def triangle_among_trees(seed: int, *, trees: int) -> PlanningProblem:
+    """A 100 m x 60 m field of random trees (radius + clearance 1-3 m), none near start
+    or goal, three UAVs in a triangle crossing it from west to east."""
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform([5.0, 5.0], [95.0, 55.0], (trees, 2))
+    far = np.minimum(np.hypot(*(centres - [2.0, 30.0]).T), np.hypot(*(centres - [98.0, 30.0]).T))
+    return field(start=np.array([2.0, 30.0, 4.0]), goal=np.array([98.0, 30.0, 4.0]),
+                 offsets=np.array([[0.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]]),
+                 centres=centres[far > 8.0], radii=rng.uniform(1.0, 3.0, (far > 8.0).sum()),
+                 area_lower=np.array([0.0, 0.0]), area_upper=np.array([100.0, 60.0]))
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_the_graph_made_a_chunk_at_a_time_is_the_same_graph(monkeypatch, seed):
     from ftlbo_mav.planning import geometric as G
 
-    rng = np.random.default_rng(seed)
-    centres = rng.uniform([5.0, 5.0], [95.0, 55.0], (60, 2))
-    far = np.minimum(np.hypot(*(centres - [2.0, 30.0]).T), np.hypot(*(centres - [98.0, 30.0]).T))
-    problem = field(start=np.array([2.0, 30.0, 4.0]), goal=np.array([98.0, 30.0, 4.0]),
-                    offsets=np.array([[0.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]]),
-                    centres=centres[far > 8.0], radii=rng.uniform(1.0, 3.0, (far > 8.0).sum()),
-                    area_lower=np.array([0.0, 0.0]), area_upper=np.array([100.0, 60.0]))
+    problem = triangle_among_trees(seed, trees=60)
     whole = G.shortest_routes(problem, count=4)
     graph = G._Graph(problem, G.formation_discs(problem))
     monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 1)
@@ -325,13 +331,7 @@ def test_the_graph_made_a_chunk_at_a_time_is_the_same_graph(monkeypatch, seed):
 def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
     from ftlbo_mav.planning import geometric as G
 
-    rng = np.random.default_rng(7)
-    centres = rng.uniform([5.0, 5.0], [95.0, 55.0], (45, 2))
-    far = np.minimum(np.hypot(*(centres - [2.0, 30.0]).T), np.hypot(*(centres - [98.0, 30.0]).T))
-    problem = field(start=np.array([2.0, 30.0, 4.0]), goal=np.array([98.0, 30.0, 4.0]),
-                    offsets=np.array([[0.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]]),
-                    centres=centres[far > 8.0], radii=rng.uniform(1.0, 3.0, (far > 8.0).sum()),
-                    area_lower=np.array([0.0, 0.0]), area_upper=np.array([100.0, 60.0]))
+    problem = triangle_among_trees(7, trees=45)
     discs = G.formation_discs(problem)
     lists = G._Graph(problem, discs)
     monkeypatch.setattr(G, "ARRAY_GRAPH_FROM", 1)
