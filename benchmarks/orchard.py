@@ -92,7 +92,7 @@ def orchard_files(folder: Path, *, rows: int, per_row: int) -> Path:
         "[start]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*start),
         "[goal]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*goal),
         "[formation]", "offsets = [[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]",
-        "clearance = 1.0",
+        "clearance = 1.0", "[navigation]", 'class = "rtk-fixed"',  # aisles need RTK
         "[survey]", f"spacing = {ROW_SPACING_M}", "heading = 0.0", f"margin = {margin}",
         "[planner]", 'waypoints = "auto"', "seed = 0",
         "[mission]", "speed = 3.0", 'end_action = "land"', ""])

@@ -75,7 +75,9 @@ def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) ->
              "[goal]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*ll(*goal)),
              "[formation]",
              "offsets = [" + ", ".join(f"[{e:.2f}, {n:.2f}, 0.0]" for e, n, _ in offsets) + "]",
-             "clearance = 1.0"]
+             "clearance = 1.0",
+             # a swarm 3 m apart among trees needs RTK (docs/planning.md)
+             "[navigation]", 'class = "rtk-fixed"']
     for centre, radius in trees:
         lines += ["[[obstacles]]", "lat = {:.7f}\nlon = {:.7f}".format(*ll(*centre)),
                   f"radius = {radius:.2f}"]

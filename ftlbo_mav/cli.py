@@ -9,11 +9,14 @@ from __future__ import annotations
 import signal
 import sys
 import threading
+from dataclasses import replace
 
 import click
+import numpy as np
 
 from . import __version__
 from .cli_errors import user_errors
+from .gnss import classes_within
 from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files, read_plan
 from .mission.files import OutputFolder
 from .planning.optimizers import OPTIMIZERS
@@ -160,10 +163,39 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
     if not result.feasible:
         for line in result.violations:
             click.echo(f"  violation: {line}", err=True)
+        hint = _navigation_hint(scn, seed=seed, iterations=iterations, students=students,
+                                waypoints=waypoints, algorithm=algorithm)
+        if hint:
+            click.echo(hint, err=True)
         if not allow_infeasible:
             click.echo("no mission files written: the best plan is infeasible "
                        "(see plan.json; --allow-infeasible writes them anyway)", err=True)
         sys.exit(1)
+
+
+def _navigation_hint(scn, **planner) -> str | None:
+    """For a plan infeasible with its navigation budget: the loosest tighter class
+    (:data:`~ftlbo_mav.gnss.CLASSES`) with which the same scenario plans feasibly, each
+    planned in turn, loosest first; None without a budget."""
+    nav = scn.navigation
+    if not nav.horizontal_m:
+        return None
+    tighter = [c for c in classes_within(nav.horizontal_m) if c.horizontal_m < nav.horizontal_m]
+    for c in [*tighter, replace(nav, name="none", horizontal_m=0.0)]:
+        click.echo(f"planning again with [navigation] {c.describe()}, to see what budget "
+                   "would do", err=True)
+        if plan_scenario(replace(scn, navigation=c), **planner).feasible:
+            if c.horizontal_m == 0:
+                return ("  navigation: feasible only with no navigation error at all: with "
+                        f"[navigation] {nav.describe()} kept beyond the predicted path, and "
+                        "with every class of receiver, it is not (a larger clearance cannot "
+                        "help; fewer obstacles in the way, or a smaller formation, can)")
+            return (f"  navigation: the clearance and separation are kept where the copters "
+                    f"truly are, [navigation] {nav.describe()} beyond the predicted path; "
+                    f"with [navigation] class = \"{c.name}\" ({c.horizontal_m:g} m) the plan "
+                    "is feasible")
+    return (f"  navigation: infeasible even with no navigation error: [navigation] "
+            f"{nav.describe()} is not what stops it")
 
 
 def _say_written(paths, *, listed: int = 24) -> None:
@@ -249,8 +281,13 @@ def _flown(result) -> str:
            for n, what in ((result.corners_moved, "corner move"),
                            (result.corner_stops, "corner stop"),
                            (result.replans, "re-plan")) if n]
+    nav = result.scenario.navigation
+    true_sep = p.separation if p.true_separation is None else p.true_separation
+    truly = (f"; where the copters truly are, at 95 % with [navigation] {nav.describe()}: "
+             f"clearance {p.clearance.min() - nav.horizontal_m:.2f} m"
+             + (f", separation {true_sep.min():.2f} m" if np.isfinite(true_sep.min()) else ""))
     return (f"; flown path (predicted): clearance {p.clearance.min():.2f} m"
-            + (f" ({', '.join(did)})" if did else ""))
+            + (f" ({', '.join(did)})" if did else "") + truly)
 
 
 def format_survey(result) -> list[str]:

@@ -16,6 +16,8 @@ EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
 
 SMALL = """\
 name = "test field"
+[navigation]
+horizontal_error = 0.0
 [area]
 corner_a = [12.2335526, 109.1144313]
 corner_b = [12.2331044, 109.1152252]

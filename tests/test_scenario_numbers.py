@@ -41,6 +41,7 @@ FIELDS = {
     "survey.spacing": ("seed = 0", "seed = 0\n[survey]\nspacing = {}\nheading = 0.0"),
     "survey.heading": ("seed = 0", "seed = 0\n[survey]\nspacing = 2.5\nheading = {}"),
     "survey.alt": ("seed = 0", "seed = 0\n[survey]\nspacing = 2.5\nheading = 0.0\nalt = {}"),
+    "navigation.horizontal_error": ("horizontal_error = 0.0", "horizontal_error = {}"),
 }
 # Values no field takes: not finite, far beyond anything physical, the wrong type.
 BAD_VALUES = ["nan", "inf", "-inf", "1e300", "-1e300", '"12"', "true", "[1.0]"]

@@ -23,6 +23,8 @@ from .conftest import ROOT
 # 40 m x 30 m, the paper's triangle at 10 m (UAVs at 12, 9, 9 m)
 FIELD = """\
 name = "camera field"
+[navigation]
+horizontal_error = 0.0
 [area]
 corner_a = [12.2340000, 109.1160000]
 corner_b = [12.2342713, 109.1163677]

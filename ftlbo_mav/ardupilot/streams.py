@@ -52,9 +52,10 @@ READINESS: Mapping[int, float] = {
 
 
 def flight_streams(position_hz: float) -> dict[int, float]:
-    """A flight's needs: readiness, the position at ``position_hz`` and the current item."""
+    """A flight's needs: readiness, the position at ``position_hz``, the current item and
+    the EKF's health (the navigation budget is watched on GPS_RAW_INT and it)."""
     return {**READINESS, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: position_hz,
-            R.MAVLINK_MSG_ID_MISSION_CURRENT: 2.0}
+            R.MAVLINK_MSG_ID_MISSION_CURRENT: 2.0, R.MAVLINK_MSG_ID_EKF_STATUS_REPORT: 2.0}
 
 
 def message_name(msgid: int) -> str:

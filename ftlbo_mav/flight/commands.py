@@ -274,7 +274,8 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
         watch.vehicles = fleet.vehicles
         view = LiveView(watch, sys.stderr)
         departures = DepartureWatch(len(sysids),
-                                    landing=landing_points(planned) if planned else None)
+                                    landing=landing_points(planned) if planned else None,
+                                    navigation=planned.navigation if planned else None)
         events: list[str] = []
         end = time.monotonic() + duration if duration else float("inf")
         flew = set()

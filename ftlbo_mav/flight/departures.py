@@ -15,6 +15,9 @@ vehicle
   ``stall_s`` plus the item's hold time): ``no progress``;
 - lands (disarms) farther than ``landed_away_m`` from where its mission lands:
   ``landed away``;
+- no longer knows well enough where it is (its GPS or EKF past the plan's navigation
+  budget, a GPS glitch, ArduCopter's own glitch or EKF variance announcement:
+  :mod:`.navigation`): ``navigation``;
 
 and a ``link back`` event when a lost vehicle is heard from again. Pure: no I/O, the
 time is given.
@@ -28,9 +31,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..ardupilot.failsafes import departure_text
+from ..gnss import NavigationBudget
+from .navigation import EkfReport, GpsReport, NavigationWatch
 
-LINK_LOST, LINK_BACK, MODE, FAILSAFE, FENCE, CRASH = (
-    "link lost", "link back", "mode", "failsafe", "fence", "crash")
+LINK_LOST, LINK_BACK, MODE, FAILSAFE, FENCE, CRASH, NAVIGATION = (
+    "link lost", "link back", "mode", "failsafe", "fence", "crash", "navigation")
 DISARMED_AIRBORNE, NO_PROGRESS, LANDED_AWAY = "disarmed in the air", "no progress", "landed away"
 # departures the vehicle (its pilot, its failsafe, another station) chose: the flight
 # never commands that vehicle against them
@@ -72,6 +77,8 @@ class Seen:
     text_count: int = 0
     position: np.ndarray | None = None
     seq: int = -1
+    gps: GpsReport | None = None
+    ekf: EkfReport | None = None
 
 
 @dataclass(frozen=True)
@@ -116,8 +123,10 @@ class DepartureWatch:
     """
 
     def __init__(self, count: int, *, options: WatchOptions = WatchOptions(),
-                 landing: Sequence[np.ndarray | None] | None = None) -> None:
+                 landing: Sequence[np.ndarray | None] | None = None,
+                 navigation: NavigationBudget | None = None) -> None:
         self.options = options
+        self.navigation = None if navigation is None else NavigationWatch(count, navigation)
         self.tracks = [_Track() for _ in range(count)]
         self.expected: list[str | None] = [None] * count
         self.on_legs = [False] * count
@@ -177,6 +186,11 @@ class DepartureWatch:
             kind = departure_text(text)
             if kind is not None:
                 out += self._once(i, kind, f'"{text.strip()}"', now)
+        # where it is: its GPS and EKF held to the plan's budget, in the air
+        if self.navigation is not None and s.armed:
+            why = self.navigation.check(i, s.gps, s.ekf, now)
+            if why is not None:
+                out += self._once(i, NAVIGATION, why, now)
         # mode
         if s.asked_t != tr.asked_t:  # this station asked for a mode: the one before it
             tr.asked_t, tr.mode_at_ask = s.asked_t, s.mode  # may linger a moment

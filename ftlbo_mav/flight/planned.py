@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
+from ..gnss import NO_BUDGET, NavigationBudget, budget_from_document
 from ..mission.export import check_plan_folder, plan_from_document, read_plan_json
 from ..mission.fence_files import FenceSet, read_fence_set
 from ..mission.items import CMD_NAV_TAKEOFF, MissionItem
@@ -47,6 +48,7 @@ class PlannedFlight:
     predicted_clearance: np.ndarray | None = None
     predicted_separation: np.ndarray | None = None
     vehicle: dict[str, float] | None = None  # plan.json's [vehicle] parameters, if any
+    navigation: NavigationBudget = NO_BUDGET  # plan.json's navigation budget
 
     @property
     def count(self) -> int:
@@ -89,6 +91,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
         predicted = [_predicted(u, "predicted_clearance_m") for u in uavs]
         separated = [_predicted(u, "predicted_separation_m") for u in uavs]
         vehicle = {str(k): float(v) for k, v in (doc.get("vehicle") or {}).items()}
+        navigation = budget_from_document(doc.get("navigation"))
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise PlanFolderError(f"{doc_path}: not a plan.json written by ftlbo-mav ({exc})") from None
     missions = []
@@ -105,7 +108,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
                          clearance, fences,
                          None if None in predicted else np.array(predicted, float),
                          None if None in separated else np.array(separated, float),
-                         vehicle or None)
+                         vehicle or None, navigation)
 
 
 def _predicted(uav: dict, key: str) -> float | None:

@@ -1,7 +1,8 @@
 """Pre-flight: every vehicle holds exactly its planned mission and fence (read back and
 compared as ``upload`` verifies) and the ``[vehicle]`` parameters its flown path was
-predicted with (plan.json ``vehicle``: WPNAV_SPEED, WPNAV_ACCEL, ...), has a 3D GPS fix
-and passes its pre-arm checks. Any failure stops the flight here, one line per vehicle,
+predicted with (plan.json ``vehicle``: WPNAV_SPEED, WPNAV_ACCEL, ...), has a 3D GPS fix,
+passes its pre-arm checks, and has a GPS fix, accuracy and EKF that hold it to the plan's
+navigation budget (:mod:`.navigation`). Any failure stops the flight here, one line per vehicle,
 before anything is armed."""
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from ..link.mission_protocol import download_mission
 from ..link.params import read_vehicle_params
 from ..link.transfer import Timing
 from .fleet import concurrently
+from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
 from .vehicle import FlightVehicle
 
@@ -52,6 +54,19 @@ def vehicle_param_problem(differences: Sequence[tuple[str, float | None, float]]
     return text
 
 
+def navigation_problems(planned: PlannedFlight, v: FlightVehicle) -> list[str]:
+    """Why vehicle ``v``'s GPS and EKF do not hold it to the plan's navigation budget
+    (:func:`~ftlbo_mav.flight.navigation.preflight_problems`), with what it reports."""
+    s = v.status
+    gps = gps_report(s.gps_raw, planned.frame)
+    ekf = ekf_report(s.ekf_raw)
+    short = preflight_problems(planned.navigation, gps, ekf)
+    if not short:
+        return []
+    return [f"navigation: {'; '.join(short)} (reports {describe(gps, ekf)}; the plan "
+            f"assumes [navigation] {planned.navigation.describe()})"]
+
+
 def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
               timing: Timing, ready_timeout_s: float) -> None:
     """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission."""
@@ -83,13 +98,19 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     fences = planned.fences or (None,) * len(planned.missions)
     onboard = concurrently(onboard_problems, list(zip(vehicles, planned.missions, fences)))
     deadline = time.monotonic() + ready_timeout_s
-    while time.monotonic() < deadline and not all(is_ready(v.link, v.sysid) for v in vehicles):
+
+    def reported(v: FlightVehicle) -> bool:
+        return v.status.gps_raw is not None and v.status.ekf_raw is not None
+
+    while time.monotonic() < deadline and not all(
+            is_ready(v.link, v.sysid) and reported(v) for v in vehicles):
         time.sleep(0.1)
     problems = []
     for v, why in zip(vehicles, onboard):
         why = list(why)
         if not is_ready(v.link, v.sysid):
             why += readiness_problems(v.link, v.sysid)
+        why += navigation_problems(planned, v)
         if v.status.armed:
             why.append("already armed")
         if why:

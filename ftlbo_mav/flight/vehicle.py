@@ -77,6 +77,10 @@ class Status:
     text_count: int = 0
     acks: dict[int, int] = field(default_factory=dict)
     params: dict[str, float] = field(default_factory=dict)
+    # the last GPS_RAW_INT and EKF_STATUS_REPORT as received (flight/navigation.py
+    # reads them: gps_report, ekf_report)
+    gps_raw: object | None = None
+    ekf_raw: object | None = None
 
     @property
     def texts(self) -> list[str]:
@@ -151,6 +155,10 @@ class FlightVehicle:
                 position = True
             elif kind == "MISSION_CURRENT":
                 s.seq = msg.seq
+            elif kind == "GPS_RAW_INT":
+                s.gps_raw = msg
+            elif kind == "EKF_STATUS_REPORT":
+                s.ekf_raw = msg
             elif kind == "COMMAND_ACK":
                 s.acks[msg.command] = msg.result
                 if (msg.command == R.MAV_CMD_DO_SET_MODE and msg.result == R.MAV_RESULT_ACCEPTED

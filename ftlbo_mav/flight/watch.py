@@ -18,6 +18,7 @@ from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
 from .departures import DEFAULT_WATCH, DepartureWatch, Event, Seen, WatchOptions
 from .keeper import FormationKeeper
+from .navigation import ekf_report, gps_report
 from .outcome import FlightLeftPlan, aborted
 from .planned import PlannedFlight
 from .policy import FaultPolicy, Response
@@ -89,10 +90,12 @@ def observe(v: FlightVehicle, planned: PlannedFlight | None) -> Seen:
     position = None
     if s.lat_deg is not None and planned is not None:
         position = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
+    gps = (None if planned is None else
+           gps_report(s.gps_raw, planned.frame, fallback_velocity=s.velocity_enu[:2]))
     return Seen(mode=s.mode, armed=s.armed, alt_m=s.alt_m, heard_t=s.heard_t,
                 link_up=v.link_up, asked_mode=v.asked_mode, asked_t=v.asked_t,
                 texts=tuple(s.text_log), text_count=s.text_count, position=position,
-                seq=s.seq)
+                seq=s.seq, gps=gps, ekf=ekf_report(s.ekf_raw))
 
 
 def watch_from_outside(departures: DepartureWatch, vehicles: Sequence[FlightVehicle],
@@ -125,7 +128,8 @@ class FlightWatch:
         self.planned, self.vehicles, self.say = planned, list(vehicles), say
         self.on_event = on_event
         self.departures = DepartureWatch(len(vehicles), options=options,
-                                         landing=landing_points(planned))
+                                         landing=landing_points(planned),
+                                         navigation=planned.navigation)
         self.response = Response(policy, budget_s=budget_s,
                                  lost_wait_s=lost_wait_s,
                                  route_check=self.rtl_problem, landing=self.landing)

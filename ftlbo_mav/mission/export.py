@@ -18,6 +18,7 @@ import numpy as np
 
 from ..ardupilot.navigation import vehicle_params
 from ..errors import MissionFileError
+from ..gnss import budget_from_document
 from ..inputs import read_user_text
 from ..planning.cost import CostTerms
 from ..planning.planner import Leg, Plan
@@ -163,6 +164,7 @@ def plan_document(
         "length_ratio": _round(plan.length_ratio, 6),
         "history": [_finite(h) for h in plan.history],
         "clearance": plan.scenario.clearance_m,
+        "navigation": _navigation_document(plan),
         "corner_allowance": plan.scenario.mission.corner_allowance_m,
         "vehicle": vehicle_params(sc.vehicle),
         "predicted": _predicted_document(plan),
@@ -211,6 +213,22 @@ def plan_document(
         "params_file": FENCE_PARAMS_FILE if written else None,
         "exclusion_radii_m": list(fences[0].exclusion_radii_m),
     }})
+
+
+def _navigation_document(plan: Plan) -> dict:
+    """The navigation budget and what the plan keeps, at 95 %, where the copters truly
+    are: the predicted flown path's clearance less the budget, and its separation less
+    two copters' combined error (:mod:`ftlbo_mav.gnss`)."""
+    nav = plan.scenario.navigation
+    doc = nav.document()
+    p = plan.prediction
+    if p is not None:
+        true_sep = p.separation if p.true_separation is None else p.true_separation
+        doc["kept_at_95"] = {
+            "clearance_m": _round(_finite(float(p.clearance.min()) - nav.horizontal_m), 4),
+            "separation_m": _round(_finite(float(true_sep.min())), 4),
+        }
+    return doc
 
 
 def _predicted_document(plan: Plan) -> dict | None:
@@ -411,6 +429,7 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
             source=source,
             via=via,
             survey=survey,
+            navigation=budget_from_document(doc.get("navigation")),
         )
         waypoints = doc["waypoints"]
         settings = PlannerSettings(

@@ -136,9 +136,10 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
                      [hi[0] + grow, hi[1] + grow], [lo[0] - grow, hi[1] + grow]])
     ring_lla = plan.lla(np.column_stack([ring, np.zeros(len(ring))]))
     centre_lla = plan.lla(centres) if len(centres) else np.zeros((0, 3))
-    # the planner kept the clearance plus the scenario's corner allowance: on the
-    # predicted flown path when there is one (the circles then need no corner cut)
-    kept = s.clearance_m + s.mission.corner_allowance_m
+    # the planner kept the clearance plus the navigation budget and the corner allowance
+    # on the estimated position (which the fence watches): on the predicted flown path
+    # when there is one (the circles then need no corner cut)
+    kept = s.kept_clearance_m
     flown = replace(settings, corner_cut_m=0.0) if plan.prediction is not None else settings
     excl = tuple(round(exclusion_radius_m(float(r), clearance_m=_flown_clearance(plan, k, kept),
                                           settings=flown), 2) for k, r in enumerate(radii))

@@ -348,7 +348,7 @@ def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Pla
     t0 = time.perf_counter()
     sc = plan.scenario
     model = flight_model(sc)
-    keep = sc.clearance_m + sc.mission.corner_allowance_m
+    keep = sc.kept_clearance_m
     if own_radii is None:
         _centres, own_radii = sc.obstacles_enu()
     holds = np.zeros(len(plan.centroid))
@@ -359,7 +359,7 @@ def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Pla
         fixed = np.zeros(len(plan.centroid), bool)
         fixed[firsts] = True  # the start, every via point, the goal
         kept = keep_clearance(plan.problem, plan.centroid, model=model, obstacle_radii=own_radii,
-                              clearance_m=keep, fixed=fixed)
+                              clearance_m=keep, fixed=fixed, pair_error_m=sc.navigation.pair_m)
         holds, prediction, moved = kept.holds_s, kept.prediction, kept.moved
         stopped_for = kept.stopped_for
         if moved:
@@ -368,7 +368,7 @@ def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Pla
             plan = combine(sc, plan.settings, legs)
     else:
         prediction = predict(plan.uav_paths, model=model, centres=plan.problem.centres,
-                             radii=own_radii)
+                             radii=own_radii, pair_error_m=sc.navigation.pair_m)
     flown = predicted_violations(plan.problem, prediction, clearance_m=keep,
                                  obstacle_radii=own_radii, min_separation_m=sc.min_separation_m)
     seconds = time.perf_counter() - t0
@@ -491,7 +491,7 @@ def solve(
     its corners need stops. See :func:`plan_leg`."""
     _check_settings(settings)
     # problem's radii include the scenario's clearance and allowance (problem_from_scenario)
-    own = problem.radii - scenario.clearance_m - scenario.mission.corner_allowance_m
+    own = problem.radii - scenario.kept_clearance_m
 
     def attempt(_scenario: Scenario, widened: np.ndarray, first: bool) -> Plan:
         rng = np.random.default_rng(settings.seed)

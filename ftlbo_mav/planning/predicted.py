@@ -20,6 +20,7 @@ import numpy as np
 
 from ..ardupilot.flight_path import FlownPath, fly_groups
 from ..ardupilot.navigation import Navigation
+from ..gnss import largest_error_for, true_distance
 from .feasibility import violations as segment_violations
 from .problem import PlanningProblem
 from .proximity import nearest_samples
@@ -54,7 +55,9 @@ class Prediction:
     surface (inf without obstacles); ``obstacle_clearance``: ``(K,)`` the smallest over
     the UAVs, per obstacle; ``separation``: ``(N,)`` each UAV's smallest 3D distance to
     any other at the same instant (inf for one UAV); ``worst``: per UAV ``(time index,
-    obstacle index)`` of its smallest clearance (-1 without obstacles)."""
+    obstacle index)`` of its smallest clearance (-1 without obstacles);
+    ``true_separation``: ``(N,)`` the smallest the separation can truly be within the
+    navigation budget (:func:`predict`'s ``pair_error_m``)."""
 
     times: np.ndarray
     positions: np.ndarray
@@ -63,6 +66,7 @@ class Prediction:
     obstacle_clearance: np.ndarray
     separation: np.ndarray
     worst: np.ndarray
+    true_separation: np.ndarray | None = None
 
     @property
     def leg_seconds(self) -> np.ndarray:
@@ -113,32 +117,41 @@ def _clearances(padded: np.ndarray, group: np.ndarray, shift: np.ndarray,
     return clearance, worst, surface.min(axis=0)
 
 
-def _separations(positions: np.ndarray, group: np.ndarray, shift: np.ndarray) -> np.ndarray:
-    """Per UAV its smallest 3D distance to any other at the same instant ``(N,)``: within
-    a group of translated paths that distance never changes (the difference of their
-    shifts); across groups it is measured one UAV at a time (memory ``(N, T)``)."""
+def _separations(positions: np.ndarray, group: np.ndarray, shift: np.ndarray,
+                 pair_error_m: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Per UAV its smallest 3D distance to any other at the same instant ``(N,)``, and
+    the smallest it can truly be when their horizontal positions are off by up to
+    ``pair_error_m`` between them (:func:`~ftlbo_mav.gnss.true_distance`): within a group
+    of translated paths those distances never change (the difference of their shifts);
+    across groups they are measured one UAV at a time (memory ``(N, T)``)."""
     N = len(group)
     out = np.full(N, np.inf)
+    true = np.full(N, np.inf)
     if N < 2:
-        return out
+        return out, true
     same = group[:, None] == group[None, :]
-    apart = np.linalg.norm(shift[:, None] - shift[None, :], axis=-1)
-    apart[~same] = np.inf
-    np.fill_diagonal(apart, np.inf)
-    out = apart.min(axis=1)
+    apart = shift[:, None] - shift[None, :]
+    mates = same & ~np.eye(N, dtype=bool)
+    out = np.where(mates, np.linalg.norm(apart, axis=-1), np.inf).min(axis=1)
+    true = np.where(mates, true_distance(np.hypot(apart[..., 0], apart[..., 1]), apart[..., 2],
+                                         pair_error_m), np.inf).min(axis=1)
     for n in range(N):
         other = np.flatnonzero(~same[n])
         if len(other):
-            gap = np.linalg.norm(positions[other] - positions[n][None], axis=-1)
-            out[n] = min(out[n], float(gap.min()))
-    return out
+            d = positions[other] - positions[n][None]
+            out[n] = min(out[n], float(np.linalg.norm(d, axis=-1).min()))
+            true[n] = min(true[n], float(true_distance(np.hypot(d[..., 0], d[..., 1]),
+                                                        d[..., 2], pair_error_m).min()))
+    return out, true
 
 
 def predict(paths: np.ndarray, *, model: FlightModel, centres: np.ndarray,
-            radii: np.ndarray, holds_s: np.ndarray | None = None) -> Prediction:
+            radii: np.ndarray, holds_s: np.ndarray | None = None,
+            pair_error_m: float = 0.0) -> Prediction:
     """Fly every UAV's path ``(N, P, 3)`` (holds ``(P,)`` whole seconds, default none)
     and measure it against the cylinders ``centres`` ``(K, 2)``, ``radii`` ``(K,)``
-    (their own radii, no clearance)."""
+    (their own radii, no clearance); ``pair_error_m``: the navigation budget's combined
+    error of two copters, for ``true_separation``."""
     shapes, group, shift = fly_groups(paths, nav=model.nav, speed_m_s=model.speed_m_s,
                                       holds_s=holds_s)
     times, pos = _common_clock(shapes, group, shift)
@@ -152,10 +165,11 @@ def predict(paths: np.ndarray, *, model: FlightModel, centres: np.ndarray,
         worst = np.full((N, 2), -1)
         clearance = np.full(N, np.inf)
         per_obstacle = np.zeros(0)
-    separation = _separations(pos, group, shift)
+    separation, true_separation = _separations(pos, group, shift, pair_error_m)
     reached = np.array([shapes[g].reached for g in group])
     return Prediction(times=times, positions=pos, reached=reached, clearance=clearance,
-                      obstacle_clearance=per_obstacle, separation=separation, worst=worst)
+                      obstacle_clearance=per_obstacle, separation=separation, worst=worst,
+                      true_separation=true_separation)
 
 
 def predicted_violations(problem: PlanningProblem, prediction: Prediction, *,
@@ -184,9 +198,12 @@ def predicted_violations(problem: PlanningProblem, prediction: Prediction, *,
         out.append(f"UAV {n + 1}'s predicted flown path is at {z[n, i]:.2f} m, outside the "
                    f"altitude band [{problem.h_min:g}, {problem.h_max:g}] m, "
                    f"{p.times[i]:.1f} s into its legs")
-    for n in np.flatnonzero(p.separation < min_separation_m - _TOL):
-        out.append(f"UAV {n + 1} is predicted {p.separation[n]:.2f} m from another UAV "
-                   f"(needs {min_separation_m:g} m)")
+    true = p.separation if p.true_separation is None else p.true_separation
+    for n in np.flatnonzero(true < min_separation_m - _TOL):
+        truly = ("" if true[n] == p.separation[n] else
+                 f", truly as close as {true[n]:.2f} m within the navigation budget")
+        out.append(f"UAV {n + 1} is predicted {p.separation[n]:.2f} m from another UAV"
+                   f"{truly} (needs {min_separation_m:g} m)")
     if len(out) > limit:
         out = out[: limit - 1] + [f"... and {len(out) - limit + 1} more"]
     return out
@@ -256,7 +273,7 @@ def _area_shortfalls(problem: PlanningProblem, p: Prediction) -> list:
 
 def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: FlightModel,
                    obstacle_radii: np.ndarray, clearance_m: float,
-                   fixed: np.ndarray | None = None) -> Kept:
+                   fixed: np.ndarray | None = None, pair_error_m: float = 0.0) -> Kept:
     """Change the centroid path until every UAV's predicted flown path keeps
     ``clearance_m`` from every obstacle's surface (``obstacle_radii``: the cylinders' own
     radii at ``problem.centres``) and stays inside the area.
@@ -272,7 +289,7 @@ def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: Fli
     polyline either way, or one moved :data:`MAX_PUSHES` times) becomes a stop: a hold
     of :data:`HOLD_S` s, so that every copter stops on it and the polyline's clearance
     is flown. ``fixed``: ``(P,)`` True for points that may not move (the start,
-    via points and the goal always are)."""
+    via points and the goal always are); ``pair_error_m``: passed to :func:`predict`."""
     path = np.array(centroid, float)
     P = len(path)
     fixed = np.zeros(P, bool) if fixed is None else np.array(fixed, bool)
@@ -285,7 +302,7 @@ def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: Fli
     while True:
         uavs = path[None] + problem.offsets[:, None]
         pred = predict(uavs, model=model, centres=problem.centres, radii=obstacle_radii,
-                       holds_s=holds)
+                       holds_s=holds, pair_error_m=pair_error_m)
         short = pred.clearance < clearance_m - _TOL
         outside = _area_shortfalls(problem, pred)
         if (not short.any() and not outside) or rounds >= MAX_ROUNDS:
@@ -323,3 +340,20 @@ def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: Fli
                 pushes[j] = MAX_PUSHES  # overshot too): left to the plan's violations
     return Kept(centroid=path, holds_s=holds, prediction=pred, moved=moved, stops=stops,
                 rounds=rounds, stopped_for=stopped_for)
+
+
+def navigation_room(prediction: Prediction, *, clearance_m: float,
+                    min_separation_m: float) -> float:
+    """The largest navigation budget (metres at 95 %, per copter) with which the
+    predicted flight still keeps ``clearance_m`` from every obstacle and
+    ``min_separation_m`` between copters where they truly are: the clearance it keeps
+    beyond ``clearance_m``, and the separation room shared by two copters' errors
+    (:func:`~ftlbo_mav.gnss.largest_error_for`), the smaller; 0 when it keeps neither."""
+    p = prediction
+    room = float(p.clearance.min()) - clearance_m if len(p.clearance) else np.inf
+    N = p.positions.shape[0]
+    for n in range(N - 1):
+        d = p.positions[n + 1:] - p.positions[n][None]
+        pair = largest_error_for(np.hypot(d[..., 0], d[..., 1]), d[..., 2], min_separation_m)
+        room = min(room, pair / np.sqrt(2.0))
+    return max(float(room), 0.0)

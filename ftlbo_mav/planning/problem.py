@@ -16,9 +16,9 @@ class PlanningProblem:
     ``start``, ``goal``: ``(3,)`` the centroid's start ``P_s`` and goal ``P_f``.
     ``offsets``: ``(N, 3)`` each UAV's offset from the centroid.
     ``centres``: ``(K, 2)`` cylinder axes (east, north).
-    ``radii``: ``(K,)`` cylinder radius *plus the scenario's clearance* (and its
-    ``[mission] corner_allowance``): the radius every check uses (clearance 0 is the paper
-    exactly).
+    ``radii``: ``(K,)`` cylinder radius *plus the scenario's clearance*, its navigation
+    budget and its ``[mission] corner_allowance`` (``Scenario.kept_clearance_m``): the
+    radius every check uses (clearance 0 is the paper exactly).
     ``h_min``, ``h_max``: altitude band for every UAV waypoint.
     ``area_lower``, ``area_upper``: ``(2,)`` horizontal area bounds.
     ``waypoints``: ``m``, the number of free waypoints between start and goal.
@@ -84,8 +84,9 @@ def problem_from_scenario(scenario: Scenario, *, waypoints: int | None = None) -
         goal=scenario.goal_enu(),
         offsets=scenario.offsets_m,
         centres=centres,
-        # the corners ArduCopter's S-curve cuts come out of the allowance, not the clearance
-        radii=radii + scenario.clearance_m + scenario.mission.corner_allowance_m,
+        # the clearance kept where the copters truly are: plus the navigation budget
+        # (and the corners ArduCopter's S-curve cuts come out of the allowance)
+        radii=radii + scenario.kept_clearance_m,
         h_min=scenario.min_altitude_m,
         h_max=scenario.max_altitude_m,
         area_lower=lower,

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..ardupilot.navigation import Navigation
 from ..geo import LocalFrame
+from ..gnss import NavigationBudget, budget
 from ..obstacles import Cylinder
 from ..planning.camera import Camera
 
@@ -46,6 +47,8 @@ MAX_WEIGHT = 1e6
 """The cost weights alpha, beta, gamma."""
 MAX_UAVS = 254
 """One MAVLink system id (1..254) per UAV."""
+MAX_NAVIGATION_ERROR_M = 50.0
+"""The largest ``[navigation] horizontal_error`` (metres, 95 %) a scenario may give."""
 MIN_SEPARATION_M = 2.0
 """``[formation] min_separation``'s default: the closest two UAVs of the formation may be."""
 MIN_STUDENTS, MAX_STUDENTS = 4, 100_000
@@ -159,9 +162,25 @@ class Scenario:
     vehicle: Navigation = field(default_factory=Navigation)
     """How the copters fly (the ``[vehicle]`` table: ArduCopter's parameters, its defaults
     unless set); the planner predicts the flown path with it."""
+    navigation: NavigationBudget = field(default_factory=budget)
+    """How well the copters know where they are (the ``[navigation]`` table,
+    :mod:`ftlbo_mav.gnss`): the clearance and the separation are kept on the true
+    position, this much beyond the predicted one."""
     dropped_obstacles: int = 0
     """Obstacles of the file that cannot touch any UAV's path inside the area (their
     disc, radius + clearance, does not reach it): left out of ``obstacles``."""
+
+    @property
+    def true_clearance_m(self) -> float:
+        """The clearance kept on the estimated position so that the true one keeps
+        ``clearance_m`` (95 %): the clearance plus the navigation budget."""
+        return self.clearance_m + self.navigation.horizontal_m
+
+    @property
+    def kept_clearance_m(self) -> float:
+        """What the planner keeps from every obstacle's surface on the predicted flown
+        path: the clearance, the navigation budget and the ``[mission] corner_allowance``."""
+        return self.true_clearance_m + self.mission.corner_allowance_m
 
     @cached_property
     def frame(self) -> LocalFrame:

@@ -19,6 +19,7 @@ import numpy as np
 from ..ardupilot.navigation import VEHICLE_PARAMS, vehicle_navigation
 from ..errors import ScenarioError
 from ..formation import PLANES, closest_pair, regular_formation
+from ..gnss import CLASSES, NavigationBudget, budget, largest_error_for, true_distance, would_do
 from ..inputs import read_user_text
 from ..obstacles import Cylinder, read_obstacle_geojson
 from ..planning.camera import (
@@ -38,6 +39,7 @@ from .model import (
     MAX_DISTANCE_M,
     MAX_ITERATIONS,
     MAX_LANES,
+    MAX_NAVIGATION_ERROR_M,
     MAX_OFFSET_M,
     MAX_RADIUS_M,
     MAX_SEED,
@@ -96,12 +98,13 @@ def parse_scenario(
     start_t.done()
     goal_t.done()
 
+    navigation = _read_navigation(root.table("navigation", required=False))
     form = root.table("formation")
     offsets = _read_offsets(form)
     clearance = form.number("clearance", 1.0, lo=0.0, hi=MAX_DISTANCE_M, unit="m")
     separation = form.number("min_separation", MIN_SEPARATION_M, lo=0.0, hi=MAX_DISTANCE_M,
                              unit="m")
-    _check_separation(form, offsets, separation)
+    _check_separation(form, offsets, separation, navigation)
     form.done()
 
     obstacles = _read_obstacles(root.raw("obstacles", []), source)
@@ -137,6 +140,7 @@ def parse_scenario(
         via=via,
         min_separation_m=separation,
         vehicle=vehicle,
+        navigation=navigation,
     )
     _check_area_size(scenario)
     if obstacles_file:
@@ -193,23 +197,38 @@ def _drop_unreachable_obstacles(s: Scenario) -> Scenario:
     centres, radii = s.obstacles_enu()
     lower, upper = s.area_bounds_enu()
     outside = np.maximum(np.maximum(lower - centres, centres - upper), 0.0)
-    reach = np.hypot(outside[:, 0], outside[:, 1]) <= radii + s.clearance_m + 1.0  # 1 m spare
+    reach = np.hypot(outside[:, 0], outside[:, 1]) <= radii + s.true_clearance_m + 1.0  # spare
     if reach.all():
         return s
     kept = tuple(c for c, r in zip(s.obstacles, reach) if r)
     return replace(s, obstacles=kept, dropped_obstacles=len(s.obstacles) - len(kept))
 
 
-def _check_separation(form: Table, offsets: np.ndarray, separation: float) -> None:
-    """No two UAVs of the formation closer than ``min_separation`` (3D), the pair named."""
+def _check_separation(form: Table, offsets: np.ndarray, separation: float,
+                      navigation: NavigationBudget) -> None:
+    """No two UAVs of the formation closer than ``min_separation`` (3D), the pair named,
+    where they truly are: their horizontal distance less the navigation budget's
+    combined error of two copters (:func:`~ftlbo_mav.gnss.true_distance`)."""
     pair = closest_pair(offsets)
     if pair is None:
         return
+    key = "offsets" if form.has("offsets") else "radius"
     i, j, dist = pair
     if dist < separation:
-        key = "offsets" if form.has("offsets") else "radius"
         raise form.error(key, f"puts UAV {i + 1} and UAV {j + 1} {dist:.2f} m apart, closer "
                               f"than min_separation = {separation:g} m")
+    a, b = np.triu_indices(len(offsets), 1)
+    d = offsets[a] - offsets[b]
+    horizontal, vertical = np.hypot(d[:, 0], d[:, 1]), d[:, 2]
+    true = true_distance(horizontal, vertical, navigation.pair_m)
+    k = int(np.argmin(true))
+    if true[k] < separation - 1e-9:
+        room = largest_error_for(horizontal, vertical, separation) / math.sqrt(2.0)
+        raise form.error(key, f"puts UAV {a[k] + 1} and UAV {b[k] + 1} {horizontal[k]:.2f} m "
+                              f"apart horizontally ({np.hypot(horizontal[k], vertical[k]):.2f} m"
+                              f" in 3D): with [navigation] {navigation.describe()} each, they "
+                              f"can truly be {true[k]:.2f} m apart, closer than min_separation "
+                              f"= {separation:g} m ({would_do(room)})")
 
 
 def _read_offsets(form: Table) -> np.ndarray:
@@ -416,7 +435,7 @@ def _with_lanes(s: Scenario, survey: Survey, *, inset=((0.0, 0.0), (0.0, 0.0))) 
             f"across {across:.0f} m: at most {MAX_LANES} (a wider spacing)")
     centres, radii = s.obstacles_enu()
     discs_c = (centres[None, :, :] - offsets[None, :, :2].transpose(1, 0, 2)).reshape(-1, 2)
-    discs_r = np.tile(radii + s.clearance_m, len(offsets))
+    discs_r = np.tile(radii + s.true_clearance_m, len(offsets))
     begin = s.frame.to_enu(lat_deg=(s.via[-1] if s.via else s.start).lat_deg,
                            lon_deg=(s.via[-1] if s.via else s.start).lon_deg)
     lanes = lay_lanes(lower=lo, upper=hi, spacing_m=survey.spacing_m,
@@ -502,6 +521,22 @@ def _read_vehicle(t: Table | None):
     return vehicle_navigation(values)
 
 
+def _read_navigation(t: Table | None) -> NavigationBudget:
+    """``[navigation]``: how well the copters know where they are. ``class``: one of
+    :data:`ftlbo_mav.gnss.CLASSES` (``gps``, the default, ``sbas``, ``rtk-float``,
+    ``rtk-fixed``); ``horizontal_error``: the 95 % horizontal bound in metres, in place of
+    the class's figure (the class still sets the fix type a copter needs)."""
+    if t is None:
+        return budget()
+    name = t.string("class", None, choices=tuple(CLASSES)) if t.has("class") else None
+    t.used.add("class")
+    error = (t.number("horizontal_error", lo=0.0, hi=MAX_NAVIGATION_ERROR_M, unit="m")
+             if t.has("horizontal_error") else None)
+    t.used.add("horizontal_error")
+    t.done()
+    return budget(name, error)
+
+
 def _check_geometry(s: Scenario) -> None:
     """Start, via points and goal inside the area, every UAV clear of every obstacle and
     in the band; no two consecutive points at one place; a loop needs via points."""
@@ -558,15 +593,21 @@ def _check_point(s: Scenario, key: str, point, enu: np.ndarray) -> None:
         if len(radii):
             dist = np.hypot(*(centres - uav[:2]).T)
             k = int(np.argmin(dist - radii))
-            if dist[k] <= radii[k] + s.clearance_m:
+            if dist[k] <= radii[k] + s.true_clearance_m:
                 corners = np.array([lower, [lower[0], upper[1]], upper, [upper[0], lower[1]]])
-                covers = np.all(np.hypot(*(corners - centres[k]).T) <= radii[k] + s.clearance_m)
+                covers = np.all(np.hypot(*(corners - centres[k]).T)
+                                <= radii[k] + s.true_clearance_m)
+                nav = s.navigation
+                budgeted = (f" + navigation {nav.horizontal_m:g} m ([navigation] "
+                            f"{nav.describe()}; "
+                            f"{would_do(dist[k] - radii[k] - s.clearance_m)})"
+                            if nav.horizontal_m and dist[k] > radii[k] + s.clearance_m else "")
                 raise ScenarioError(
                     s.source,
                     key,
                     f"puts UAV {n} {dist[k]:.2f} m from the axis of "
                     f"{s.obstacles[k].describe(k)} (radius {radii[k]:g} m + clearance "
-                    f"{s.clearance_m:g} m)"
+                    f"{s.clearance_m:g} m{budgeted})"
                     + ("; it covers the whole area, start and goal included" if covers else ""),
                 )
 

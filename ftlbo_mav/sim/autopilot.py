@@ -63,13 +63,15 @@ from ..mission.items import (
     MissionItem,
 )
 from .fence import FenceGuard
+from .gps import SIM_GPS_PARAM_DEFAULTS
 from .modes import ModeAuto, ModeBrake, ModeGuided, ModeLand, ModeRTL
 from .modes.common import AUTO, FLOWN_MODES, LAND, RTL, STABILIZE
 from .modes.common import text as _text
 from .physics import FlightLimits, VerticalShaper, WaypointNav
 from .wind import Gusts
 
-PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS, **CAMERA_PARAM_DEFAULTS}
+PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS, **CAMERA_PARAM_DEFAULTS,
+                  **SIM_GPS_PARAM_DEFAULTS}
 FENCE_CHECK_S = 1.0 / ap_fence.FENCE_CHECK_HZ
 
 STEP_S = 0.02

@@ -17,6 +17,7 @@ ArduCopter 4.5.6 SITL: ``tests/data/ardupilot-4.5.6/boot.json``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
@@ -35,12 +36,16 @@ from ..ardupilot.navigation import PARAM_COUNT
 from ..ardupilot.streams import data_stream_messages
 from ..mission.items import MissionItem
 from .autopilot import Autopilot, AutopilotOptions
+from .gps import GpsError, GpsErrorOptions
 from .mission_server import EVERY_LINK, SENDER, MissionServer, MissionServerOptions
 from .physics import FlightLimits
 
 R = mavlink2
 Link = Hashable
 
+EKF_HEALTHY_FLAGS = (R.EKF_ATTITUDE | R.EKF_VELOCITY_HORIZ | R.EKF_VELOCITY_VERT
+                     | R.EKF_POS_HORIZ_REL | R.EKF_POS_HORIZ_ABS | R.EKF_POS_VERT_ABS
+                     | R.EKF_PRED_POS_HORIZ_REL | R.EKF_PRED_POS_HORIZ_ABS)
 TIMESYNC_S = 10.0  # GCS_MAVLINK::update_send: TIMESYNC every 10 s, asked or not
 
 
@@ -57,7 +62,8 @@ class VehicleOptions:
     connects, is; one 24 ms later is kept). ``limits``: the copter's navigation
     parameters (ArduCopter's defaults, :class:`~ftlbo_mav.sim.physics.FlightLimits`) and
     what its airframe adds; :func:`~ftlbo_mav.sim.physics.varied` makes one copter of a
-    real fleet (start latency, WPNAV_JERK)."""
+    real fleet (start latency, WPNAV_JERK). ``gps``: its GPS error and what its GPS
+    reports (:mod:`.gps`; default: SITL's, no error, RTK fixed, 0.3 m)."""
 
     heartbeat_s: float = 1.0
     ready_after_s: float = 0.0
@@ -66,6 +72,7 @@ class VehicleOptions:
     interval_drop_s: float = 0.02
     limits: FlightLimits = field(default_factory=FlightLimits)
     mission: MissionServerOptions = field(default_factory=MissionServerOptions)
+    gps: GpsErrorOptions = field(default_factory=GpsErrorOptions)
 
     def timeline(self) -> BootTimeline:
         if self.boot is not None:
@@ -134,6 +141,7 @@ class Vehicle:
         self.autopilot = Autopilot(home=(lat, lon), boot_time=boot_time,
                                    options=AutopilotOptions(boot=self.boot, limits=options.limits))
         self.autopilot.home_alt_m = alt
+        self.gps = GpsError(options.gps, self.autopilot.params, lat_deg=lat)
         self.links: dict[Link, LinkState] = {}
         self._mission_version = -1
 
@@ -185,6 +193,7 @@ class Vehicle:
             replies = self._command(msg, now, st)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_SET"):
             replies = self._param(msg)
+            self.gps.param_changed(now - self.boot_time)  # SIM_GPS_GLITCH_X/Y
         elif kind == "SET_POSITION_TARGET_GLOBAL_INT":
             replies = self._position_target(msg)
         else:
@@ -402,7 +411,6 @@ class Vehicle:
     def message(self, msgid: int, now: float):
         """The message ``msgid`` as the vehicle would send it now, or None (not emulated)."""
         s = self.state
-        boot_ms = int((now - self.boot_time) * 1000) & 0xFFFFFFFF
         fix = now - self.boot_time >= self.boot.gps_fix_s
         if msgid == R.MAVLINK_MSG_ID_HEARTBEAT:
             return self.heartbeat()
@@ -420,12 +428,16 @@ class Vehicle:
             return R.MAVLink_sys_status_message(present, enabled, health, 0, 12600, -1, 100,
                                                 0, 0, 0, 0, 0, 0)
         if msgid == R.MAVLINK_MSG_ID_GPS_RAW_INT:
-            lat, lon = (round(s.lat_deg * 1e7), round(s.lon_deg * 1e7)) if fix else (0, 0)
-            return R.MAVLink_gps_raw_int_message(
-                boot_ms * 1000, 6 if fix else R.GPS_FIX_TYPE_NO_FIX, lat, lon,
-                int(s.alt_amsl_m * 1000) if fix else 0, 121, 200, 0, 0, 10 if fix else 0)
+            return self.gps_message(now, fix)
         if msgid == R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT:
             return self.position_message(now)
+        if msgid == R.MAVLINK_MSG_ID_EKF_STATUS_REPORT:
+            # a healthy EKF3 (AP_NavEKF3_Outputs.cpp send_status_report): attitude,
+            # velocities, relative and absolute position, once it uses the GPS
+            flags = EKF_HEALTHY_FLAGS if fix else R.EKF_ATTITUDE
+            return R.MAVLink_ekf_status_report_message(flags, 0.01, 0.01, 0.01, 0.01, 0.0, 0.0)
+        if msgid == R.MAVLINK_MSG_ID_SIM_STATE:
+            return self.sim_state(now)
         if msgid == R.MAVLINK_MSG_ID_MISSION_CURRENT:
             return self.mission_current()
         if msgid == R.MAVLINK_MSG_ID_EXTENDED_SYS_STATE:
@@ -441,11 +453,56 @@ class Vehicle:
                                              s.alt_amsl_m, float(v[2]))
         return None
 
+    def estimate(self, now: float) -> tuple[float, float]:
+        """Where the copter believes it is (lat, lon): the position it flies, plus what a
+        GPS step has not yet been flown out of (:meth:`.gps.GpsError.transient`)."""
+        ap = self.autopilot
+        de, dn = self.gps.transient(now - self.boot_time)
+        if de == 0 and dn == 0:
+            return self.state.lat_deg, self.state.lon_deg
+        return ap.tangent.to_latlon(ap.position[0] + de, ap.position[1] + dn)
+
+    def sim_state(self, now: float):
+        """SIM_STATE (SITL's true state, libraries/SITL/SITL.cpp ``sim_state_send``): the
+        position the copter truly has, its estimate less its GPS error."""
+        ap = self.autopilot
+        t = now - self.boot_time
+        de, dn = self.gps.transient(t) - self.gps.error(t)
+        lat, lon = ap.tangent.to_latlon(ap.position[0] + de, ap.position[1] + dn)
+        v = ap.velocity
+        return R.MAVLink_sim_state_message(
+            q1=1.0, q2=0.0, q3=0.0, q4=0.0, roll=0.0, pitch=0.0, yaw=0.0, xacc=0.0, yacc=0.0,
+            zacc=0.0, xgyro=0.0, ygyro=0.0, zgyro=0.0, lat=lat, lon=lon,
+            alt=float(self.state.alt_amsl_m), std_dev_horz=0.0, std_dev_vert=0.0,
+            vn=float(v[1]), ve=float(v[0]), vd=float(-v[2]), lat_int=round(lat * 1e7),
+            lon_int=round(lon * 1e7))
+
+    def gps_message(self, now: float, fix: bool):
+        """GPS_RAW_INT (GCS_Common.cpp send_gps_raw): the fix type and accuracy its GPS is
+        set to report (:class:`.gps.GpsErrorOptions`, SIM_GPS_ACC), the position it
+        reads (the copter's estimate), ground speed and course."""
+        s, v = self.state, self.autopilot.velocity
+        boot_ms = int((now - self.boot_time) * 1000) & 0xFFFFFFFF
+        if not fix:
+            return R.MAVLink_gps_raw_int_message(boot_ms * 1000, R.GPS_FIX_TYPE_NO_FIX, 0, 0,
+                                                 0, 121, 200, 0, 0, 0)
+        lat, lon = self.estimate(now)
+        speed = float(math.hypot(v[0], v[1]))
+        course = math.degrees(math.atan2(v[0], v[1])) % 360.0
+        acc_mm = int(round(self.gps.accuracy_m() * 1000))
+        o = self.options.gps
+        return R.MAVLink_gps_raw_int_message(
+            boot_ms * 1000, o.fix_type, round(lat * 1e7), round(lon * 1e7),
+            int(s.alt_amsl_m * 1000), 121, 200, int(round(speed * 100)),
+            int(round(course * 100)) % 36000, o.satellites, int(s.alt_amsl_m * 1000),
+            acc_mm, acc_mm, 0, 0, 0)
+
     def position_message(self, now: float):
         s, v = self.state, self.autopilot.velocity
         boot_ms = int((now - self.boot_time) * 1000) & 0xFFFFFFFF
+        lat, lon = self.estimate(now)
         # GLOBAL_POSITION_INT velocities are NED cm/s; ours are ENU m/s
         return R.MAVLink_global_position_int_message(
-            boot_ms, round(s.lat_deg * 1e7), round(s.lon_deg * 1e7), int(s.alt_amsl_m * 1000),
+            boot_ms, round(lat * 1e7), round(lon * 1e7), int(s.alt_amsl_m * 1000),
             int(round(s.relative_alt_m * 1000)), int(v[1] * 100), int(v[0] * 100),
             int(-v[2] * 100), 0)

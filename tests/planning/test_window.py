@@ -143,7 +143,7 @@ def _orchard(folder, *, rows: int, per_row: int):
         "[start]", f"lat = {s_lat:.8f}", f"lon = {s_lon:.8f}", "alt = 4.0",
         "[goal]", f"lat = {g_lat:.8f}", f"lon = {g_lon:.8f}", "alt = 4.0",
         "[formation]", "offsets = [[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]",
-        "clearance = 1.0",
+        "clearance = 1.0", "[navigation]", "horizontal_error = 0.0",
         "[survey]", "spacing = 7.0", "heading = 0.0", "margin = 3.5",
         "[planner]", 'waypoints = "auto"', ""]))
     return load_scenario(path)

@@ -1,0 +1,131 @@
+"""An emulated copter's GPS error: where it believes it is, against where it is.
+
+ArduCopter flies its EKF's position estimate along the mission; the estimate follows the
+GPS, so a copter whose GPS is off by ``e`` flies the path with its true position off by
+``-e``. The emulator's autopilot flies the estimate (:mod:`.autopilot`); this module
+gives the error (:class:`GpsError`):
+
+- a slow wander, independent per copter: per axis a first-order Gauss-Markov process
+  (``wander_m`` standard deviation, ``correlation_s``), drawn on a 1 s grid from its seed
+  and interpolated, so a flight is the same whatever its message timing;
+- steps: ``glitches`` at given times, and SITL's own knobs ``SIM_GPS_GLITCH_X`` /
+  ``SIM_GPS_GLITCH_Y`` (an offset of latitude / longitude in degrees,
+  libraries/SITL/SIM_GPS.cpp) set by PARAM_SET, as on SITL.
+
+A step of the GPS is a step of the estimate: EKF3 resets or quickly fuses to the new GPS
+position, and AC_PosControl then flies the estimate back onto the path, the true
+position moving by the step (:meth:`GpsError.transient`: the step decaying with the
+position loop's time constant, ``1 / PSC_POSXY_P``). What the copter reports is the
+estimate: GLOBAL_POSITION_INT and GPS_RAW_INT; SIM_STATE reports the true position.
+
+Reported, as SITL does: the fix type (6, RTK fixed, by default: SITL's) and the
+accuracy ``SIM_GPS_ACC`` (0.3 m by default) as GPS_RAW_INT's ``h_acc``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..ardupilot.gps import SITL_GPS_ACCURACY_M
+from ..ardupilot.navigation import REAL32, ParamDefault
+
+_SIM = "libraries/SITL/SIM_GPS.cpp"
+SIM_GPS_PARAM_DEFAULTS = {
+    "SIM_GPS_GLITCH_X": ParamDefault(0.0, REAL32, _SIM + " (latitude offset, degrees)"),
+    "SIM_GPS_GLITCH_Y": ParamDefault(0.0, REAL32, _SIM + " (longitude offset, degrees)"),
+    "SIM_GPS_ACC": ParamDefault(SITL_GPS_ACCURACY_M, REAL32, _SIM + " (reported accuracy, m)"),
+}
+"""SITL's GPS parameters the emulator knows (the names ArduCopter 4.5 SITL has)."""
+
+GRID_S = 1.0
+"""The wander is drawn every this many seconds and interpolated between."""
+METRES_PER_DEGREE = 111_319.49
+"""Metres per degree of latitude (and of longitude at the equator) on SITL's sphere
+(libraries/AP_Common/Location.cpp LOCATION_SCALING_FACTOR)."""
+
+
+@dataclass(frozen=True)
+class GpsErrorOptions:
+    """``wander_m``: the wander's standard deviation per axis (metres); ``correlation_s``
+    its correlation time; ``glitches``: ``(seconds after boot, east m, north m)`` steps
+    added to the error; ``fix_type`` and ``satellites`` as reported; ``seed``."""
+
+    wander_m: float = 0.0
+    correlation_s: float = 30.0
+    glitches: tuple[tuple[float, float, float], ...] = ()
+    fix_type: int = 6
+    satellites: int = 10
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not (self.wander_m >= 0 and self.correlation_s > 0):
+            raise ValueError("wander_m must be >= 0 and correlation_s > 0")
+
+
+@dataclass
+class GpsError:
+    """One copter's GPS error (ENU metres east/north) over time since boot; ``params``
+    is the autopilot's parameter table (SIM_GPS_GLITCH_X/Y are read from it)."""
+
+    options: GpsErrorOptions
+    params: dict
+    lat_deg: float = 0.0
+    response_s: float = 1.0  # 1 / PSC_POSXY_P (ArduCopter's default 1.0)
+    _grid: list = field(default_factory=list)
+    _rng: np.random.Generator | None = None
+    _steps: list = field(default_factory=list)  # (t, east, north) of parameter steps
+    _param_offset: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        self._rng = np.random.default_rng([self.options.seed, 0x6E55])
+        self._grid = [np.zeros(2) if self.options.wander_m == 0 else
+                      self._rng.normal(0.0, self.options.wander_m, 2)]
+
+    def _wander(self, t: float) -> np.ndarray:
+        o = self.options
+        if o.wander_m == 0 or t <= 0:
+            return self._grid[0].copy() if t <= 0 else np.zeros(2)
+        k = int(t // GRID_S)
+        a = math.exp(-GRID_S / o.correlation_s)
+        while len(self._grid) <= k + 1:
+            self._grid.append(a * self._grid[-1]
+                              + o.wander_m * math.sqrt(1 - a * a) * self._rng.normal(0, 1, 2))
+        f = t / GRID_S - k
+        return (1 - f) * self._grid[k] + f * self._grid[k + 1]
+
+    def param_changed(self, t: float) -> None:
+        """SIM_GPS_GLITCH_X/Y may have changed at ``t``: a step of the difference."""
+        north = float(self.params.get("SIM_GPS_GLITCH_X", 0.0)) * METRES_PER_DEGREE
+        east = (float(self.params.get("SIM_GPS_GLITCH_Y", 0.0)) * METRES_PER_DEGREE
+                * math.cos(math.radians(self.lat_deg)))
+        de, dn = east - self._param_offset[0], north - self._param_offset[1]
+        if de or dn:
+            self._steps.append((t, de, dn))
+            self._param_offset = (east, north)
+
+    def _all_steps(self) -> Sequence[tuple[float, float, float]]:
+        return [*self.options.glitches, *self._steps]
+
+    def error(self, t: float) -> np.ndarray:
+        """The GPS error at ``t`` seconds after boot, ``(2,)`` east/north metres."""
+        out = self._wander(t)
+        for t0, east, north in self._all_steps():
+            if t >= t0:
+                out = out + (east, north)
+        return out
+
+    def transient(self, t: float) -> np.ndarray:
+        """How far the estimate still is from where the controller flies it after the
+        steps so far (the step, decaying with ``response_s``), ``(2,)``."""
+        out = np.zeros(2)
+        for t0, east, north in self._all_steps():
+            if t >= t0:
+                out += np.array([east, north]) * math.exp(-(t - t0) / self.response_s)
+        return out
+
+    def accuracy_m(self) -> float:
+        return float(self.params.get("SIM_GPS_ACC", SITL_GPS_ACCURACY_M))
