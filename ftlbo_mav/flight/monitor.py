@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 from .metrics import min_clearance, min_separation, slot_errors
+from .navigation import navigation_short
 from .planned import PlannedFlight
 from .record import FlightRecord, Sample
 
@@ -69,7 +70,7 @@ class Monitor:
         stale = "  NO HEARTBEAT" if age > 3.0 else ""
         return (f"{v.name:>5} sysid {v.sysid:<3} {s.mode:<9} "
                 f"{'ARMED' if s.armed else 'disarmed':<8} alt {s.alt_m:5.1f} m  "
-                f"item {item:<6} {slot}{stale}")
+                f"item {item:<6} {slot}{navigation_short(s.gps_raw, s.ekf_raw)}{stale}")
 
     def _group_line(self, pos: np.ndarray, slots: np.ndarray) -> str:
         err = float(np.sqrt(np.mean(slots**2)))

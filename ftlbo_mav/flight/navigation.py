@@ -182,3 +182,20 @@ def ekf_report(msg) -> EkfReport | None:
     if msg is None:
         return None
     return EkfReport(int(msg.flags), float(msg.pos_horiz_variance))
+
+
+_FIX_SHORT = {0: "none", 1: "nofix", 2: "2D", 3: "3D", 4: "DGPS", 5: "RTKflt", 6: "RTKfix",
+              7: "static", 8: "PPP"}
+
+
+def navigation_short(gps_msg, ekf_msg) -> str:
+    """The live view's few characters for a vehicle's GPS and EKF (raw messages, None
+    when not received): fix, accuracy, satellites, EKF position variance."""
+    if gps_msg is None:
+        return ""
+    acc = h_acc_m(getattr(gps_msg, "h_acc", 0))
+    text = (f"  gps {_FIX_SHORT.get(gps_msg.fix_type, gps_msg.fix_type)} "
+            + ("-" if acc is None else f"{acc:.2f} m") + f" {gps_msg.satellites_visible} sat")
+    if ekf_msg is not None:
+        text += f" ekf {ekf_msg.pos_horiz_variance:.2f}"
+    return text

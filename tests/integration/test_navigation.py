@@ -1,0 +1,102 @@
+"""Flights held to the plan's navigation budget: a copter whose GPS reports worse than
+the budget is refused before anything arms, one whose GPS jumps (a glitch, as a
+multipath reflection or a receiver reset gives) during take-off or mid-leg is a departure
+that the formation policy answers, and ``fly`` never ends with exit 0 after one.
+
+The emulator, or ArduPilot SITL when ARDUPILOT_SITL is set: the faults are made with
+SITL's own knobs from the copter's second port (SIM_GPS_ACC, SIM_GPS_GLITCH_X).
+"""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from ftlbo_mav.sim.gps import METRES_PER_DEGREE
+
+from .fleet import vehicles
+from .test_departures import (  # noqa: F401 - the fixtures
+    HOMES,
+    OPTIONS,
+    SPEEDUP,
+    SecondPort,
+    _fly_with,
+    _in_auto_for,
+    _summary,
+    _upload,
+    example,
+    plan_dir,
+)
+
+pytestmark = pytest.mark.sitl
+
+GLITCH_M = 3.0
+
+
+def test_a_copter_whose_gps_is_worse_than_the_budget_is_refused_before_arming(plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        station = SecondPort(fleet.serial1_urls[1], 2)
+        try:
+            station.set_param("SIM_GPS_ACC", 1.5)
+            time.sleep(1.0 / SPEEDUP)
+            result, _took = _fly_with(plan_dir, fleet.urls, time.monotonic)
+            assert not station.armed
+        finally:
+            station.close()
+    out = result.output
+    assert result.exit_code != 0, out
+    assert "pre-flight failed, nothing armed" in out
+    line = next(x for x in out.splitlines() if "uav2 (sysid 2)" in x)
+    assert "GPS accuracy 1.50 m, worse than the plan's budget 0.5 m" in line
+    assert "rtk-float" in line
+    assert not any("uav1 (sysid 1)" in x for x in out.splitlines() if "navigation" in x)
+
+
+def _glitch(station: SecondPort) -> None:
+    station.set_param("SIM_GPS_GLITCH_X", GLITCH_M / METRES_PER_DEGREE)  # north, degrees
+
+
+def test_a_gps_glitch_mid_leg_is_a_departure_the_others_answer(plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        station = SecondPort(fleet.serial1_urls[0], 1)
+
+        def fault():
+            _in_auto_for(station, 3.0)
+            _glitch(station)
+            return time.monotonic()
+
+        try:
+            result, took = _fly_with(plan_dir, fleet.urls, fault)
+        finally:
+            station.close()
+    out = result.output
+    assert result.exit_code == 1, out
+    line = next(x for x in out.splitlines() if x.strip().startswith("uav1 (sysid 1): navigation"))
+    # the GPS jumps by the glitch, less what the copter has flown out of it by the next
+    # report; or ArduCopter rejects it and says so
+    assert "GPS position jumped" in line or "GPS Glitch" in line, line
+    assert "uav2 (sysid 2): stopped on its track (pause)" in out
+    assert any("uav1 (sysid 1): navigation" in d for d in _summary(plan_dir)["departures"])
+    assert took < 60.0
+
+
+def test_a_gps_glitch_during_take_off_is_a_departure(plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        station = SecondPort(fleet.serial1_urls[2], 3)
+
+        def fault():
+            assert station.wait(lambda p: p.armed, 120.0)
+            _glitch(station)
+            return time.monotonic()
+
+        try:
+            result, _took = _fly_with(plan_dir, fleet.urls, fault)
+        finally:
+            station.close()
+    out = result.output
+    assert result.exit_code == 1, out
+    assert any(x.strip().startswith("uav3 (sysid 3): navigation") for x in out.splitlines()), out
