@@ -12,11 +12,15 @@ gives the error (:class:`GpsError`):
   ``SIM_GPS_GLITCH_Y`` (an offset of latitude / longitude in degrees,
   libraries/SITL/SIM_GPS.cpp) set by PARAM_SET, as on SITL.
 
-A step of the GPS is a step of the estimate: EKF3 resets or quickly fuses to the new GPS
-position, and AC_PosControl then flies the estimate back onto the path, the true
-position moving by the step (:meth:`GpsError.transient`: the step decaying with the
-position loop's time constant, ``1 / PSC_POSXY_P``). What the copter reports is the
-estimate: GLOBAL_POSITION_INT and GPS_RAW_INT; SIM_STATE reports the true position.
+A step of the GPS is no step of the estimate: EKF3 fuses the new GPS position over
+seconds (recorded on ArduCopter 4.5.6 SITL, ``tests/data/ardupilot-4.5.6/gps.json``: a
+3 m SIM_GPS_GLITCH_X step, the EKF's position moving to it as a first-order lag of
+:data:`EKF_FUSE_S`), while AC_PosControl keeps the estimate on the path; the true
+position moves away by the fused part of the step. :meth:`GpsError.transient` is the
+part not yet fused. What the copter reports: GLOBAL_POSITION_INT the estimate (the
+position it flies), GPS_RAW_INT the receiver's reading (the truth plus the error: the
+estimate plus the unfused part), SIM_STATE the truth (the estimate less the fused
+error).
 
 Reported, as SITL does: the fix type (6, RTK fixed, by default: SITL's) and the
 accuracy ``SIM_GPS_ACC`` (0.3 m by default) as GPS_RAW_INT's ``h_acc``.
@@ -41,6 +45,9 @@ SIM_GPS_PARAM_DEFAULTS = {
 }
 """SITL's GPS parameters the emulator knows (the names ArduCopter 4.5 SITL has)."""
 
+EKF_FUSE_S = 5.0
+"""How fast EKF3 takes up a step of the GPS position: a first-order lag of this time
+constant (fitted to tests/data/ardupilot-4.5.6/gps.json: 4.7-5.4 s over the step)."""
 GRID_S = 1.0
 """The wander is drawn every this many seconds and interpolated between."""
 METRES_PER_DEGREE = 111_319.49
@@ -74,7 +81,7 @@ class GpsError:
     options: GpsErrorOptions
     params: dict
     lat_deg: float = 0.0
-    response_s: float = 1.0  # 1 / PSC_POSXY_P (ArduCopter's default 1.0)
+    response_s: float = EKF_FUSE_S
     _grid: list = field(default_factory=list)
     _rng: np.random.Generator | None = None
     _steps: list = field(default_factory=list)  # (t, east, north) of parameter steps
@@ -119,8 +126,8 @@ class GpsError:
         return out
 
     def transient(self, t: float) -> np.ndarray:
-        """How far the estimate still is from where the controller flies it after the
-        steps so far (the step, decaying with ``response_s``), ``(2,)``."""
+        """The part of the steps so far the EKF has not yet fused (each step decaying
+        with ``response_s``), ``(2,)``: the GPS reads this much beyond the estimate."""
         out = np.zeros(2)
         for t0, east, north in self._all_steps():
             if t >= t0:

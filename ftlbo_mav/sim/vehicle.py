@@ -453,9 +453,9 @@ class Vehicle:
                                              s.alt_amsl_m, float(v[2]))
         return None
 
-    def estimate(self, now: float) -> tuple[float, float]:
-        """Where the copter believes it is (lat, lon): the position it flies, plus what a
-        GPS step has not yet been flown out of (:meth:`.gps.GpsError.transient`)."""
+    def reading(self, now: float) -> tuple[float, float]:
+        """What its GPS reads (lat, lon): the position it flies (its estimate) plus the
+        part of a GPS step its EKF has not fused yet (:meth:`.gps.GpsError.transient`)."""
         ap = self.autopilot
         de, dn = self.gps.transient(now - self.boot_time)
         if de == 0 and dn == 0:
@@ -464,7 +464,8 @@ class Vehicle:
 
     def sim_state(self, now: float):
         """SIM_STATE (SITL's true state, libraries/SITL/SITL.cpp ``sim_state_send``): the
-        position the copter truly has, its estimate less its GPS error."""
+        position the copter truly has, its estimate less the fused GPS error (``lat`` and
+        ``lon`` as SITL fills them: 1e-7 degrees in a float, as ``lat_int``)."""
         ap = self.autopilot
         t = now - self.boot_time
         de, dn = self.gps.transient(t) - self.gps.error(t)
@@ -472,7 +473,7 @@ class Vehicle:
         v = ap.velocity
         return R.MAVLink_sim_state_message(
             q1=1.0, q2=0.0, q3=0.0, q4=0.0, roll=0.0, pitch=0.0, yaw=0.0, xacc=0.0, yacc=0.0,
-            zacc=0.0, xgyro=0.0, ygyro=0.0, zgyro=0.0, lat=lat, lon=lon,
+            zacc=0.0, xgyro=0.0, ygyro=0.0, zgyro=0.0, lat=lat * 1e7, lon=lon * 1e7,
             alt=float(self.state.alt_amsl_m), std_dev_horz=0.0, std_dev_vert=0.0,
             vn=float(v[1]), ve=float(v[0]), vd=float(-v[2]), lat_int=round(lat * 1e7),
             lon_int=round(lon * 1e7))
@@ -486,7 +487,7 @@ class Vehicle:
         if not fix:
             return R.MAVLink_gps_raw_int_message(boot_ms * 1000, R.GPS_FIX_TYPE_NO_FIX, 0, 0,
                                                  0, 121, 200, 0, 0, 0)
-        lat, lon = self.estimate(now)
+        lat, lon = self.reading(now)
         speed = float(math.hypot(v[0], v[1]))
         course = math.degrees(math.atan2(v[0], v[1])) % 360.0
         acc_mm = int(round(self.gps.accuracy_m() * 1000))
@@ -500,7 +501,7 @@ class Vehicle:
     def position_message(self, now: float):
         s, v = self.state, self.autopilot.velocity
         boot_ms = int((now - self.boot_time) * 1000) & 0xFFFFFFFF
-        lat, lon = self.estimate(now)
+        lat, lon = s.lat_deg, s.lon_deg
         # GLOBAL_POSITION_INT velocities are NED cm/s; ours are ENU m/s
         return R.MAVLink_global_position_int_message(
             boot_ms, round(lat * 1e7), round(lon * 1e7), int(s.alt_amsl_m * 1000),

@@ -9,14 +9,17 @@ SITL's own knobs from the copter's second port (SIM_GPS_ACC, SIM_GPS_GLITCH_X).
 
 from __future__ import annotations
 
+import shutil
 import time
+from pathlib import Path
 
 import pytest
 
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE
 
+from ..conftest import EXAMPLE
 from .fleet import vehicles
-from .test_departures import (  # noqa: F401 - the fixtures
+from .test_departures import (
     HOMES,
     OPTIONS,
     SPEEDUP,
@@ -25,9 +28,21 @@ from .test_departures import (  # noqa: F401 - the fixtures
     _in_auto_for,
     _summary,
     _upload,
-    example,
-    plan_dir,
 )
+
+
+@pytest.fixture(scope="module")
+def example(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("example") / "plan"
+    shutil.copytree(EXAMPLE.with_suffix(""), folder)
+    return folder
+
+
+@pytest.fixture
+def plan_dir(example, tmp_path) -> Path:
+    folder = tmp_path / "plan"
+    shutil.copytree(example, folder)
+    return folder
 
 pytestmark = pytest.mark.sitl
 

@@ -45,7 +45,7 @@ def test_sim_gps_glitch_is_a_step_that_the_copter_flies_out_of():
     g.param_changed(10.0)
     assert np.allclose(g.error(9.9), 0) and np.allclose(g.error(10.0), [0.0, 3.0])
     assert np.allclose(g.transient(10.0), [0.0, 3.0])
-    assert np.allclose(g.transient(20.0), [0.0, 3.0 * np.exp(-10.0)])
+    assert np.allclose(g.transient(20.0), [0.0, 3.0 * np.exp(-10.0 / g.response_s)])
 
 
 def _vehicle(**gps) -> Vehicle:
@@ -53,9 +53,9 @@ def _vehicle(**gps) -> Vehicle:
 
 
 def _en(v: Vehicle, msg, frame: LocalFrame) -> np.ndarray:
-    lat = msg.lat * 1e-7 if isinstance(msg.lat, int) else msg.lat
-    lon = msg.lon * 1e-7 if isinstance(msg.lon, int) else msg.lon
-    return frame.to_enu(lat_deg=lat, lon_deg=lon)[:2]
+    lat, lon = (msg.lat_int, msg.lon_int) if msg.get_type() == "SIM_STATE" else (msg.lat,
+                                                                                 msg.lon)
+    return frame.to_enu(lat_deg=lat * 1e-7, lon_deg=lon * 1e-7)[:2]
 
 
 def test_gps_raw_int_reports_sitls_fix_and_accuracy_until_told_otherwise():
