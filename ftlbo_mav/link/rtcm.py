@@ -19,8 +19,10 @@ The rules follow ArduPilot 4.5.6, libraries/AP_GPS/AP_GPS.cpp
 - So a frame of an exact multiple of 180 bytes (fewer than 4 fragments) needs an empty
   final fragment; more than 4 * 180 = 720 bytes cannot be sent (dropped, counted).
 
-(Written from AP_GPS.cpp as remembered; the ArduPilot source was not re-read in this
-change, see the commit message.)
+Checked against an AP_GPS.cpp of the ArduPilot repository of the 4.5 era (the one with
+``handle_gps_rtcm_data(chan, msg)``, ``rtcm_stats`` and ``AP_GPS_RTCM_DECODE_ENABLED``),
+not pinned to the 4.5.6 tag. That version may also decode the injected RTCM (to drop
+duplicates arriving on several links); the emulator does not model that.
 """
 
 from __future__ import annotations
