@@ -80,9 +80,44 @@ def _forwarding(url: str | None, fleet: Fleet):
     return Forwarder(url, fleet.links, {v.sysid: v.link for v in fleet.vehicles})
 
 
+def _rtcm(source: str | None, fleet: Fleet):
+    """RTK corrections from ``--rtcm`` to every link of the flight (link/rtcm.py)."""
+    if not source:
+        return contextlib.nullcontext()
+    from ..link.rtcm import RtcmForwarder, frames_from, parse_source
+
+    return RtcmForwarder(frames_from(parse_source(source)), fleet.links)
+
+
+def _check_rtcm(source: str | None) -> None:
+    """A bad ``--rtcm`` string is a BadInput (exit 2) before any link is opened."""
+    if source:
+        from ..link.rtcm import parse_source
+
+        parse_source(source)
+
+
+def _rtcm_line(rtcm) -> str | None:
+    if rtcm is None:
+        return None
+    line = (f"RTCM corrections: {rtcm.frames} frames, {rtcm.bytes} bytes, "
+            f"{rtcm.bytes_per_s():.0f} bytes/s to every copter")
+    if rtcm.dropped:
+        line += f"; {rtcm.dropped} frames longer than 720 bytes dropped"
+    if rtcm.error:
+        line += f"; the source stopped: {rtcm.error}"
+    return line
+
+
+_rtcm_option = click.option(
+    "--rtcm", "rtcm_source", default=None,
+    help="RTK corrections for every copter (GPS_RTCM_DATA): a serial port, "
+         "tcp://host:port or ntrip://user:pass@host:port/MOUNTPOINT.")
+
+
 def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                         sysids: list[int], *, keeper=None, outcome: list[str] | None = None,
-                        events: list[str] | None = None) -> dict:
+                        events: list[str] | None = None, rtcm=None) -> dict:
     """flight.csv, summary.json and report.png in ``out_dir``; returns the summary.
     ``events``: the departures seen, one line each; ``outcome``: per vehicle, what
     happened and what was done when the flight left its plan."""
@@ -97,6 +132,9 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                              "off_reason": keeper.off_reason,
                              "link_gaps": keeper.log.link_gaps,
                              "vehicles": keeper.log.as_dict(planned.names)}
+    if rtcm is not None:
+        summary["rtcm"] = {"frames": rtcm.frames, "bytes": rtcm.bytes, "dropped": rtcm.dropped,
+                           "bytes_per_s": round(rtcm.bytes_per_s(), 1), "error": rtcm.error}
     files = {"flight.csv": monitor.record.to_csv(),
              "summary.json": json.dumps(summary, indent=2) + "\n"}
     if len(times):
@@ -125,6 +163,10 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
         click.echo("formation keeper: " + (_keeper_line(waited) if waited
                                            else "no vehicle needed to wait") + (
             f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else ""))
+    rtcm = summary.get("rtcm")
+    if rtcm:
+        click.echo(f"RTCM corrections: {rtcm['frames']} frames, {rtcm['bytes']} bytes "
+                   f"({rtcm['bytes_per_s']:.0f} bytes/s), {rtcm['dropped']} dropped")
     click.echo(f"flight log, summary and report in {out_dir}/")
 
 
@@ -178,10 +220,11 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
 @click.option("--flight-timeout", type=FiniteFloat(1, 86_400), default=900.0,
               show_default=True, help="Abort if the missions have not ended by then.")
 @timing_options
+@_rtcm_option
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
                 on_departure, lost_wait, use_keeper, arm_budget, preflight_timeout, flight_timeout,
-                timeout, retries, ready_timeout, discover_timeout, signing_key):
+                timeout, retries, ready_timeout, discover_timeout, signing_key, rtcm_source):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
@@ -191,6 +234,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     """
     planned = load_planned_flight(plan_dir)
     names, sysids, urls = _fleet_args(planned, sysid_text, connect)
+    _check_rtcm(rtcm_source)
     key = load_key(signing_key) if signing_key else None
     monitor = Monitor(planned)
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
@@ -202,14 +246,16 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
                on_position=monitor) as fleet, _forwarding(forward, fleet), \
-            _control(control_port, fleet):
+            _control(control_port, fleet), _rtcm(rtcm_source, fleet) as rtcm:
         monitor.vehicles = fleet.vehicles
+        if rtcm is not None:
+            click.echo(f"RTCM corrections from {rtcm_source} to {len(fleet.links)} link(s)")
         view = LiveView(monitor, sys.stderr)
         events: list[str] = []
 
         def report(**extra) -> dict:
             return write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper,
-                                       events=events, **extra)
+                                       events=events, rtcm=rtcm, **extra)
 
         try:
             fly(planned, fleet.vehicles, options=options,
@@ -258,20 +304,25 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
               show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
+@_rtcm_option
 @user_errors
 def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, discover_timeout,
-            signing_key):
+            signing_key, rtcm_source):
     """Live view of the vehicles; with PLAN_DIR also formation error, separation and
     clearance, and a flight log and report at the end."""
     planned = load_planned_flight(plan_dir) if plan_dir else None
     names, sysids, urls = _fleet_args(planned, sysid_text, connect)
+    _check_rtcm(rtcm_source)
     key = load_key(signing_key) if signing_key else None
     watch = Monitor(planned)
     if planned is not None:
         check_writable(log_dir or plan_dir / "monitor")
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
-               on_position=watch, position_hz=rate) as fleet, _forwarding(forward, fleet):
+               on_position=watch, position_hz=rate) as fleet, _forwarding(forward, fleet), \
+            _rtcm(rtcm_source, fleet) as rtcm:
         watch.vehicles = fleet.vehicles
+        if rtcm is not None:
+            click.echo(f"RTCM corrections from {rtcm_source} to {len(fleet.links)} link(s)")
         view = LiveView(watch, sys.stderr)
         departures = DepartureWatch(len(sysids),
                                     landing=landing_points(planned) if planned else None,
@@ -295,6 +346,8 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
         except KeyboardInterrupt:
             pass
         view.update(force=True)
+    if _rtcm_line(rtcm):
+        click.echo(_rtcm_line(rtcm))
     departed = [e for e in departures.events if e.departure]
     if departed:
         click.echo(f"{len(departed)} departure(s) from the plan:")
@@ -302,8 +355,8 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
             click.echo(f"  {line}")
     if planned is not None:
         out_dir = log_dir or plan_dir / "monitor"
-        _print_summary(write_flight_report(planned, watch, out_dir, sysids, events=events),
-                       out_dir)
+        _print_summary(write_flight_report(planned, watch, out_dir, sysids, events=events,
+                                           rtcm=rtcm), out_dir)
     if departed:
         sys.exit(1)
 

@@ -34,6 +34,7 @@ from ..ardupilot.fence import (
 from ..ardupilot.modes import CopterMode, heartbeat_base_mode
 from ..ardupilot.navigation import PARAM_COUNT
 from ..ardupilot.streams import data_stream_messages
+from ..link.rtcm import Reassembler
 from ..mission.items import MissionItem
 from .autopilot import Autopilot, AutopilotOptions
 from .gps import GpsError, GpsErrorOptions
@@ -144,6 +145,9 @@ class Vehicle:
         self.gps = GpsError(options.gps, self.autopilot.params, lat_deg=lat)
         self.links: dict[Link, LinkState] = {}
         self._mission_version = -1
+        # GPS_RTCM_DATA reassembled as AP_GPS::handle_gps_rtcm_fragment does (link/rtcm.py)
+        self.rtcm = Reassembler()
+        self.rtcm_frames: list[bytes] = []
 
     # -- links
     def link(self, link: Link, now: float | None = None) -> LinkState:
@@ -196,6 +200,11 @@ class Vehicle:
             self.gps.param_changed(now - self.boot_time)  # SIM_GPS_GLITCH_X/Y
         elif kind == "SET_POSITION_TARGET_GLOBAL_INT":
             replies = self._position_target(msg)
+        elif kind == "GPS_RTCM_DATA":  # AP_GPS::handle_gps_rtcm_data: injected, no reply
+            frame = self.rtcm.add(msg.flags, bytes(msg.data[:msg.len]))
+            if frame is not None:
+                self.rtcm_frames.append(frame)
+            replies = []
         else:
             replies = self.server_for(msg).handle(msg, now, link)
             self.home_for_missions(now)
