@@ -79,6 +79,7 @@ class Seen:
     seq: int = -1
     gps: GpsReport | None = None
     ekf: EkfReport | None = None
+    gps_jump_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -188,7 +189,7 @@ class DepartureWatch:
                 out += self._once(i, kind, f'"{text.strip()}"', now)
         # where it is: its GPS and EKF held to the plan's budget, in the air
         if self.navigation is not None and s.armed:
-            why = self.navigation.check(i, s.gps, s.ekf, now)
+            why = self.navigation.check(i, s.gps, s.ekf, now, jump_m=s.gps_jump_m)
             if why is not None:
                 out += self._once(i, NAVIGATION, why, now)
         # mode

@@ -107,14 +107,14 @@ def preflight_problems(budget: NavigationBudget, gps: GpsReport | None,
 
 @dataclass
 class _Track:
-    last: GpsReport | None = None
     short_since: float | None = None
     reported: set = field(default_factory=set)
 
 
 class NavigationWatch:
     """Per vehicle: ``check(i, gps, ekf, now)`` returns the words of a new departure
-    (a glitch, or a shortfall lasting :data:`PERSIST_S`), else None; each kind once."""
+    (a glitch: a jump measured by the vehicle's reader on each report, :func:`report_jump`;
+    or a shortfall lasting :data:`PERSIST_S`), else None; each kind once."""
 
     def __init__(self, count: int, budget: NavigationBudget) -> None:
         self.budget = budget
@@ -122,16 +122,17 @@ class NavigationWatch:
         self.tracks = [_Track() for _ in range(count)]
 
     def check(self, i: int, gps: GpsReport | None, ekf: EkfReport | None,
-              now: float) -> str | None:
+              now: float, *, jump_m: float = 0.0) -> str | None:
+        """``jump_m``: the largest GPS jump the vehicle's reports showed while armed
+        (:func:`report_jump`, measured on every report as it arrives)."""
         tr = self.tracks[i]
-        if gps is None:
-            return None
-        jump = self._jump(tr, gps)
-        if jump is not None and "glitch" not in tr.reported:
+        if jump_m > self.glitch_m and "glitch" not in tr.reported:
             tr.reported.add("glitch")
-            return (f"GPS position jumped {jump:.1f} m in one report, more than its "
+            return (f"GPS position jumped {jump_m:.1f} m in one report, more than its "
                     f"velocity carries it (a glitch; at most {self.glitch_m:g} m counts as "
                     "wander)")
+        if gps is None:
+            return None
         short = _shortfalls(self.budget, gps, ekf)
         if not short:
             tr.short_since = None
@@ -143,20 +144,32 @@ class NavigationWatch:
             return "; ".join(short) + f" for {now - tr.short_since:.1f} s"
         return None
 
-    def _jump(self, tr: _Track, gps: GpsReport) -> float | None:
-        """How far ``gps`` is from where the previous report's position and the two
-        reports' mean velocity put it, when that is a glitch (else None)."""
-        last, tr.last = tr.last, gps
-        if last is None or gps.t <= last.t or gps.t - last.t > GPS_STALE_S:
-            return None
-        if gps.fix_type < 3 or last.fix_type < 3:
-            return None
-        dt = gps.t - last.t
-        v = [r.velocity for r in (last, gps) if r.velocity is not None]
-        mean = np.mean(v, axis=0) if v else np.zeros(2)
-        off = np.array([gps.east - last.east, gps.north - last.north]) - mean * dt
-        jump = float(np.hypot(*off))
-        return jump if jump > self.glitch_m else None
+
+M_PER_DEGREE = 111_319.49  # metres per degree of latitude (spherical, for a few metres)
+
+
+def report_jump(prev, cur, fallback_velocity=None) -> float:
+    """How far GPS_RAW_INT ``cur`` is from where ``prev`` and their mean velocity put it,
+    metres (0 when they cannot be compared: no fix, out of order, far apart in time)."""
+    if prev is None or cur.fix_type < 3 or prev.fix_type < 3:
+        return 0.0
+    dt = (cur.time_usec - prev.time_usec) * 1e-6
+    if not 0 < dt <= GPS_STALE_S:
+        return 0.0
+    north = (cur.lat - prev.lat) * 1e-7 * M_PER_DEGREE
+    east = ((cur.lon - prev.lon) * 1e-7 * M_PER_DEGREE
+            * float(np.cos(np.radians(cur.lat * 1e-7))))
+    v = [w for w in (_velocity(prev, fallback_velocity), _velocity(cur, fallback_velocity))
+         if w is not None]
+    mean = np.mean(v, axis=0) if v else np.zeros(2)
+    return float(np.hypot(east - mean[0] * dt, north - mean[1] * dt))
+
+
+def _velocity(msg, fallback):
+    if msg.vel != 0xFFFF and msg.cog != 0xFFFF:
+        speed, course = msg.vel / 100.0, np.radians(msg.cog / 100.0)
+        return (speed * float(np.sin(course)), speed * float(np.cos(course)))
+    return None if fallback is None else tuple(fallback[:2])
 
 
 def gps_report(msg, frame, *, fallback_velocity=None) -> GpsReport | None:

@@ -21,6 +21,7 @@ from ..ardupilot.modes import CopterMode, mode_name
 from ..ardupilot.streams import flight_streams
 from ..errors import FtlboError
 from ..link.endpoints import LinkError
+from .navigation import report_jump
 
 CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
 
@@ -81,6 +82,7 @@ class Status:
     # reads them: gps_report, ekf_report)
     gps_raw: object | None = None
     ekf_raw: object | None = None
+    gps_jump_m: float = 0.0  # the largest GPS jump while armed (flight/navigation.py)
 
     @property
     def texts(self) -> list[str]:
@@ -156,6 +158,9 @@ class FlightVehicle:
             elif kind == "MISSION_CURRENT":
                 s.seq = msg.seq
             elif kind == "GPS_RAW_INT":
+                if s.armed:  # a glitch is measured on every report, whoever watches
+                    s.gps_jump_m = max(s.gps_jump_m, report_jump(s.gps_raw, msg,
+                                                                 s.velocity_enu))
                 s.gps_raw = msg
             elif kind == "EKF_STATUS_REPORT":
                 s.ekf_raw = msg

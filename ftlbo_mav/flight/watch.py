@@ -95,7 +95,7 @@ def observe(v: FlightVehicle, planned: PlannedFlight | None) -> Seen:
     return Seen(mode=s.mode, armed=s.armed, alt_m=s.alt_m, heard_t=s.heard_t,
                 link_up=v.link_up, asked_mode=v.asked_mode, asked_t=v.asked_t,
                 texts=tuple(s.text_log), text_count=s.text_count, position=position,
-                seq=s.seq, gps=gps, ekf=ekf_report(s.ekf_raw))
+                seq=s.seq, gps=gps, ekf=ekf_report(s.ekf_raw), gps_jump_m=s.gps_jump_m)
 
 
 def watch_from_outside(departures: DepartureWatch, vehicles: Sequence[FlightVehicle],

@@ -7,16 +7,19 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ftlbo_mav.ardupilot.failsafes import NAVIGATION, departure_text
 from ftlbo_mav.ardupilot.gps import EKF_POS_HORIZ_ABS
 from ftlbo_mav.flight.departures import DepartureWatch, Seen
 from ftlbo_mav.flight.navigation import (
+    M_PER_DEGREE,
     PERSIST_S,
     EkfReport,
     GpsReport,
     NavigationWatch,
     preflight_problems,
+    report_jump,
 )
 from ftlbo_mav.gnss import CLASSES, NO_BUDGET, budget
 
@@ -67,21 +70,37 @@ def test_a_brief_shortfall_is_not_a_departure():
     assert w.check(0, gps(acc=0.9, t=1.0), HEALTHY, 11.0) is None
 
 
+def raw(north_m=0.0, east_m=0.0, t=0.0, v=(0.0, 0.0), fix=6):
+    lat0, lon0 = 12.0, 109.0
+    speed = float(np.hypot(*v))
+    cog = int(round(np.degrees(np.arctan2(v[0], v[1])) % 360 * 100))
+    return R.MAVLink_gps_raw_int_message(
+        int(t * 1e6), fix, int(round((lat0 + north_m / M_PER_DEGREE) * 1e7)),
+        int(round((lon0 + east_m / (M_PER_DEGREE * np.cos(np.radians(lat0)))) * 1e7)), 0,
+        100, 100, int(round(speed * 100)), cog, 10)
+
+
 def test_moving_at_speed_is_no_glitch_but_a_jump_is():
-    w = NavigationWatch(1, FLOAT)
-    east = 0.0
+    jumps, east, prev = [], 0.0, None
     for k in range(10):  # 5 m/s east, reports 0.5 s apart
-        assert w.check(0, gps(east=east, v=(5.0, 0.0), t=0.5 * k), HEALTHY, 0.5 * k) is None
-        east += 2.5
-    why = w.check(0, gps(east=east + 3.0, v=(5.0, 0.0), t=5.0), HEALTHY, 5.0)
+        cur = raw(east_m=east, v=(5.0, 0.0), t=0.5 * k)
+        jumps.append(report_jump(prev, cur))
+        prev, east = cur, east + 2.5
+    assert max(jumps) < 0.05
+    assert report_jump(prev, raw(east_m=east, north_m=3.0, v=(5.0, 0.0), t=5.0)) == (
+        pytest.approx(3.0, abs=0.05))
+    assert report_jump(prev, raw(east_m=east, t=5.0 + 10.0)) == 0.0  # too far apart
+    assert report_jump(prev, raw(east_m=40.0, t=5.0, fix=1)) == 0.0  # no fix
+
+
+def test_a_jump_larger_than_the_budget_or_a_metre_is_a_glitch():
+    w = NavigationWatch(1, FLOAT)
+    assert w.check(0, gps(), HEALTHY, 1.0, jump_m=0.8) is None
+    why = w.check(0, gps(), HEALTHY, 1.1, jump_m=3.0)
     assert why is not None and "jumped 3.0 m" in why
-
-
-def test_a_wander_slower_than_the_glitch_threshold_is_not_a_glitch():
-    w = NavigationWatch(1, budget("gps"))
-    assert w.glitch_m == pytest.approx(CLASSES["gps"].horizontal_m)
-    for k in range(20):
-        assert w.check(0, gps(fix=3, acc=1.5, east=0.2 * k, t=0.5 * k), HEALTHY, 0.5 * k) is None
+    loose = NavigationWatch(1, budget("gps"))
+    assert loose.glitch_m == pytest.approx(CLASSES["gps"].horizontal_m)
+    assert loose.check(0, gps(fix=3, acc=1.5), HEALTHY, 1.0, jump_m=3.0) is None
 
 
 def test_arducopters_glitch_and_variance_texts_are_navigation_departures():
@@ -93,10 +112,9 @@ def test_arducopters_glitch_and_variance_texts_are_navigation_departures():
 def test_the_departure_watch_reports_a_glitch_in_the_air_only():
     w = DepartureWatch(1, navigation=FLOAT)
     base = dict(mode="AUTO", asked_mode="AUTO", asked_t=0.0, heard_t=1.0, link_up=True,
-                alt_m=5.0, position=np.zeros(3), ekf=HEALTHY)
-    assert w.check([Seen(armed=True, gps=gps(t=0.0), **base)], 1.0) == []
-    (e,) = w.check([Seen(armed=True, gps=gps(east=3.0, t=0.5), **base)], 1.1)
+                alt_m=5.0, position=np.zeros(3), ekf=HEALTHY, gps=gps())
+    assert w.check([Seen(armed=True, **base)], 1.0) == []
+    (e,) = w.check([Seen(armed=True, gps_jump_m=3.0, **base)], 1.1)
     assert e.kind == NAVIGATION and not e.vehicle_chose and "jumped 3.0 m" in e.detail
     ground = DepartureWatch(1, navigation=FLOAT)
-    ground.check([Seen(armed=False, gps=gps(t=0.0), **base)], 1.0)
-    assert ground.check([Seen(armed=False, gps=gps(east=3.0, t=0.5), **base)], 1.1) == []
+    assert ground.check([Seen(armed=False, gps_jump_m=3.0, **base)], 1.1) == []
