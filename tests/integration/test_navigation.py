@@ -19,10 +19,10 @@ from ftlbo_mav.sim.gps import METRES_PER_DEGREE
 
 from ..conftest import EXAMPLE
 from .fleet import vehicles
+from .fleet import BACKEND
 from .test_departures import (
     HOMES,
     OPTIONS,
-    SPEEDUP,
     SecondPort,
     _fly_with,
     _in_auto_for,
@@ -47,6 +47,7 @@ def plan_dir(example, tmp_path) -> Path:
 pytestmark = pytest.mark.sitl
 
 GLITCH_M = 3.0
+SPEEDUP = 1.0 if BACKEND == "sitl" else 12.0  # the emulator: a flight in a few seconds
 
 
 def test_a_copter_whose_gps_is_worse_than_the_budget_is_refused_before_arming(plan_dir):
