@@ -52,6 +52,7 @@ are flown stepwise, not compiled: numba's start-up in a new process
 :func:`stepwise_budget` the seconds are counted over all the flights flown there."""
 
 _STEPWISE_LEFT: ContextVar[float | None] = ContextVar("stepwise_left", default=None)
+_compiled_loaded = False  # whether this process has flown a path compiled: its start-up paid
 
 
 @contextmanager
@@ -59,9 +60,9 @@ def stepwise_budget(seconds: float = STEPWISE_UP_TO_S) -> Iterator[None]:
     """Within: flights are flown stepwise while together they are expected to last at
     most ``seconds``, and compiled from the first that would go over (one plan, which
     predicts its flights again and again while it keeps the clearance, pays numba's
-    start-up once the stepwise loop would cost more). What the flights before did
-    inside, not what the process did before, decides; the two loops fly the same path
-    (within 1e-6 m, ``tests/ardupilot/test_compiled.py``)."""
+    start-up once the stepwise loop would cost more). In a process that has already
+    flown a path compiled every flight is compiled, inside or not; the two loops fly the
+    same path (within 1e-6 m, ``tests/ardupilot/test_compiled.py``)."""
     token = _STEPWISE_LEFT.set(seconds)
     try:
         yield
@@ -70,7 +71,10 @@ def stepwise_budget(seconds: float = STEPWISE_UP_TO_S) -> Iterator[None]:
 
 
 def _stepwise(expected_s: float) -> bool:
-    """Whether a flight expected to last ``expected_s`` is flown stepwise (and counted)."""
+    """Whether a flight expected to last ``expected_s`` is flown stepwise (and counted):
+    never once the process has loaded the compiled loop, whose start-up is then paid."""
+    if _compiled_loaded:
+        return False
     left = _STEPWISE_LEFT.get()
     if left is None:
         return expected_s <= STEPWISE_UP_TO_S
@@ -131,8 +135,8 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     :func:`fly_path_stepwise` flies with the model's objects, 40 times faster; a short
     flight (up to :data:`STEPWISE_UP_TO_S`, or within what is left of a
     :func:`stepwise_budget`) is flown stepwise, since numba's start-up costs more than
-    that (the choice is by size, so a plan never depends on what the process did
-    before)."""
+    that; once a process has flown one path compiled, every later one is (the two loops
+    fly the same path within 1e-6 m, so the choice never changes a plan beyond that)."""
     points, holds = _checked(points, holds_s)
     desired = WaypointNav(nav, points[0].copy(), speed_m_s).desired_speed
     budget = _budget(points, holds, nav, desired, dt)
@@ -142,11 +146,13 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
                                  airframe=airframe)
     from . import compiled
 
+    global _compiled_loaded
     legs = compiled.legs_of(points, nav, desired)
     prm = compiled.nav_params(nav, airframe, desired)
     status, n, times, positions, reached = compiled.fly(
         points, holds, *legs, prm, dt, budget, airframe is not None, SETTLED_M, SETTLED_M_S,
         int(SETTLE_BUDGET_S / dt))
+    _compiled_loaded = True
     if status != compiled.OK:
         raise RuntimeError(f"the path of {len(points)} points was not flown within "
                            f"{budget * dt:.0f} s")

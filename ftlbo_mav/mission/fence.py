@@ -22,9 +22,10 @@ The fence ArduCopter enforces on board (its storage and breach rules:
   RTL's straight line home through the orchard), FENCE_ALT_MAX, FENCE_MARGIN.
 
 And one **rally point** per UAV (where RTL goes when it is nearer than home): the point
-nearest the UAV's goal that is clear of every obstacle (``radius + clearance``), inside
-the area by ``corner_cut_m + margin_m``, at least ``rally_separation_m`` from the other
-UAVs' homes and rally points and from their return lines to their rally points (the
+nearest the UAV's goal that is clear of every obstacle (``radius + clearance`` plus the
+navigation budget, so that the true position keeps the clearance), inside the area by
+``corner_cut_m + margin_m``, at least ``rally_separation_m`` plus two copters' combined
+navigation error (:func:`~ftlbo_mav.gnss.pair_error_m`) from the other UAVs' homes and rally points and from their return lines to their rally points (the
 straight lines RTL flies from each point of their paths that is nearer their rally point
 than their home), while its own such lines keep that distance from the other UAVs'
 homes and rally points (:func:`~.rally.rally_points_enu`). Its altitude is the goal's, in whole
@@ -48,6 +49,7 @@ from .items import (
     FRAME_GLOBAL_RELATIVE_ALT,
     MissionItem,
 )
+from ..gnss import pair_error_m
 from .rally import rally_points_enu
 
 if TYPE_CHECKING:
@@ -158,9 +160,13 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
                           param1=r)
               for i, ((lat, lon, _alt), r) in enumerate(zip(centre_lla, excl))]
     paths = np.asarray(plan.uav_paths, float)
+    # where the copters truly are: the obstacles' clearance plus the navigation budget,
+    # the others' homes and return lines plus two copters' combined error
+    rally_settings = replace(settings, rally_separation_m=settings.rally_separation_m
+                             + pair_error_m(s.navigation.horizontal_m))
     rally = rally_points_enu(paths=paths, centres=centres[:, :2], radii=radii,
-                             clearance_m=s.clearance_m, area_min=lo, area_max=hi,
-                             settings=settings)
+                             clearance_m=s.true_clearance_m, area_min=lo, area_max=hi,
+                             settings=rally_settings)
     params = fence_params(s.max_altitude_m, settings)
     out = []
     for n, (path, point) in enumerate(zip(paths, rally)):
@@ -168,7 +174,7 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
         items: tuple[MissionItem, ...] = ()
         if point is None:
             own_notes.append(f"no rally point: no place in the area is clear of the "
-                             f"obstacles and {settings.rally_separation_m:g} m from the other "
+                             f"obstacles and {rally_settings.rally_separation_m:.2f} m from the other "
                              "UAVs' return lines; RTL goes home")
         else:
             lat, lon, _ = plan.lla(np.array([[point[0], point[1], 0.0]]))[0]

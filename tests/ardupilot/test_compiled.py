@@ -64,6 +64,7 @@ def test_a_plans_flights_share_one_stepwise_budget(monkeypatch):
         return real(*args, **kwargs)
 
     monkeypatch.setattr(fp, "fly_path_stepwise", counted)
+    monkeypatch.setattr(fp, "_compiled_loaded", False)  # as in a new process
     points = np.array([[0.0, 0.0, 5.0], [40.0, 0.0, 5.0]])  # 40 m at 10 m/s: 4 s expected
     alone = [fp.fly_path(points, speed_m_s=10.0) for _ in range(3)]
     assert len(stepwise) == 3  # alone, each is short: stepwise
@@ -75,7 +76,23 @@ def test_a_plans_flights_share_one_stepwise_budget(monkeypatch):
         _same(a, b)
     stepwise.clear()
     fp.fly_path(points, speed_m_s=10.0)
-    assert len(stepwise) == 1  # outside the budget again: by the flight's size
+    assert not stepwise  # the compiled loop's start-up is paid: every later flight is compiled
+
+
+def test_a_short_flight_is_stepwise_until_the_compiled_loop_is_loaded(monkeypatch):
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    monkeypatch.setattr(fp, "_compiled_loaded", False)
+    calls = []
+    real = fp.fly_path_stepwise
+    monkeypatch.setattr(fp, "fly_path_stepwise", lambda *a, **k: calls.append(1) or real(*a, **k))
+    points = np.array([[0.0, 0.0, 5.0], [40.0, 0.0, 5.0]])
+    fp.fly_path(points, speed_m_s=10.0)
+    assert calls == [1]  # short, numba not loaded: stepwise
+    _compiled(points, speed_m_s=10.0)
+    calls.clear()
+    fp.fly_path(points, speed_m_s=10.0)
+    assert calls == []
 
 
 @pytest.mark.parametrize("name", ["nha-trang-orchard", "orchard-survey", "six-tree-slalom"])

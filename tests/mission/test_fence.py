@@ -64,6 +64,26 @@ def test_rally_points_are_clear_of_obstacles_and_apart():
     assert all(f.rally[0].alt_m == int(f.rally[0].alt_m) for f in FENCES)  # whole metres
 
 
+def test_rally_points_keep_clearance_and_separation_where_the_copters_truly_are():
+    from ftlbo_mav.gnss import budget, pair_error_m
+
+    nav = budget("gps", 1.5)  # 1.5 m at 95 %: 2.12 m between two copters
+    rough = replace(PLAN, scenario=replace(PLAN.scenario, navigation=nav))
+    fences = plan_fences(rough)
+    centres, radii = PLAN.scenario.obstacles_enu()
+    centres = np.asarray(centres).reshape(len(radii), -1)[:, :2]
+    homes = PLAN.uav_paths[:, 0, :2]
+    placed = [(n, _en(f.rally)[0]) for n, f in enumerate(fences) if f.rally]
+    assert placed
+    for n, p in placed:
+        assert np.all(np.linalg.norm(centres - p, axis=1) >= np.asarray(radii) + 1.0 + 1.5)
+        others = np.delete(homes, n, axis=0)
+        assert np.linalg.norm(others - p, axis=1).min() >= (
+            FenceSettings().rally_separation_m + pair_error_m(1.5) - 1e-6)
+    plain = [_en(f.rally)[0] for f in FENCES]
+    assert any(np.linalg.norm(p - plain[n]) > 0.1 for n, p in placed)  # the budget moved them
+
+
 def test_no_clearance_makes_the_circles_the_trees_and_says_so():
     bare = replace(PLAN, scenario=replace(PLAN.scenario, clearance_m=0.0))
     fences = plan_fences(bare)
