@@ -52,6 +52,8 @@ COPTER_TYPES = frozenset({
 
 SUPPORTED = "ArduCopter 4.5.x (official or rc) on a multirotor"
 NOT_PROMISED = "the predicted flown path, the clearance kept on it and its timing"
+UNANSWERED = "it did not answer AUTOPILOT_VERSION (MAV_CMD_REQUEST_MESSAGE 148)"
+ANY_FIRMWARE_HINT = " (--any-firmware to go on anyway)"
 
 
 @dataclass(frozen=True)
@@ -104,15 +106,14 @@ def firmware_problem(*, vehicle_type: int | None, autopilot: int | None,
     if vehicle_type is not None and vehicle_type not in COPTER_TYPES:
         found.append(f"its HEARTBEAT says {_type_name('type', vehicle_type)}")
     if version is None:
-        found.append("it did not answer AUTOPILOT_VERSION (MAV_CMD_REQUEST_MESSAGE 148)")
+        found.append(UNANSWERED)
     elif not found:
         fw = Firmware.decode(version)
         if not fw.supported:
             found.append(f"it runs {fw.describe()}")
     if not found:
         return None
-    return (f"firmware: {'; '.join(found)}; the flight model is {SUPPORTED}'s "
-            "(--any-firmware to go on anyway)")
+    return f"firmware: {'; '.join(found)}; the flight model is {SUPPORTED}'s{ANY_FIRMWARE_HINT}"
 
 
 def any_firmware_warning(problem: str) -> str:

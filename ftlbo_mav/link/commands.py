@@ -175,10 +175,14 @@ def timing_options(func):
 @click.option("--no-vehicle-params", "no_vehicle_params", is_flag=True,
               help="Leave the vehicles' WPNAV_*, PSC_JERK_XY, ATC_INPUT_TC as they are "
                    "(`fly` still refuses a vehicle whose values are not plan.json's).")
+@click.option("--any-firmware", "any_firmware", is_flag=True,
+              help="Upload to a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x (the "
+                   "firmware the planner's flight model follows), saying what is then not "
+                   "promised. Without it such a swarm is refused before anything is sent.")
 @timing_options
 @user_errors
-def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_params, timeout,
-           retries, ready_timeout, discover_timeout, signing_key):
+def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_params,
+           any_firmware, timeout, retries, ready_timeout, discover_timeout, signing_key):
     """Upload MISSION_DIR/uavN.waypoints to the vehicles, read each back and verify it.
 
     With uavN.fence (and uavN.rally, fence.parm) beside it, each vehicle also gets its
@@ -218,7 +222,10 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_para
     board = ProgressBoard([(a.name, a.sysid) for a in assignments])
     results = upload_swarm(assignments, urls, signing_key=key,
                            timing=_timing(timeout, retries, ready_timeout),
-                           discover_timeout_s=discover_timeout, on_progress=board)
+                           discover_timeout_s=discover_timeout, on_progress=board,
+                           any_firmware=any_firmware,
+                           on_warning=lambda name, sysid, text: click.echo(
+                               f"warning: {name} (sysid {sysid}): {text}", err=True))
     for r in results:
         status = r.message if r.verified else f"FAILED: {r.message}"
         click.echo(f"{r.name} -> sysid {r.sysid}: {status}")

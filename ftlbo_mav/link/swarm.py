@@ -15,10 +15,12 @@ from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ..ardupilot.firmware import ANY_FIRMWARE_HINT, UNANSWERED, any_firmware_warning
 from ..mission.fence_files import FenceSet
 from ..mission.items import MissionItem
 from .codec import mission_differences
 from .endpoints import Heartbeat, describe_missing, discover, open_links
+from .firmware import channel_firmware_problem
 from .geofence import upload_fence_set
 from .mission_protocol import (
     MissionTransferError,
@@ -172,8 +174,14 @@ def _set_vehicle_params(channel, a: Assignment, timing: Timing) -> tuple[bool, s
 def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                  signing_key: bytes | None = None, timing: Timing | None = None,
                  discover_timeout_s: float = 5.0,
-                 on_progress: OnProgress | None = None) -> list[VehicleResult]:
-    """Upload and verify every assignment concurrently; results in assignment order."""
+                 on_progress: OnProgress | None = None, any_firmware: bool = False,
+                 on_warning=None) -> list[VehicleResult]:
+    """Upload and verify every assignment concurrently; results in assignment order.
+
+    First every vehicle found is asked which firmware it runs (:mod:`.firmware`): when
+    one is not a firmware the flight model follows, nothing is sent to any vehicle and
+    each result says why, unless ``any_firmware``: then ``on_warning(name, sysid, text)``
+    hears what is no longer promised for it and the upload goes on."""
     timing = timing or Timing()
     emit = on_progress or (lambda _e: None)
     started = time.monotonic()
@@ -226,6 +234,36 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
             return VehicleResult(a.name, a.sysid, ok, msg, time.monotonic() - t0)
 
         todo = [a for a in assignments if a.sysid in found]
+
+        def firmware(a: Assignment) -> str | None:
+            emit(ProgressEvent(a.name, a.sysid, "firmware"))
+            with found[a.sysid].channel(a.sysid) as channel:
+                return channel_firmware_problem(channel, found[a.sysid].heartbeats.get(a.sysid),
+                                                timeout_s=timing.timeout_s)
+
+        if todo:
+            with ThreadPoolExecutor(max_workers=len(todo)) as pool:
+                problems = list(pool.map(firmware, todo))
+            # a vehicle silent to the request is not refused here: the upload finds out
+            # whether it answers at all, and fly's pre-flight refuses an unknown firmware
+            silent = [(a, p) for a, p in zip(todo, problems) if p is not None and
+                      UNANSWERED in p and p.count(";") == 1]
+            refused = [(a, p) for a, p in zip(todo, problems)
+                       if p is not None and (a, p) not in silent]
+            for a, p in silent:
+                if on_warning is not None:
+                    on_warning(a.name, a.sysid, p.removesuffix(ANY_FIRMWARE_HINT)
+                               + "; uploading anyway, `fly` refuses it")
+            if refused and not any_firmware:
+                for a, p in zip(todo, problems):
+                    msg = p or "not uploaded: " + ", ".join(
+                        f"sysid {b.sysid}" for b, _ in refused) + " runs another firmware"
+                    results[a.sysid] = VehicleResult(a.name, a.sysid, False, msg, 0.0)
+                    emit(ProgressEvent(a.name, a.sysid, "failed", message=msg))
+                return [results[a.sysid] for a in assignments]
+            for a, p in refused:
+                if on_warning is not None:
+                    on_warning(a.name, a.sysid, any_firmware_warning(p))
         if todo:
             with ThreadPoolExecutor(max_workers=len(todo)) as pool:
                 for r in pool.map(one, todo):

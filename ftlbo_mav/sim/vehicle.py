@@ -31,6 +31,12 @@ from ..ardupilot.fence import (
     MISSION_TYPE_RALLY,
     RALLY_CAPACITY,
 )
+from ..ardupilot.firmware import (
+    RECORDED,
+    RECORDED_CAPABILITIES,
+    RECORDED_CUSTOM_VERSION,
+    Firmware,
+)
 from ..ardupilot.modes import CopterMode, heartbeat_base_mode
 from ..ardupilot.navigation import PARAM_COUNT
 from ..ardupilot.streams import data_stream_messages
@@ -64,7 +70,9 @@ class VehicleOptions:
     parameters (ArduCopter's defaults, :class:`~ftlbo_mav.sim.physics.FlightLimits`) and
     what its airframe adds; :func:`~ftlbo_mav.sim.physics.varied` makes one copter of a
     real fleet (start latency, WPNAV_JERK). ``gps``: its GPS error and what its GPS
-    reports (:mod:`.gps`; default: SITL's, no error, RTK fixed, 0.3 m)."""
+    reports (:mod:`.gps`; default: SITL's, no error, RTK fixed, 0.3 m). ``firmware``: the
+    version AUTOPILOT_VERSION reports (default ArduCopter 4.5.6 as recorded); ``autopilot``
+    and ``vehicle_type``: what HEARTBEAT says (ArduPilot, a quadrotor)."""
 
     heartbeat_s: float = 1.0
     ready_after_s: float = 0.0
@@ -74,6 +82,9 @@ class VehicleOptions:
     limits: FlightLimits = field(default_factory=FlightLimits)
     mission: MissionServerOptions = field(default_factory=MissionServerOptions)
     gps: GpsErrorOptions = field(default_factory=GpsErrorOptions)
+    firmware: Firmware = RECORDED
+    autopilot: int = mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA
+    vehicle_type: int = mavlink2.MAV_TYPE_QUADROTOR
 
     def timeline(self) -> BootTimeline:
         if self.boot is not None:
@@ -386,12 +397,21 @@ class Vehicle:
         return R.MAVLink_command_ack_message(command, result, 0, 0, to[0], to[1])
 
     # -- what ArduCopter sends
+    def autopilot_version(self):
+        """GCS_Common.cpp send_autopilot_version, as recorded (boot.json ``version``): the
+        version as major<<24|minor<<16|patch<<8|type, the git hash's first 8 characters,
+        the capabilities; board, vendor, product and OS versions 0 on SITL."""
+        custom = RECORDED_CUSTOM_VERSION.encode()
+        return R.MAVLink_autopilot_version_message(
+            RECORDED_CAPABILITIES, self.options.firmware.encode(), 0, 0, 0, custom, bytes(8),
+            bytes(8), 0, 0, 0)
+
     def heartbeat(self):
         s = self.state
         base = heartbeat_base_mode(s.mode, armed=s.armed)
         status = R.MAV_STATE_ACTIVE if s.armed else R.MAV_STATE_STANDBY
         # GCS_Common.cpp send_heartbeat: frame type, ARDUPILOTMEGA, base_mode, custom mode
-        return R.MAVLink_heartbeat_message(R.MAV_TYPE_QUADROTOR, R.MAV_AUTOPILOT_ARDUPILOTMEGA,
+        return R.MAVLink_heartbeat_message(self.options.vehicle_type, self.options.autopilot,
                                            base, int(s.mode), status, 3)
 
     def ready(self, now: float) -> bool:
@@ -447,6 +467,8 @@ class Vehicle:
             return R.MAVLink_ekf_status_report_message(flags, 0.01, 0.01, 0.01, 0.01, 0.0, 0.0)
         if msgid == R.MAVLINK_MSG_ID_SIM_STATE:
             return self.sim_state(now)
+        if msgid == R.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
+            return self.autopilot_version()
         if msgid == R.MAVLINK_MSG_ID_MISSION_CURRENT:
             return self.mission_current()
         if msgid == R.MAVLINK_MSG_ID_EXTENDED_SYS_STATE:

@@ -195,3 +195,34 @@ def test_a_link_that_closes_mid_upload_fails_that_vehicle_and_the_others_go_on(t
     assert "closed by the other end" in failed[0] or "the link failed" in failed[0]
     assert "hold" in failed[0]  # what the vehicle may now hold, and how to check it
     assert len(verified_lines(out)) == 2 and "2/3 vehicles verified" in out
+
+
+def _on_firmware(firmware):
+    from dataclasses import replace
+
+    from ftlbo_mav.ardupilot.firmware import Firmware
+
+    return [FAST, replace(FAST, firmware=Firmware.decode(firmware)), FAST]
+
+
+def test_a_vehicle_on_another_firmware_refuses_the_whole_upload_before_anything_is_sent(
+        tmp_path):
+    write_missions(tmp_path, 3)
+    with vehicles(3, options=_on_firmware(0x04040400 | 255)) as fleet:  # ArduCopter 4.4.4
+        code, out = run("upload", tmp_path, "--sysid", "1..3", *connect(fleet.urls))
+        assert code == 1, out
+        assert "sysid 2: FAILED: firmware: it runs 4.4.4 official" in out
+        assert "--any-firmware" in out
+        assert out.count("not uploaded: sysid 2 runs another firmware") == 2
+        assert fleet.missions() == [[], [], []]  # nothing sent to any
+
+
+def test_any_firmware_uploads_and_says_what_is_not_promised(tmp_path):
+    write_missions(tmp_path, 3)
+    with vehicles(3, options=_on_firmware(0x04060000 | 64)) as fleet:  # 4.6.0 alpha
+        code, out = run("upload", tmp_path, "--sysid", "1..3", "--any-firmware",
+                        *connect(fleet.urls))
+        assert code == 0, out
+        assert ("warning: uav2 (sysid 2): firmware: it runs 4.6.0 alpha: the predicted flown "
+                "path, the clearance kept on it and its timing are not promised") in out
+        assert len(verified_lines(out)) == 3
