@@ -219,12 +219,17 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
               help="Seconds to wait for a 3D GPS fix and passing pre-arm checks.")
 @click.option("--flight-timeout", type=FiniteFloat(1, 86_400), default=900.0,
               show_default=True, help="Abort if the missions have not ended by then.")
+@click.option("--any-firmware", "any_firmware", is_flag=True,
+              help="Fly a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x (the "
+                   "firmware the planner's flight model follows), saying what is then not "
+                   "promised. Without it pre-flight refuses it.")
 @timing_options
 @_rtcm_option
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
                 on_departure, lost_wait, use_keeper, arm_budget, preflight_timeout, flight_timeout,
-                timeout, retries, ready_timeout, discover_timeout, signing_key, rtcm_source):
+                any_firmware, timeout, retries, ready_timeout, discover_timeout, signing_key,
+                rtcm_source):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
@@ -240,7 +245,8 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode,
                          keeper=KeeperOptions(enabled=use_keeper),
-                         policy=FaultPolicy(on_departure), lost_wait_s=lost_wait)
+                         policy=FaultPolicy(on_departure), lost_wait_s=lost_wait,
+                         any_firmware=any_firmware)
     keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
     check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end

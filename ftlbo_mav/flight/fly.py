@@ -59,6 +59,7 @@ class FlyOptions:
     departure_budget_s: float = 50.0
     lost_wait_s: float = 15.0
     watch: WatchOptions = WatchOptions()
+    any_firmware: bool = False  # fly a vehicle whose firmware the model does not follow
 
 
 def make_keeper(planned: PlannedFlight, options: KeeperOptions) -> FormationKeeper:
@@ -94,8 +95,9 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     On Ctrl-C (KeyboardInterrupt) every vehicle but those that left by their own choice
     is sent to ``options.abort_mode`` before the interrupt propagates.
     """
-    say("pre-flight: missions, GPS, pre-arm checks")
-    preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s)
+    say("pre-flight: firmware, missions, GPS, pre-arm checks")
+    preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s,
+              any_firmware=options.any_firmware, say=say)
     if keeper is None and options.keeper.enabled:
         keeper = make_keeper(planned, options.keeper)
     if keeper is not None and keeper.options.enabled and keeper.cruise_speed_m_s is None:

@@ -1,15 +1,18 @@
 """Pre-flight: every vehicle holds exactly its planned mission and fence (read back and
 compared as ``upload`` verifies) and the ``[vehicle]`` parameters its flown path was
 predicted with (plan.json ``vehicle``: WPNAV_SPEED, WPNAV_ACCEL, ...), has a 3D GPS fix,
-passes its pre-arm checks, and has a GPS fix, accuracy and EKF that hold it to the plan's
-navigation budget (:mod:`.navigation`). Any failure stops the flight here, one line per vehicle,
-before anything is armed."""
+passes its pre-arm checks, runs the firmware the flight model follows
+(AUTOPILOT_VERSION: ArduCopter 4.5.x, :mod:`ftlbo_mav.ardupilot.firmware`), and has a
+GPS fix, accuracy and EKF that hold it to the plan's navigation budget
+(:mod:`.navigation`). Any failure stops the flight here, one line per vehicle, before
+anything is armed."""
 
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
+from ..ardupilot.firmware import any_firmware_warning, firmware_problem
 from ..errors import FtlboError
 from ..link.codec import mission_differences
 from ..link.endpoints import is_ready, readiness_problems
@@ -67,10 +70,29 @@ def navigation_problems(planned: PlannedFlight, v: FlightVehicle) -> list[str]:
             f"assumes [navigation] {planned.navigation.describe()})"]
 
 
+def firmware_problems(vehicles: Sequence[FlightVehicle], *, timeout_s: float
+                      ) -> list[str | None]:
+    """Per vehicle why its firmware is not one the flight model follows, or None
+    (:func:`~ftlbo_mav.ardupilot.firmware.firmware_problem`), asked concurrently."""
+    def one(v: FlightVehicle) -> str | None:
+        version = v.request_version(timeout_s=timeout_s)
+        return firmware_problem(vehicle_type=v.status.vehicle_type,
+                                autopilot=v.status.autopilot, version=version)
+
+    return concurrently(one, list(vehicles))
+
+
 def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
-              timing: Timing, ready_timeout_s: float) -> None:
-    """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission."""
+              timing: Timing, ready_timeout_s: float, any_firmware: bool = False,
+              say: Callable[[str], None] = lambda _t: None) -> None:
+    """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission.
+    A vehicle whose firmware is not ArduCopter 4.5.x is one that is not, unless
+    ``any_firmware``: then ``say`` hears what is no longer promised for it."""
     params: Mapping[str, float] = planned.vehicle or {}
+    firmware = firmware_problems(vehicles, timeout_s=timing.timeout_s)
+    for v, problem in zip(vehicles, firmware):
+        if problem is not None and any_firmware:
+            say(f"warning: {v.name} (sysid {v.sysid}): {any_firmware_warning(problem)}")
 
     def onboard_problems(pair) -> list[str]:
         vehicle, expected, fence = pair
@@ -106,8 +128,10 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
             is_ready(v.link, v.sysid) and reported(v) for v in vehicles):
         time.sleep(0.1)
     problems = []
-    for v, why in zip(vehicles, onboard):
+    for v, why, problem in zip(vehicles, onboard, firmware):
         why = list(why)
+        if problem is not None and not any_firmware:
+            why.append(problem)
         if not is_ready(v.link, v.sysid):
             why += readiness_problems(v.link, v.sysid)
         why += navigation_problems(planned, v)

@@ -83,6 +83,11 @@ class Status:
     gps_raw: object | None = None
     ekf_raw: object | None = None
     gps_jump_m: float = 0.0  # the largest GPS jump while armed (flight/navigation.py)
+    # what the vehicle says it is: HEARTBEAT type and autopilot, AUTOPILOT_VERSION's
+    # flight_sw_version (asked for at pre-flight; ardupilot/firmware.py judges them)
+    vehicle_type: int | None = None
+    autopilot: int | None = None
+    firmware_version: int | None = None
 
     @property
     def texts(self) -> list[str]:
@@ -139,6 +144,9 @@ class FlightVehicle:
                 s.mode = mode_name(msg.custom_mode)
                 s.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
                 s.heartbeat_t = now
+                s.vehicle_type, s.autopilot = msg.type, msg.autopilot
+            elif kind == "AUTOPILOT_VERSION":
+                s.firmware_version = int(msg.flight_sw_version)
             elif kind == "GLOBAL_POSITION_INT":
                 s.lat_deg, s.lon_deg = msg.lat * 1e-7, msg.lon * 1e-7
                 s.alt_m = msg.relative_alt / 1000.0
@@ -228,6 +236,17 @@ class FlightVehicle:
                 return self.status.acks[command]
         raise FlightError(self.name, self.sysid, step,
                           f"no COMMAND_ACK after {retries + 1} tries, {timeout_s:g} s each")
+
+    def request_version(self, *, timeout_s: float = 1.0, retries: int = 2) -> int | None:
+        """Ask for AUTOPILOT_VERSION (MAV_CMD_REQUEST_MESSAGE 148); its
+        ``flight_sw_version``, or None when it is not answered."""
+        for attempt in range(retries + 1):
+            self.send(R.MAVLink_command_long_message(
+                self.sysid, 1, R.MAV_CMD_REQUEST_MESSAGE, min(attempt, 255),
+                R.MAVLINK_MSG_ID_AUTOPILOT_VERSION, 0, 0, 0, 0, 0, 0), step="firmware")
+            if self.wait_for(lambda s: s.firmware_version is not None, timeout_s):
+                return self.status.firmware_version
+        return None
 
     def request_streams(self, position_hz: float) -> None:
         """Ask for everything a flight reads (GLOBAL_POSITION_INT at ``position_hz``,

@@ -25,11 +25,12 @@ And one **rally point** per UAV (where RTL goes when it is nearer than home): th
 nearest the UAV's goal that is clear of every obstacle (``radius + clearance`` plus the
 navigation budget, so that the true position keeps the clearance), inside the area by
 ``corner_cut_m + margin_m``, at least ``rally_separation_m`` plus two copters' combined
-navigation error (:func:`~ftlbo_mav.gnss.pair_error_m`) from the other UAVs' homes and rally points and from their return lines to their rally points (the
-straight lines RTL flies from each point of their paths that is nearer their rally point
-than their home), while its own such lines keep that distance from the other UAVs'
-homes and rally points (:func:`~.rally.rally_points_enu`). Its altitude is the goal's, in whole
-metres (AP_Rally keeps an int16 of metres).
+navigation error (:func:`~ftlbo_mav.gnss.pair_error_m`) from the other UAVs' homes and
+rally points and from their return lines to their rally points (the straight lines RTL
+flies from each point of their paths that is nearer their rally point than their home),
+while its own such lines keep that distance from the other UAVs' homes and rally points
+(:func:`~.rally.rally_points_enu`). Its altitude is the goal's, in whole metres
+(AP_Rally keeps an int16 of metres).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..gnss import pair_error_m
 from .items import (
     CMD_FENCE_CIRCLE_EXCLUSION,
     CMD_FENCE_POLYGON_VERTEX_INCLUSION,
@@ -49,7 +51,6 @@ from .items import (
     FRAME_GLOBAL_RELATIVE_ALT,
     MissionItem,
 )
-from ..gnss import pair_error_m
 from .rally import rally_points_enu
 
 if TYPE_CHECKING:
@@ -173,9 +174,10 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
         own_notes = list(notes)
         items: tuple[MissionItem, ...] = ()
         if point is None:
+            sep = rally_settings.rally_separation_m
             own_notes.append(f"no rally point: no place in the area is clear of the "
-                             f"obstacles and {rally_settings.rally_separation_m:.2f} m from the other "
-                             "UAVs' return lines; RTL goes home")
+                             f"obstacles and {sep:.2f} m from the other UAVs' return "
+                             "lines; RTL goes home")
         else:
             lat, lon, _ = plan.lla(np.array([[point[0], point[1], 0.0]]))[0]
             alt = float(math.floor(path[-1, 2]))

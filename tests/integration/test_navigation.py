@@ -18,8 +18,7 @@ import pytest
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE
 
 from ..conftest import EXAMPLE
-from .fleet import vehicles
-from .fleet import BACKEND
+from .fleet import BACKEND, vehicles
 from .test_departures import (
     HOMES,
     OPTIONS,

@@ -1,0 +1,56 @@
+"""``fly`` and ``upload`` against a copter whose firmware is not the one the planner's
+flight model follows (ArduCopter 4.5.x, ardupilot/firmware.py): refused at pre-flight,
+one line naming the vehicle and its version, unless ``--any-firmware``, which flies and
+says what is not promised. The emulator only: SITL reports the version it was built as
+(4.5.6, tests/conformance/test_firmware_version.py holds the emulator to it)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+from click.testing import CliRunner
+
+from ftlbo_mav.ardupilot.firmware import Firmware
+from ftlbo_mav.cli import main
+from ftlbo_mav.sim.vehicle import VehicleOptions
+
+from .fleet import vehicles
+from .test_departures import HOMES, _fly_with, example, plan_dir  # noqa: F401 (fixtures)
+
+SPEEDUP = 12.0
+OLD = replace(VehicleOptions(heartbeat_s=0.25), firmware=Firmware(4, 4, 4, 255))
+FLEET = [VehicleOptions(heartbeat_s=0.25), OLD, VehicleOptions(heartbeat_s=0.25)]
+
+
+def _upload_anyway(plan_dir, urls) -> str:
+    result = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                       "--any-firmware", "--connect", " ".join(urls)])
+    assert result.exit_code == 0, result.output
+    return result.output
+
+
+def test_fly_refuses_a_copter_on_another_firmware_before_arming(plan_dir):  # noqa: F811
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=FLEET) as fleet:
+        assert "uav2 (sysid 2): firmware: it runs 4.4.4 official" in _upload_anyway(
+            plan_dir, fleet.urls)
+        result, _took = _fly_with(plan_dir, fleet.urls, time.monotonic)
+        armed = fleet.sim.call(lambda: [v.state.armed for v in fleet.sim.vehicles])
+    out = result.output
+    assert result.exit_code != 0, out
+    assert "pre-flight failed, nothing armed" in out
+    line = next(x for x in out.splitlines() if "uav2 (sysid 2):" in x and "firmware" in x)
+    assert "it runs 4.4.4 official" in line and "--any-firmware" in line
+    assert not any("firmware" in x for x in out.splitlines() if "uav1 (sysid 1)" in x)
+    assert armed == [False, False, False]
+
+
+def test_any_firmware_flies_and_says_what_is_not_promised(plan_dir):  # noqa: F811
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=FLEET) as fleet:
+        _upload_anyway(plan_dir, fleet.urls)
+        result, _took = _fly_with(plan_dir, fleet.urls, time.monotonic, "--any-firmware")
+    out = result.output
+    assert result.exit_code == 0, out
+    assert ("warning: uav2 (sysid 2): firmware: it runs 4.4.4 official: the predicted flown "
+            "path, the clearance kept on it and its timing are not promised") in out
+    assert "pre-flight failed" not in out
