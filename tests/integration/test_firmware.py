@@ -23,8 +23,8 @@ OLD = replace(VehicleOptions(heartbeat_s=0.25), firmware=Firmware(4, 4, 4, 255))
 FLEET = [VehicleOptions(heartbeat_s=0.25), OLD, VehicleOptions(heartbeat_s=0.25)]
 
 
-def _upload_anyway(plan_dir, urls) -> str:
-    result = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+def _upload_anyway(folder, urls) -> str:
+    result = CliRunner().invoke(main, ["upload", str(folder), "--sysid", "1..3",
                                        "--any-firmware", "--connect", " ".join(urls)])
     assert result.exit_code == 0, result.output
     return result.output
