@@ -74,7 +74,8 @@ def fields(msg_or_item):
 def test_three_mavsdk_vehicles_receive_exactly_the_mission_files(tmp_path):
     missions = write_missions(tmp_path, 3)
     with mavsdk_vehicles(3) as fleet:
-        args = ["upload", str(tmp_path), "--sysid", "1..3"]
+        # MAVSDK's vehicles are generic, not ArduCopter: uploaded with --any-firmware
+        args = ["upload", str(tmp_path), "--sysid", "1..3", "--any-firmware"]
         for v in fleet:
             args += ["--connect", v.url]
         result = CliRunner().invoke(main, args, catch_exceptions=False)
