@@ -178,24 +178,19 @@ def flown_path_rows(repeats: int = 7) -> list[dict]:
     path = plan(load_scenario(EXAMPLE)).uav_paths[0]
     points = np.vstack([path, path[-2::-1]])
 
-    def timed() -> tuple[float, float]:
-        flown = flight_path.fly_path(points)  # warm-up
+    def timed(fly) -> tuple[float, float]:
+        flown = fly(points)  # warm-up
         walls = []
         for _ in range(repeats):
             t0 = time.perf_counter()
-            flight_path.fly_path(points)
+            fly(points)
             walls.append(time.perf_counter() - t0)
         return statistics.median(walls), flown.seconds
 
     with flight_path.stepwise_budget(0.0):  # nothing left for the stepwise loop: compiled
-        compiled, flown_s = timed()
-    flown = flight_path.fly_path_stepwise(points)  # warm-up
-    walls = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        flight_path.fly_path_stepwise(points)
-        walls.append(time.perf_counter() - t0)
-    per_60 = statistics.median(walls) * 1e3 * 60.0 / flown.seconds
+        compiled, flown_s = timed(flight_path.fly_path)
+    stepwise, _ = timed(flight_path.fly_path_stepwise)
+    per_60 = stepwise * 1e3 * 60.0 / flown_s
     compiled_60 = compiled * 1e3 * 60.0 / flown_s
     return [
         row("prediction: 60 s flight, 1 UAV (fly_path, compiled)", "issue 30",

@@ -95,16 +95,23 @@ def _type_name(prefix: str, value: int) -> str:
     return entry.name if entry is not None else f"{prefix} {value}"
 
 
-def firmware_problem(*, vehicle_type: int | None, autopilot: int | None,
-                     version: int | None) -> str | None:
-    """Why a vehicle's firmware is not one the flight model follows, or None when it is.
-    ``vehicle_type``/``autopilot`` from its HEARTBEAT (None: not heard), ``version`` its
-    AUTOPILOT_VERSION ``flight_sw_version`` (None: not answered)."""
+def heartbeat_findings(*, vehicle_type: int | None, autopilot: int | None) -> list[str]:
+    """What a vehicle's HEARTBEAT says against the flight model (empty: an ArduPilot
+    multirotor, or not heard)."""
     found = []
     if autopilot is not None and autopilot != R.MAV_AUTOPILOT_ARDUPILOTMEGA:
         found.append(f"its HEARTBEAT says {_type_name('autopilot', autopilot)}")
     if vehicle_type is not None and vehicle_type not in COPTER_TYPES:
         found.append(f"its HEARTBEAT says {_type_name('type', vehicle_type)}")
+    return found
+
+
+def firmware_problem(*, vehicle_type: int | None, autopilot: int | None,
+                     version: int | None) -> str | None:
+    """Why a vehicle's firmware is not one the flight model follows, or None when it is.
+    ``vehicle_type``/``autopilot`` from its HEARTBEAT (None: not heard), ``version`` its
+    AUTOPILOT_VERSION ``flight_sw_version`` (None: not answered)."""
+    found = heartbeat_findings(vehicle_type=vehicle_type, autopilot=autopilot)
     if version is None:
         found.append(UNANSWERED)
     elif not found:

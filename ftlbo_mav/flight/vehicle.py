@@ -21,6 +21,7 @@ from ..ardupilot.modes import CopterMode, mode_name
 from ..ardupilot.streams import flight_streams
 from ..errors import FtlboError
 from ..link.endpoints import LinkError
+from ..link.firmware import version_request
 from .navigation import report_jump
 
 CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
@@ -241,9 +242,7 @@ class FlightVehicle:
         """Ask for AUTOPILOT_VERSION (MAV_CMD_REQUEST_MESSAGE 148); its
         ``flight_sw_version``, or None when it is not answered."""
         for attempt in range(retries + 1):
-            self.send(R.MAVLink_command_long_message(
-                self.sysid, 1, R.MAV_CMD_REQUEST_MESSAGE, min(attempt, 255),
-                R.MAVLINK_MSG_ID_AUTOPILOT_VERSION, 0, 0, 0, 0, 0, 0), step="firmware")
+            self.send(version_request(self.sysid, attempt), step="firmware")
             if self.wait_for(lambda s: s.firmware_version is not None, timeout_s):
                 return self.status.firmware_version
         return None

@@ -15,12 +15,18 @@ from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
-from ..ardupilot.firmware import ANY_FIRMWARE_HINT, UNANSWERED, any_firmware_warning
+from ..ardupilot.firmware import (
+    SUPPORTED,
+    UNANSWERED,
+    any_firmware_warning,
+    firmware_problem,
+    heartbeat_findings,
+)
 from ..mission.fence_files import FenceSet
 from ..mission.items import MissionItem
 from .codec import mission_differences
 from .endpoints import Heartbeat, describe_missing, discover, open_links
-from .firmware import channel_firmware_problem
+from .firmware import request_version
 from .geofence import upload_fence_set
 from .mission_protocol import (
     MissionTransferError,
@@ -235,25 +241,28 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
 
         todo = [a for a in assignments if a.sysid in found]
 
-        def firmware(a: Assignment) -> str | None:
+        def firmware(a: Assignment) -> tuple[bool, str | None]:
             emit(ProgressEvent(a.name, a.sysid, "firmware"))
+            beat = found[a.sysid].heartbeats.get(a.sysid)
+            kind = dict(vehicle_type=None if beat is None else beat.vehicle_type,
+                        autopilot=None if beat is None else beat.autopilot)
             with found[a.sysid].channel(a.sysid) as channel:
-                return channel_firmware_problem(channel, found[a.sysid].heartbeats.get(a.sysid),
-                                                timeout_s=timing.timeout_s)
+                version = request_version(channel, timeout_s=timing.timeout_s)
+            silent = version is None and not heartbeat_findings(**kind)
+            return silent, firmware_problem(**kind, version=version)
 
         if todo:
             with ThreadPoolExecutor(max_workers=len(todo)) as pool:
-                problems = list(pool.map(firmware, todo))
+                answers = list(pool.map(firmware, todo))
+            problems = [p for _silent, p in answers]
             # a vehicle silent to the request is not refused here: the upload finds out
             # whether it answers at all, and fly's pre-flight refuses an unknown firmware
-            silent = [(a, p) for a, p in zip(todo, problems) if p is not None and
-                      UNANSWERED in p and p.count(";") == 1]
-            refused = [(a, p) for a, p in zip(todo, problems)
-                       if p is not None and (a, p) not in silent]
-            for a, p in silent:
-                if on_warning is not None:
-                    on_warning(a.name, a.sysid, p.removesuffix(ANY_FIRMWARE_HINT)
-                               + "; uploading anyway, `fly` refuses it")
+            refused = [(a, p) for a, (silent, p) in zip(todo, answers)
+                       if p is not None and not silent]
+            for a, (silent, _p) in zip(todo, answers):
+                if silent and on_warning is not None:
+                    on_warning(a.name, a.sysid, f"firmware: {UNANSWERED}; the flight model "
+                               f"is {SUPPORTED}'s; uploading anyway, `fly` refuses it")
             if refused and not any_firmware:
                 for a, p in zip(todo, problems):
                     msg = p or "not uploaded: " + ", ".join(
