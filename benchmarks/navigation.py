@@ -39,10 +39,11 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import ardupilotmega as R  # noqa: E402
 
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, fly, make_keeper  # noqa: E402
-from ftlbo_mav.flight.metrics import slot_errors  # noqa: E402
+from ftlbo_mav.flight.metrics import formation_error  # noqa: E402
 from ftlbo_mav.flight.outcome import FlightLeftPlan  # noqa: E402
 from ftlbo_mav.flight.planned import load_planned_flight  # noqa: E402
 from ftlbo_mav.flight.preflight import PreflightError  # noqa: E402
+from ftlbo_mav.flight.record import fitted_times  # noqa: E402
 from ftlbo_mav.link.swarm import Assignment, upload_swarm  # noqa: E402
 from ftlbo_mav.link.transfer import Timing  # noqa: E402
 from ftlbo_mav.mission.export import write_plan  # noqa: E402
@@ -68,8 +69,8 @@ class Judge:
         self.glitched = False
         self.speedup = speedup
         self.error = rng.normal(0.0, wander_m, 2) if wander_m else np.zeros(2)
-        self.truth: list = []  # (t, lat, lon, alt)
-        self.estimate: list = []  # (t, lat, lon, rel_alt)
+        self.truth: list = []  # (received, lat, lon, alt)
+        self.estimate: list = []  # (received, lat, lon, rel_alt, time_boot_s)
         self.armed = False
         self.mode = 0
         self.auto_since: float | None = None  # when it was first seen in AUTO
@@ -126,7 +127,7 @@ class Judge:
                 self.truth.append((time.monotonic(), lat, lon, msg.alt))
             elif kind == "GLOBAL_POSITION_INT":
                 self.estimate.append((time.monotonic(), msg.lat * 1e-7, msg.lon * 1e-7,
-                                      msg.relative_alt / 1000.0))
+                                      msg.relative_alt / 1000.0, msg.time_boot_ms / 1000.0))
             elif kind == "HEARTBEAT" and msg.type != R.MAV_TYPE_GCS:
                 self.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
                 self.mode = msg.custom_mode
@@ -137,6 +138,35 @@ class Judge:
         self.stop.set()
         self.thread.join(timeout=2)
         self.conn.close()
+
+
+def restamp(judge) -> tuple[list, list, dict]:
+    """The judge's estimate and truth with the times they were taken, not received.
+
+    GLOBAL_POSITION_INT carries the vehicle's ``time_boot_ms``: its arrival times are
+    refitted on it (flight/record.fitted_times). SIM_STATE carries no time; ArduPilot sends
+    messages asked for at the same interval together (GCS_MAVLINK's deferred-message
+    buckets, libraries/GCS_MAVLink/GCS_Common.cpp), so each is given the delay of the
+    GLOBAL_POSITION_INT that arrived nearest to it. Returns both tracks and the link's
+    delay figures (ms)."""
+    est = judge.estimate
+    if len(est) < 3 or not judge.truth:
+        return est, judge.truth, {}
+    received = np.array([r[0] for r in est])
+    taken = fitted_times(received, np.array([r[4] for r in est]))
+    delay = received - taken
+    estimate = [(float(s), *r[1:]) for s, r in zip(taken, est)]
+    truth_received = np.array([r[0] for r in judge.truth])
+    k = np.clip(np.searchsorted(received, truth_received), 1, len(received) - 1)
+    nearest = np.where(np.abs(received[k - 1] - truth_received)
+                       < np.abs(received[k] - truth_received), k - 1, k)
+    truth = [(float(t - delay[n]), *r[1:]) for t, n, r in
+             zip(truth_received, nearest, judge.truth)]
+    pair = np.abs(received[nearest] - truth_received)
+    return estimate, truth, {"delay_median_ms": round(float(np.median(delay)) * 1e3, 1),
+                             "delay_p99_ms": round(float(np.percentile(delay, 99)) * 1e3, 1),
+                             "sim_state_pair_median_ms": round(float(np.median(pair)) * 1e3,
+                                                               1)}
 
 
 def _grid(tracks, frame, times):
@@ -151,12 +181,14 @@ def _grid(tracks, frame, times):
     return np.stack(out)
 
 
-def judged(planned, judges, legs: tuple[float, float], alts) -> dict:
+def judged(planned, stamped, legs: tuple[float, float]) -> dict:
     """Truth and estimate over the flight: clearance, separation, formation error on the
-    legs (``legs``: monotonic start and end), landing error."""
+    legs (``legs``: monotonic start and end), landing error. ``stamped``: per copter, its
+    estimate and truth tracks as :func:`restamp` gives them. Heights are the estimate's
+    in both views (the injected error is horizontal)."""
     out = {}
-    for name, attr in (("believed", "estimate"), ("true", "truth")):
-        tracks = [getattr(j, attr) for j in judges]
+    for name, which in (("believed", 0), ("true", 1)):
+        tracks = [s[which] for s in stamped]
         if any(len(t) < 10 for t in tracks):
             out[name] = None
             continue
@@ -164,18 +196,17 @@ def judged(planned, judges, legs: tuple[float, float], alts) -> dict:
         t1 = min(t[-1][0] for t in tracks)
         times = np.arange(t0, t1, 0.1)
         en = _grid(tracks, planned.frame, times)
-        airborne = np.stack([np.interp(times, [r[0] for r in j.estimate],
-                                       [r[3] for r in j.estimate]) for j in judges]) > 1.0
-        pos = np.concatenate([en, np.stack([np.interp(times, [r[0] for r in j.estimate],
-                                                      [r[3] for r in j.estimate])
-                                            for j in judges])[..., None]], axis=-1)
+        height = np.stack([np.interp(times, [r[0] for r in s[0]], [r[3] for r in s[0]])
+                           for s in stamped])
+        airborne = height > 1.0
+        pos = np.concatenate([en, height[..., None]], axis=-1)
         fly = airborne.any(axis=0)
         d = planned.centres[None, None, :, :] - en[:, :, None, :]
         surface = np.hypot(d[..., 0], d[..., 1]) - planned.radii[None, None, :]
         surface[~airborne] = np.inf
         sep = np.inf
-        for a in range(len(judges)):
-            for b in range(a + 1, len(judges)):
+        for a in range(len(stamped)):
+            for b in range(a + 1, len(stamped)):
                 both = airborne[a] & airborne[b]
                 if both.any():
                     sep = min(sep, float(np.linalg.norm(pos[a, both] - pos[b, both],
@@ -184,11 +215,13 @@ def judged(planned, judges, legs: tuple[float, float], alts) -> dict:
         leg_alt = np.median(planned.paths[:, 1:-1, 2], axis=1)
         level = (np.abs(pos[..., 2] - leg_alt[:, None]) < 0.5).all(axis=0)
         on_legs = (times >= legs[0]) & (times <= legs[1]) & level
-        errs = np.array([slot_errors(pos[:, k], planned.offsets) for k in
-                         np.flatnonzero(on_legs)]) if on_legs.any() else np.zeros((1, 1))
+        # as fly's summary has it: per instant the RMS over the copters of their slot
+        # errors (flight/metrics.formation_error), then its RMS and worst over the legs
+        at_legs = pos[:, on_legs].transpose(1, 0, 2)  # (T, N, 3)
+        errs = formation_error(at_legs, planned.offsets) if on_legs.any() else np.zeros(1)
         landing = [None if not fly.any() else
                    float(np.hypot(*(en[n, -1] - planned.paths[n, -1, :2])))
-                   for n in range(len(judges))]
+                   for n in range(len(stamped))]
         out[name] = {"min_clearance_m": float(surface.min()) if np.isfinite(surface.min())
                      else None,
                      "min_separation_m": sep if math.isfinite(sep) else None,
@@ -260,13 +293,16 @@ def one_flight(plan_dir: Path, homes, *, binary, speedup, seed, wander_m, tau_s,
             j.close()
     autos = [j.auto_since for j in judges if j.auto_since is not None]
     legs = (max(autos) if autos else start, end)
+    stamped = [restamp(j) for j in judges]
     row = {"seed": seed, "outcome": outcome, "seconds": round(end - start, 1),
-           **judged(planned, judges, legs, None)}
+           **judged(planned, stamped, legs), "link": [s[2] for s in stamped]}
     return row
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenario", type=Path, default=EXAMPLE,
+                    help="the scenario to plan and fly (default: the shipped example)")
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--wander", type=float, default=0.2,
@@ -285,13 +321,13 @@ def main() -> int:
         glitch = (int(uav), when, float(metres))
     binary = os.environ.get("ARDUPILOT_SITL")
     speedup = args.speedup or (1.0 if binary else 6.0)
-    scenario = load_scenario(EXAMPLE)
+    scenario = load_scenario(args.scenario)
     folder = Path(tempfile.mkdtemp(prefix="navigation-"))
     write_plan(plan(scenario), folder)
     homes = scenario_homes(scenario)
     rows = []
     backend = "ArduCopter SITL" if binary else "emulator"
-    print(f"{backend}: the example ([navigation] {scenario.navigation.describe()}, "
+    print(f"{backend}: {args.scenario.name} ([navigation] {scenario.navigation.describe()}, "
           f"clearance {scenario.clearance_m:g} m, min_separation "
           f"{scenario.min_separation_m:g} m); GPS wander {args.wander:g} m per axis, "
           f"tau {args.tau:g} s, SIM_GPS_ACC {args.acc:g} m, glitch {args.glitch or 'none'}")
@@ -306,8 +342,8 @@ def main() -> int:
                   f"{r.get('formation_rms_m')}/{r.get('formation_worst_m')} m, landing "
                   f"{r.get('landing_error_worst_m')} m")
         print(f"seed {row['seed']} outcome: {row['outcome'][:300]}")
-    args.out.write_text(json.dumps({"backend": backend, "args": vars(args) | {
-        "out": str(args.out)}, "rows": rows}, indent=1, default=str))
+    args.out.write_text(json.dumps({"backend": backend, "args": vars(args), "rows": rows},
+                                   indent=1, default=str))
     return 0
 
 

@@ -123,6 +123,19 @@ def firmware_problem(*, vehicle_type: int | None, autopilot: int | None,
     return f"firmware: {'; '.join(found)}; the flight model is {SUPPORTED}'s{ANY_FIRMWARE_HINT}"
 
 
+def firmware_entry(*, vehicle_type: int | None, autopilot: int | None,
+                   version: int | None) -> dict:
+    """What summary.json says of one vehicle's firmware: its version as decoded (None:
+    AUTOPILOT_VERSION not answered), its HEARTBEAT's type and autopilot names, and
+    :func:`firmware_problem` (None: the flight model's firmware)."""
+    return {"version": Firmware.decode(version).describe() if version is not None else None,
+            "vehicle_type": (_type_name("type", vehicle_type) if vehicle_type is not None
+                             else None),
+            "autopilot": _type_name("autopilot", autopilot) if autopilot is not None else None,
+            "problem": firmware_problem(vehicle_type=vehicle_type, autopilot=autopilot,
+                                        version=version)}
+
+
 def any_firmware_warning(problem: str) -> str:
     """The warning line for a vehicle flown with ``--any-firmware`` despite ``problem``."""
     reason = problem.removeprefix("firmware: ").split("; the flight model is ")[0]

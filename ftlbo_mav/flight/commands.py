@@ -13,6 +13,7 @@ from pathlib import Path
 
 import click
 
+from ..ardupilot.firmware import firmware_entry
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, PORT, SYSIDS, FiniteFloat
 from ..errors import FtlboError
@@ -132,6 +133,12 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                              "off_reason": keeper.off_reason,
                              "link_gaps": keeper.log.link_gaps,
                              "vehicles": keeper.log.as_dict(planned.names)}
+    if monitor.vehicles and any(v.status.firmware_version is not None
+                                for v in monitor.vehicles):  # fly asked at its pre-flight
+        summary["firmware"] = {v.name: firmware_entry(
+            vehicle_type=v.status.vehicle_type, autopilot=v.status.autopilot,
+            version=v.status.firmware_version) | {"sysid": v.sysid}
+            for v in monitor.vehicles}
     if rtcm is not None:
         summary["rtcm"] = {"frames": rtcm.frames, "bytes": rtcm.bytes, "dropped": rtcm.dropped,
                            "bytes_per_s": round(rtcm.bytes_per_s(), 1), "error": rtcm.error}

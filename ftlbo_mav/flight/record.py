@@ -116,8 +116,15 @@ def sample_times(samples: list[Sample]) -> np.ndarray:
     ``a + b * boot_s`` (``b`` absorbs a simulator running faster than real time) and the
     line is moved down onto the earliest arrivals, the ones least delayed.
     """
-    t = np.array([s.t for s in samples])
-    boot = np.array([s.boot_s for s in samples])
+    return fitted_times(np.array([s.t for s in samples]), np.array([s.boot_s for s in samples]))
+
+
+def fitted_times(t: np.ndarray, boot: np.ndarray) -> np.ndarray:
+    """Arrival times ``t`` refitted on the vehicle's own stamps ``boot`` (both seconds,
+    one per sample), as :func:`sample_times` explains; ``t`` itself when ``boot`` cannot
+    be used."""
+    t = np.asarray(t, float)
+    boot = np.asarray(boot, float)
     if len(t) < 3 or not np.all(np.isfinite(boot)) or np.any(np.diff(boot) <= 0):
         return t
     b, _a = np.polyfit(boot, t, 1)
@@ -127,4 +134,4 @@ def sample_times(samples: list[Sample]) -> np.ndarray:
     return a + b * boot
 
 
-__all__ = ["FlightRecord", "Sample", "sample_times"]
+__all__ = ["FlightRecord", "Sample", "fitted_times", "sample_times"]

@@ -6,6 +6,7 @@ says what is not promised. The emulator only: SITL reports the version it was bu
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import replace
 
@@ -54,3 +55,9 @@ def test_any_firmware_flies_and_says_what_is_not_promised(plan_dir):  # noqa: F8
     assert ("warning: uav2 (sysid 2): firmware: it runs 4.4.4 official: the predicted flown "
             "path, the clearance kept on it and its timing are not promised") in out
     assert "pre-flight failed" not in out
+    firmware = json.loads((plan_dir / "flight" / "summary.json").read_text())["firmware"]
+    assert firmware["uav2"]["version"] == "4.4.4 official"
+    assert "it runs 4.4.4 official" in firmware["uav2"]["problem"]
+    assert firmware["uav1"] == {"version": "4.5.6 official", "vehicle_type": "MAV_TYPE_QUADROTOR",
+                                "autopilot": "MAV_AUTOPILOT_ARDUPILOTMEGA", "problem": None,
+                                "sysid": 1}
