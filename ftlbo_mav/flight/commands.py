@@ -133,8 +133,8 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                              "off_reason": keeper.off_reason,
                              "link_gaps": keeper.log.link_gaps,
                              "vehicles": keeper.log.as_dict(planned.names)}
-    if monitor.vehicles and any(v.status.firmware_version is not None
-                                for v in monitor.vehicles):  # fly asked at its pre-flight
+    # fly asked for AUTOPILOT_VERSION at its pre-flight
+    if any(v.status.firmware_version is not None for v in monitor.vehicles):
         summary["firmware"] = {v.name: firmware_entry(
             vehicle_type=v.status.vehicle_type, autopilot=v.status.autopilot,
             version=v.status.firmware_version) | {"sysid": v.sysid}
