@@ -3,7 +3,8 @@
 The pure core: :func:`fragment` turns one RTCM3 frame into the GPS_RTCM_DATA messages
 (``(flags, len, data)``) that carry it, :class:`Reassembler` rebuilds frames from them by
 ArduPilot's rules. The edges: :func:`parse_source` (the ``--rtcm`` string),
-:func:`tcp_frames` (a TCP stream cut into frames by pyrtcm's RTCMReader) and
+:func:`tcp_frames` (a TCP stream cut into frames by pyrtcm's RTCMReader),
+:func:`ntrip_frames` (an NTRIP caster, through pygnssutils' client) and
 :class:`RtcmForwarder` (a thread that sends each frame on every link and counts).
 
 The rules follow ArduPilot 4.5.6, libraries/AP_GPS/AP_GPS.cpp
@@ -253,29 +254,63 @@ def serial_frames(source: Source, *, baud: int = 115200) -> Iterator[bytes]:
         yield from stream_frames(port)
 
 
-def ntrip_frames(source: Source, *, timeout_s: float = 5.0) -> Iterator[bytes]:
-    """Frames from an NTRIP caster through pygnssutils' GNSSNTRIPClient (which sends
-    each frame it reads to a queue). Not yet tested against a caster here."""
+def ntrip_frames(source: Source, *, timeout_s: float = 10.0) -> Iterator[bytes]:
+    """Frames from an NTRIP caster through pygnssutils' GNSSNTRIPClient (NTRIP 1.0 and
+    2.0, Basic authentication), which puts each frame it decodes on a queue.
+
+    Raises :class:`RtcmError` when the caster refuses (its status line: 401, a
+    sourcetable for an unknown mountpoint) or sends nothing for ``timeout_s``. Ends when
+    the caster closes the stream. Two things pygnssutils 1.3 does that a caster's user
+    should know (tests/link/test_ntrip.py shows both): the first read after the
+    response head is not forwarded, and a message pyrtcm cannot decode is dropped."""
     import queue
 
     from pygnssutils import GNSSNTRIPClient
 
+    where = f"--rtcm ntrip://{source.host}:{source.port}/{source.mountpoint}"
     out: queue.Queue = queue.Queue()
-    client = GNSSNTRIPClient()
+    stop = threading.Event()  # run()'s default Event is shared by every client
+    client = GNSSNTRIPClient(retries=0, timeout=max(1, round(timeout_s)))
     client.run(server=source.host, port=source.port, https=0, mountpoint=source.mountpoint,
                ntripuser=source.user or "anon", ntrippassword=source.password or "password",
-               ggainterval=-1, output=out)
+               ggainterval=-1, output=out, stopevent=stop)
+    waited = 0.0
     try:
-        while client.connected or not out.empty():
+        while True:
             try:
-                item = out.get(timeout=timeout_s)
+                item = out.get(timeout=0.2)
             except queue.Empty:
+                item = None
+            if item is None:
+                if not client.connected:
+                    _check_refusal(client, where)
+                    return
+                waited += 0.2
+                if waited >= timeout_s:
+                    raise RtcmError(f"{where}: nothing received for {timeout_s:g} s")
                 continue
             raw = item[0] if isinstance(item, tuple) else item
-            if isinstance(raw, bytes | bytearray):
-                yield bytes(raw)
+            if isinstance(raw, list):  # the sourcetable, parsed
+                raise RtcmError(f"{where}: no such mountpoint (the caster sent its "
+                                "sourcetable)")
+            if not raw:  # pygnssutils reads b"" for ever once the caster closed
+                return
+            waited = 0.0
+            yield bytes(raw)
     finally:
         client.stop()
+
+
+def _check_refusal(client, where: str) -> None:
+    """Raise what a stopped NTRIP client was told: nothing, a status, a sourcetable."""
+    status = client.status
+    if not status:
+        raise RtcmError(f"{where}: cannot connect")
+    if status["code"] != 200:
+        raise RtcmError(f"{where}: the caster answered {status['code']} "
+                        f"{status['description']}")
+    if client.is_sourcetable:
+        raise RtcmError(f"{where}: no such mountpoint (the caster sent its sourcetable)")
 
 
 def frames_from(source: Source) -> Iterator[bytes]:

@@ -29,6 +29,8 @@ from ftlbo_mav.sim.homes import scenario_homes
 from ftlbo_mav.sim.vehicle import VehicleOptions
 
 from ..conftest import EXAMPLE
+from ..link.ntrip_caster import FakeCaster
+from ..link.rtcm_base import base_station
 from .fleet import BACKEND, free_udp_port, vehicles
 
 pytestmark = pytest.mark.sitl
@@ -64,14 +66,27 @@ def _upload(plan_dir: Path, urls: list[str]) -> None:
 
 
 def test_fly_the_example_all_land_at_the_goal_in_formation(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+    # with RTK corrections flowing from an NTRIP caster (a base station's MSM7 stream,
+    # ~1 kB/s, at the flight's time scale): the flight is judged as one without
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet, \
+            FakeCaster(lambda: base_station(600), interval_s=1.0 / SPEEDUP) as caster:
         _upload(plan_dir, fleet.urls)
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
                                            "--control-port", "0",
+                                           "--rtcm", f"ntrip://me:secret@127.0.0.1:"
+                                                     f"{caster.port}/BASE1",
                                            "--connect", " ".join(fleet.urls)])
         assert result.exit_code == 0, result.output
+        received = (fleet.sim.call(lambda: [list(v.rtcm_frames) for v in fleet.sim.vehicles])
+                    if fleet.sim else None)
     assert "all vehicles finished their missions" in result.stdout
     summary = json.loads((plan_dir / "flight" / "summary.json").read_text())
+    rtcm = summary["rtcm"]
+    assert rtcm["error"] is None and rtcm["dropped"] == 0 and rtcm["frames"] >= 20
+    assert 0.5 * 800 * SPEEDUP < rtcm["bytes_per_s"] < 1.5 * 1200 * SPEEDUP
+    if received is not None:  # every frame forwarded reached every copter whole
+        assert all(len(frames) == rtcm["frames"] for frames in received)
+        assert all(sum(map(len, frames)) == rtcm["bytes"] for frames in received)
     assert (plan_dir / "flight" / "report.png").stat().st_size > 20_000
     assert summary["leg_seconds"] > 1.0
     # the clearance the plan promised, less what ArduCopter's S-curve cuts at the tangent
