@@ -21,6 +21,7 @@ loopback-only network namespace.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -39,11 +40,13 @@ from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import ardupilotmega as R  # noqa: E402
 
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, fly, make_keeper  # noqa: E402
+from ftlbo_mav.flight.keeper import KeeperOptions  # noqa: E402
 from ftlbo_mav.flight.metrics import formation_error  # noqa: E402
 from ftlbo_mav.flight.outcome import FlightLeftPlan  # noqa: E402
 from ftlbo_mav.flight.planned import load_planned_flight  # noqa: E402
 from ftlbo_mav.flight.preflight import PreflightError  # noqa: E402
 from ftlbo_mav.flight.record import fitted_times  # noqa: E402
+from ftlbo_mav.link.rtcm import RtcmForwarder, frames_from, parse_source  # noqa: E402
 from ftlbo_mav.link.swarm import Assignment, upload_swarm  # noqa: E402
 from ftlbo_mav.link.transfer import Timing  # noqa: E402
 from ftlbo_mav.mission.export import write_plan  # noqa: E402
@@ -51,6 +54,8 @@ from ftlbo_mav.planning.planner import plan  # noqa: E402
 from ftlbo_mav.scenario import load_scenario  # noqa: E402
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE  # noqa: E402
 from ftlbo_mav.sim.homes import scenario_homes  # noqa: E402
+from tests.link.ntrip_caster import FakeCaster  # noqa: E402
+from tests.link.rtcm_base import base_station  # noqa: E402
 
 EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
 INJECT_HZ = 5.0
@@ -233,7 +238,8 @@ def judged(planned, stamped, legs: tuple[float, float]) -> dict:
 
 
 def one_flight(plan_dir: Path, homes, *, binary, speedup, seed, wander_m, tau_s, acc_m,
-               glitch) -> dict:
+               glitch, rtcm: bool = False, tracks: Path | None = None,
+               use_keeper: bool = True) -> dict:
     planned = load_planned_flight(plan_dir)
     if binary:
         from sitl import SitlSwarm
@@ -270,8 +276,10 @@ def one_flight(plan_dir: Path, homes, *, binary, speedup, seed, wander_m, tau_s,
         for j in judges:
             j.start()
         time.sleep(2.0 / speedup)
-        options = FlyOptions()
-        keeper = make_keeper(planned, options.keeper)
+        options = FlyOptions(keeper=KeeperOptions(enabled=use_keeper))
+        keeper = make_keeper(planned, options.keeper) if use_keeper else None
+        if keeper is not None and tracks is not None:
+            keeper.trace = []
         lines: list[str] = []
         outcome = "completed"
 
@@ -279,8 +287,22 @@ def one_flight(plan_dir: Path, homes, *, binary, speedup, seed, wander_m, tau_s,
             lines.append(text)
 
         start = time.monotonic()
+        corrections: dict = {}
         try:
-            with Fleet(planned.names, list(range(1, planned.count + 1)), vehicles.urls) as fleet:
+            with contextlib.ExitStack() as stack:
+                fleet = stack.enter_context(
+                    Fleet(planned.names, list(range(1, planned.count + 1)), vehicles.urls))
+                if rtcm:  # a base station's stream from an NTRIP caster, as fly --rtcm
+                    caster = stack.enter_context(FakeCaster(
+                        lambda: base_station(3600, lat=homes[0][0], lon=homes[0][1]),
+                        interval_s=1.0 / speedup))
+                    source = parse_source(f"ntrip://me:secret@127.0.0.1:{caster.port}/BASE1")
+                    forwarder = stack.enter_context(
+                        RtcmForwarder(frames_from(source), fleet.links))
+                    stack.callback(lambda: corrections.update(
+                        frames=forwarder.frames, bytes=forwarder.bytes,
+                        bytes_per_s=round(forwarder.bytes_per_s(), 1),
+                        dropped=forwarder.dropped, error=forwarder.error))
                 fly(planned, fleet.vehicles, options=options, timing=Timing(), say=say,
                     tick=lambda: None, keeper=keeper)
         except PreflightError as exc:
@@ -295,7 +317,16 @@ def one_flight(plan_dir: Path, homes, *, binary, speedup, seed, wander_m, tau_s,
     legs = (max(autos) if autos else start, end)
     stamped = [restamp(j) for j in judges]
     row = {"seed": seed, "outcome": outcome, "seconds": round(end - start, 1),
-           **judged(planned, stamped, legs), "link": [s[2] for s in stamped]}
+           **judged(planned, stamped, legs), "link": [s[2] for s in stamped],
+           "rtcm": corrections or None,
+           "keeper": keeper.log.as_dict(planned.names) if keeper is not None else None}
+    if tracks is not None:  # each copter's restamped estimate and truth, for a closer look
+        np.savez_compressed(tracks, **{f"{view}{n + 1}": np.array(s[w], float)
+                                       for n, s in enumerate(stamped)
+                                       for w, view in ((0, "estimate"), (1, "truth"))},
+                            legs=np.array(legs))
+        if keeper is not None:
+            tracks.with_suffix(".keeper.json").write_text(json.dumps(keeper.trace))
     return row
 
 
@@ -312,6 +343,12 @@ def main() -> int:
     ap.add_argument("--acc", type=float, default=0.3, help="SIM_GPS_ACC, m")
     ap.add_argument("--glitch", help="UAV:WHEN:METRES, WHEN 'takeoff' or seconds into the "
                                      "legs (e.g. 1:takeoff:3 or 2:5:3): a sudden north offset")
+    ap.add_argument("--rtcm", action="store_true",
+                    help="RTK corrections flowing: a generated base station's MSM7 stream "
+                         "(~1 kB/s) from a local NTRIP caster to every copter, as fly --rtcm")
+    ap.add_argument("--no-keeper", action="store_true", help="fly as fly --no-keeper")
+    ap.add_argument("--tracks", type=Path, default=None,
+                    help="write each run's restamped tracks to TRACKS.<run>.npz")
     ap.add_argument("--speedup", type=float, default=None)
     ap.add_argument("--out", type=Path, default=Path("navigation-benchmark.json"))
     args = ap.parse_args()
@@ -333,7 +370,9 @@ def main() -> int:
           f"tau {args.tau:g} s, SIM_GPS_ACC {args.acc:g} m, glitch {args.glitch or 'none'}")
     for k in range(args.runs):
         row = one_flight(folder, homes, binary=binary, speedup=speedup, seed=args.seed + k,
-                         wander_m=args.wander, tau_s=args.tau, acc_m=args.acc, glitch=glitch)
+                         wander_m=args.wander, tau_s=args.tau, acc_m=args.acc, glitch=glitch,
+                         rtcm=args.rtcm, use_keeper=not args.no_keeper,
+                         tracks=args.tracks and args.tracks.with_suffix(f".{k}.npz"))
         rows.append(row)
         for view in ("believed", "true"):
             r = row.get(view) or {}
@@ -342,6 +381,10 @@ def main() -> int:
                   f"{r.get('formation_rms_m')}/{r.get('formation_worst_m')} m, landing "
                   f"{r.get('landing_error_worst_m')} m")
         print(f"seed {row['seed']} outcome: {row['outcome'][:300]}")
+        if row["keeper"]:
+            print(f"seed {row['seed']} keeper: {row['keeper']}")
+        if row["rtcm"]:
+            print(f"seed {row['seed']} RTCM: {row['rtcm']}")
     args.out.write_text(json.dumps({"backend": backend, "args": vars(args), "rows": rows},
                                    indent=1, default=str))
     return 0
