@@ -24,7 +24,7 @@ from ..link.transfer import Timing
 from .departures import WatchOptions
 from .fleet import Fleet, concurrently
 from .keeper import FormationKeeper, KeeperOptions, planned_speed
-from .launch import first_leg, start_together, take_off, takeoff_item
+from .launch import align_at_start, first_leg, start_together, take_off, takeoff_item
 from .outcome import FlightLeftPlan, abort, aborted
 from .planned import PlannedFlight
 from .policy import FaultPolicy
@@ -51,6 +51,8 @@ class FlyOptions:
     takeoff_timeout_s: float = 60.0
     takeoff_tolerance_m: float = 0.3
     settled_climb_m_s: float = 0.15
+    start_tolerance_m: float = 0.2  # launch.align_at_start
+    align_timeout_s: float = 20.0
     position_hz: float = 10.0
     flight_timeout_s: float = 900.0
     abort_mode: str = "RTL"
@@ -119,7 +121,8 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
         try:
             fw.expect("GUIDED")
             take_off(planned, vehicles, options, say, poll=fw.check)
-            say("all hovering at their altitudes: starting the missions together")
+            align_at_start(planned, vehicles, options, say, poll=fw.check)
+            say("all hovering at their start points: starting the missions together")
             fw.expect("AUTO")
             started = start_together(planned, vehicles)
         except LeftPlan:

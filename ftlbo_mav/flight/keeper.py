@@ -45,9 +45,16 @@ class KeeperOptions:
     last is measured, in metres and in seconds (metres over the group's speed).
     A vehicle more than ``engage_m`` ahead, or more than ``engage_s`` ahead and at least
     ``floor_m`` (while the group speeds up, a lead shows in time before it shows in
-    metres), is paused for as long as makes it lose that lead (ArduCopter's pause and
-    continue, modelled in :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s`;
-    at most ``max_pause_s``). What a pause is still to take (its copter's track clock
+    metres), is paused for as long as makes it lose that lead in metres at the cruise
+    speed (ArduCopter's pause and continue, modelled in
+    :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_cost_s`; at most
+    ``max_pause_s``). Not in seconds at the group's speed: a lead may be one in time (a
+    late start) or in space (a copter's estimate moved along its track by its GPS), and
+    only the first grows with speed; a pause sized in seconds at 1 m/s costs a copter
+    five times a lead in space once cruising at 5 m/s, and the others are paused for that
+    in turn (the emulator, GPS wander 1.5 m per axis: leads of 3.5 m; docs/flight.md).
+    Sized at cruise a pause never costs more than the lead; a lead in time that is still
+    there shows again as the group speeds up and is answered then. What a pause is still to take (its copter's track clock
     slows to zero and comes back to pace over seconds) counts as taken: each vehicle's
     progress is measured less what its pauses have still to cost it, so a lead that keeps
     growing is answered again ``rest_s`` after the last continue (once the measurement
@@ -288,7 +295,10 @@ class FormationKeeper:
             elif (flying and not late and now >= self._rest_until[i]
                   and (ahead[i] > o.engage_m
                        or (ahead[i] > o.floor_m and ahead_s[i] > o.engage_s))):
-                d = o.pause_for(float(ahead[i]), group_speed, self.cruise_speed_m_s)
+                # sized as a lead in metres at the cruise speed: never more than the
+                # lead needs, whichever kind it is (see KeeperOptions)
+                d = o.pause_for(float(ahead[i]), max(group_speed, self.cruise_speed_m_s),
+                                self.cruise_speed_m_s)
                 if d > 0:
                     self._paused_at[i], self._resume_at[i] = now, now + d
                     self._rest_until[i] = now + d + o.rest_s

@@ -79,6 +79,70 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
         pending[0].wait_for(hovering(targets[vehicles.index(pending[0])]), 0.1)
 
 
+def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
+                   say: Callable[[str], None], poll: Callable[[], None] = lambda: None
+                   ) -> list[float]:
+    """Hovering, each vehicle moves (GUIDED) to its leg's start point where its own
+    estimate puts it off by more than ``options.start_tolerance_m``; returns how far
+    each was (metres, horizontal).
+
+    A copter is placed at its home; with an uncorrected GPS its estimate is off by the
+    GPS error, it takes off where it believes it stands, and starts its legs from there
+    (ArduCopter SITL, GPS wander 0.7 m per axis: estimates 0.2-1.3 m from their start
+    points, 1.2 m along the track). Started so, a copter ahead of its start is ahead in
+    space, not in time; the formation keeper, which answers leads as time (every copter
+    leaves together), paused the others for it in turn: leads of 3 m for the whole
+    flight. Moved to the start point first, every copter starts where the plan and the
+    keeper expect, in its own estimate; where it truly is stays off by its GPS error,
+    as it is anywhere on its path (the plan's navigation budget)."""
+    tolerance = options.start_tolerance_m
+    starts = []
+    for i, mission in enumerate(planned.missions):
+        lat, lon, _alt = planned.frame.to_lla(planned.paths[i][0])
+        starts.append((float(lat), float(lon), takeoff_item(mission)[1]))
+
+    def away(v, start) -> float:
+        s = v.status
+        if s.lat_deg is None:
+            return float("inf")
+        enu = planned.frame.to_enu(lat_deg=[s.lat_deg, start[0]], lon_deg=[s.lon_deg, start[1]])
+        return float(np.hypot(*(enu[0, :2] - enu[1, :2])))
+
+    first = [away(v, st) for v, st in zip(vehicles, starts)]
+    moving = [i for i, d in enumerate(first) if d > tolerance]
+    if not moving:
+        return first
+    say("moving to the start points first (each vehicle's own estimate): " + ", ".join(
+        f"{vehicles[i].name} {first[i]:.2f} m off" for i in moving))
+    for i in moving:
+        vehicles[i].goto(*starts[i])
+    deadline = time.monotonic() + options.align_timeout_s
+    resent = time.monotonic()
+
+    def there(v, st) -> bool:
+        return away(v, st) <= tolerance and v.status.ground_speed_m_s <= options.settled_climb_m_s
+
+    while True:
+        if aborted(vehicles):
+            raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
+        pending = [i for i in moving if not there(vehicles[i], starts[i])]
+        if not pending:
+            return first
+        now = time.monotonic()
+        if now >= deadline:
+            say("not at the start point after {:g} s, starting anyway: {}".format(
+                options.align_timeout_s, ", ".join(
+                    f"{vehicles[i].name} {away(vehicles[i], starts[i]):.2f} m off"
+                    for i in pending)))
+            return first
+        if now - resent >= 2.0:  # SET_POSITION_TARGET is never acknowledged: say it again
+            resent = now
+            for i in pending:
+                vehicles[i].goto(*starts[i])
+        poll()
+        vehicles[pending[0]].wait_for(lambda s: False, 0.1)
+
+
 def first_leg(mission, frame: LocalFrame, *, hold_m: float = 0.5) -> tuple[int, list]:
     """``(seq, speed items)``: where AUTO starts, and the DO_CHANGE_SPEED items it skips
     (to be sent as commands once AUTO runs).

@@ -48,6 +48,14 @@ class FlightAborted(FtlboError):
         super().__init__(f"{name} (sysid {sysid}): flight aborted, vehicle sent to {mode}")
 
 
+POSITION_ONLY = (R.POSITION_TARGET_TYPEMASK_VX_IGNORE | R.POSITION_TARGET_TYPEMASK_VY_IGNORE
+                 | R.POSITION_TARGET_TYPEMASK_VZ_IGNORE | R.POSITION_TARGET_TYPEMASK_AX_IGNORE
+                 | R.POSITION_TARGET_TYPEMASK_AY_IGNORE | R.POSITION_TARGET_TYPEMASK_AZ_IGNORE
+                 | R.POSITION_TARGET_TYPEMASK_YAW_IGNORE
+                 | R.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE)
+"""SET_POSITION_TARGET_*'s type_mask for a position alone."""
+
+
 @dataclass
 class Status:
     """What the vehicle last said about itself; ``t`` values are ``time.monotonic()``."""
@@ -307,6 +315,18 @@ class FlightVehicle:
             if self.wait_for(lambda s: name in s.params, timeout_s):
                 return self.status.params[name]
         return None
+
+    def goto(self, lat_deg: float, lon_deg: float, alt_m: float) -> None:
+        """GUIDED to a position (altitude above home) without waiting:
+        SET_POSITION_TARGET_GLOBAL_INT, position only (ArduCopter/GCS_Mavlink.cpp
+        handle_message_set_position_target_global_int -> ModeGuided::set_destination;
+        never acknowledged)."""
+        if self.aborted_to is not None:
+            raise FlightAborted(self.name, self.sysid, self.aborted_to)
+        self.send(R.MAVLink_set_position_target_global_int_message(
+            0, self.sysid, 1, R.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, POSITION_ONLY,
+            round(lat_deg * 1e7), round(lon_deg * 1e7), alt_m, 0, 0, 0, 0, 0, 0, 0, 0),
+            step="goto")
 
     def send_pause(self, pause: bool) -> None:
         """MAV_CMD_DO_PAUSE_CONTINUE (param1 0: pause, 1: continue) without waiting; its

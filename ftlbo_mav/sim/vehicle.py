@@ -21,6 +21,7 @@ import math
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
+import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot.commands import INSTANT_BOOT, BootTimeline
@@ -154,6 +155,7 @@ class Vehicle:
                                    options=AutopilotOptions(boot=self.boot, limits=options.limits))
         self.autopilot.home_alt_m = alt
         self.gps = GpsError(options.gps, self.autopilot.params, lat_deg=lat)
+        self._ground_truth: np.ndarray | None = np.zeros(2)  # placed at its home, truly
         self.links: dict[Link, LinkState] = {}
         self._mission_version = -1
         # GPS_RTCM_DATA reassembled as AP_GPS::handle_gps_rtcm_fragment does (link/rtcm.py)
@@ -204,6 +206,7 @@ class Vehicle:
         kind = msg.get_type()
         self._sync_mission()
         news = self._announce(self.autopilot.advance(now), link)
+        self._stand_still(now)
         if kind in ("COMMAND_LONG", "SET_MODE", "MISSION_SET_CURRENT", "REQUEST_DATA_STREAM"):
             replies = self._command(msg, now, st)
         elif kind in ("PARAM_REQUEST_READ", "PARAM_SET"):
@@ -247,6 +250,7 @@ class Vehicle:
         home once, announcements, and the mission server's re-requests/cancellations."""
         self._sync_mission()
         self._announce(self.autopilot.advance(now), None)
+        self._stand_still(now)
         self._sync_state()
         self.home_for_missions(now)
         for server in (self.missions, self.fence, self.rally):
@@ -288,6 +292,23 @@ class Vehicle:
                         lon_deg=it.y / 1e7, alt_m=it.z, param1=it.param1,
                         param2=it.param2, param3=it.param3, param4=it.param4)
             for i, it in enumerate(self.missions.items)])
+
+    def _stand_still(self, now: float) -> None:
+        """On the ground a copter does not move; its estimate does, by the GPS error its
+        EKF has fused (ArduCopter 4.5.6 SITL, tests/data/ardupilot-4.5.6/gps.json: a
+        SIM_GPS_GLITCH_X step on the ground moves GLOBAL_POSITION_INT, never SIM_STATE).
+        So a copter placed at its home believes it is at home plus its GPS error, and
+        takes off and starts its mission from there, as one on SITL does. In the air the
+        controller holds the estimate and the truth moves instead (:mod:`.gps`)."""
+        ap = self.autopilot
+        if not ap.landed:
+            self._ground_truth = None
+            return
+        t = now - self.boot_time
+        fused = self.gps.error(t) - self.gps.transient(t)
+        if self._ground_truth is None:  # just touched down: where it truly stands
+            self._ground_truth = ap.position[:2] - fused
+        ap.position[:2] = self._ground_truth + fused
 
     def _sync_state(self) -> None:
         ap, s = self.autopilot, self.state

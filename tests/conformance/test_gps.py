@@ -60,3 +60,38 @@ def test_a_glitch_jumps_the_reading_and_the_estimate_follows_as_ekf3_does():
         assert abs(ours_raw - sitl_raw) < 0.05, t  # the reading: the whole step at once
         assert abs(ours_est - sitl_est) < 0.35, (t, ours_est, sitl_est)  # the EKF's lag
     assert np.interp(off - 0.1, t_true, true) == base  # SITL's truth never moved
+
+
+def test_on_the_ground_the_estimate_moves_and_the_truth_stays_as_on_sitl():
+    on, off = (e["t"] for e in DATA["events"] if e["param_set"] == "SIM_GPS_GLITCH_X")
+    t_true, true = _recorded_north("SIM_STATE", "lat_int")
+    t_est, est = _recorded_north("GLOBAL_POSITION_INT")
+    v = Vehicle(sysid=1, home=HOME, boot_time=0.0)
+    v.tick(on - 0.5)
+    truth0 = v.message(R.MAVLINK_MSG_ID_SIM_STATE, on - 0.5).lat_int
+    est0 = v.message(R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, on - 0.5).lat
+    v.autopilot.params["SIM_GPS_GLITCH_X"] = 3.0 / (M_PER_E7 * 1e7)
+    v.gps.param_changed(on)
+    base_true, base_est = np.interp(on - 0.5, t_true, true), np.interp(on - 0.5, t_est, est)
+    for t in np.arange(on + 0.5, off, 0.5):
+        v.tick(t)
+        assert v.message(R.MAVLINK_MSG_ID_SIM_STATE, t).lat_int == truth0  # as SITL's
+        moved = (v.message(R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, t).lat - est0) * M_PER_E7
+        sitl_moved = (np.interp(t, t_est, est) - base_est) * M_PER_E7
+        assert abs(moved - sitl_moved) < 0.35, (t, moved, sitl_moved)
+    assert np.interp(off - 0.1, t_true, true) == base_true
+
+
+def test_a_copter_placed_at_home_believes_it_is_at_home_plus_its_gps_error():
+    from ftlbo_mav.sim.gps import GpsErrorOptions
+    from ftlbo_mav.sim.vehicle import VehicleOptions
+
+    v = Vehicle(sysid=1, home=HOME, boot_time=0.0,
+                options=VehicleOptions(gps=GpsErrorOptions(wander_m=1.0, seed=3)))
+    v.tick(20.0)
+    error = v.gps.error(20.0)
+    truth = v.message(R.MAVLINK_MSG_ID_SIM_STATE, 20.0)
+    est = v.message(R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 20.0)
+    assert abs(truth.lat_int - round(HOME[0] * 1e7)) <= 1
+    assert abs((est.lat - truth.lat_int) * M_PER_E7 - error[1]) < 0.02
+    assert np.hypot(*error) > 0.1  # the draw is not a zero error

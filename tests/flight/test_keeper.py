@@ -110,6 +110,23 @@ def test_while_the_group_speeds_up_a_lead_in_seconds_is_enough():
     assert tiny.update(positions_at([1.025, 1.0, 1.0]), np.full(3, 0.2), 0.0) == {}
 
 
+def test_a_lead_seen_while_the_group_speeds_up_is_paused_as_metres_at_cruise():
+    """A lead seen at 1 m/s may be one in space (a copter's estimate put ahead by its GPS)
+    as well as one in time: sized as 0.5 m over 1 m/s (0.5 s of track) the pause would
+    cost a copter 2.5 m at cruise, and the others would be paused for that in turn (SITL
+    and the emulator with GPS wander: leads of 3 m). Sized at the cruise speed it never
+    costs more than the lead; a lead in time shows again as the group speeds up, and is
+    answered again then."""
+    keeper = FormationKeeper(PATHS, CRUISE, options=ON)
+    slow = np.full(3, 1.0)
+    assert keeper.update(positions_at([1.5, 1.0, 1.0]), slow, 0.0) == {0: True}
+    pause = ON.pause_for(0.5, CRUISE, CRUISE)
+    assert pause < ON.pause_for(0.5, 1.0, CRUISE)
+    assert CRUISE * ON.navigation.pause_cost_s(pause, CRUISE) < 0.5 + 0.1
+    assert keeper.update(positions_at([1.6, 1.2, 1.2]), slow, pause - 0.06) == {}
+    assert keeper.update(positions_at([1.6, 1.2, 1.2]), slow, pause) == {0: False}
+
+
 def test_longer_leads_get_longer_pauses_up_to_the_limit():
     pauses = [ON.pause_for(lead, 5.0, CRUISE) for lead in (0.12, 0.3, 0.8, 1.5, 50.0)]
     assert pauses == sorted(pauses) and len(set(pauses)) == 5
