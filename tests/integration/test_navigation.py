@@ -9,12 +9,15 @@ SITL's own knobs from the copter's second port (SIM_GPS_ACC, SIM_GPS_GLITCH_X).
 
 from __future__ import annotations
 
+import math
 import shutil
 import time
 from pathlib import Path
 
 import pytest
+from click.testing import CliRunner
 
+from ftlbo_mav.cli import main
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE
 
 from ..conftest import EXAMPLE
@@ -115,3 +118,28 @@ def test_a_gps_glitch_during_take_off_is_a_departure(plan_dir):
     out = result.output
     assert result.exit_code == 1, out
     assert any(x.strip().startswith("uav3 (sysid 3): navigation") for x in out.splitlines()), out
+
+
+def test_a_copter_whose_gps_puts_it_ahead_of_its_start_moves_there_before_the_legs(plan_dir):
+    """Its estimate 1.2 m east of where it stands (the first leg runs east): it takes off
+    where it believes it is, moves to its start point, and the formation leaves as one.
+    Started where it hovered, it would fly the legs 1.2 m ahead of the others."""
+    ahead_m = 1.2
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        station = SecondPort(fleet.serial1_urls[1], 2)
+        try:
+            station.set_param("SIM_GPS_GLITCH_Y", ahead_m / (
+                METRES_PER_DEGREE * math.cos(math.radians(HOMES[1][0]))))
+            time.sleep(10.0 / SPEEDUP)  # EKF3 takes a GPS step up over about 5 s
+            result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                               "--control-port", "0", "--no-keeper",
+                                               "--connect", " ".join(fleet.urls)])
+        finally:
+            station.close()
+    out = result.output
+    assert result.exit_code == 0, out
+    line = next(x for x in out.splitlines() if "moving to the start points first" in x)
+    assert "uav2" in line and "uav1" not in line and "uav3" not in line, line
+    summary = _summary(plan_dir)
+    assert summary["formation_error_max_legs_m"] < 0.4, summary["formation_error_max_legs_m"]
