@@ -54,8 +54,9 @@ class KeeperOptions:
     five times a lead in space once cruising at 5 m/s, and the others are paused for that
     in turn (the emulator, GPS wander 1.5 m per axis: leads of 3.5 m; docs/flight.md).
     Sized at cruise a pause never costs more than the lead; a lead in time that is still
-    there shows again as the group speeds up and is answered then. What a pause is still to take (its copter's track clock
-    slows to zero and comes back to pace over seconds) counts as taken: each vehicle's
+    there shows again as the group speeds up and is answered then. What a pause is still
+    to take (its copter's track clock slows to zero and comes back to pace over seconds)
+    counts as taken: each vehicle's
     progress is measured less what its pauses have still to cost it, so a lead that keeps
     growing is answered again ``rest_s`` after the last continue (once the measurement
     shows that pause), without pausing twice for the same lead.
