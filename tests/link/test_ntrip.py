@@ -89,3 +89,33 @@ def test_a_message_pyrtcm_cannot_decode_is_dropped_by_the_client():
     with FakeCaster(lambda: [good, junk + good, good], interval_s=0.05) as caster:
         frames = list(ntrip_frames(url(caster), timeout_s=3))
     assert junk not in frames and frames == frames_of(good + good)
+
+
+def test_a_serial_port_stream_is_cut_into_frames():
+    """``--rtcm /dev/ttyUSB0``: a base station's radio on a serial port (a pty here)."""
+    import os
+    import threading
+
+    from ftlbo_mav.link.rtcm import serial_frames
+
+    master, slave = os.openpty()
+    seconds = list(base_station(3))
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.extend(
+        itertools.islice(serial_frames(parse_source(os.ttyname(slave))), 4 * 3 + 2)),
+        daemon=True)
+    reader.start()
+    time.sleep(0.2)
+    for data in seconds:
+        os.write(master, data)
+    reader.join(timeout=10)
+    os.close(master)
+    os.close(slave)
+    assert got == frames_of(b"".join(seconds))
+
+
+def test_a_serial_port_that_cannot_be_opened_says_so(tmp_path):
+    from ftlbo_mav.link.rtcm import serial_frames
+
+    with pytest.raises(RtcmError, match="cannot open"):
+        next(serial_frames(parse_source(str(tmp_path / "ttyNONE"))))
