@@ -16,8 +16,10 @@ A step of the GPS is no step of the estimate: EKF3 fuses the new GPS position ov
 seconds (recorded on ArduCopter 4.5.6 SITL, ``tests/data/ardupilot-4.5.6/gps.json``: a
 3 m SIM_GPS_GLITCH_X step, the EKF's position moving to it as a first-order lag of
 :data:`EKF_FUSE_S`), while AC_PosControl keeps the estimate on the path; the true
-position moves away by the fused part of the step. :meth:`GpsError.transient` is the
-part not yet fused. What the copter reports: GLOBAL_POSITION_INT the estimate (the
+position moves away by the fused part of the step. On the ground it is the other way
+round: the copter stands where it was placed and its estimate moves by the fused error
+(``Vehicle._stand_still``), so it takes off believing it is at home plus its error.
+:meth:`GpsError.transient` is the part not yet fused. What the copter reports: GLOBAL_POSITION_INT the estimate (the
 position it flies), GPS_RAW_INT the receiver's reading (the truth plus the error: the
 estimate plus the unfused part), SIM_STATE the truth (the estimate less the fused
 error).
