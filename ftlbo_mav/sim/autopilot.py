@@ -147,6 +147,10 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self.z = VerticalShaper()  # AC_PosControl's vertical target (takeoff, landing)
         self._hold_s = 0
         self._rtl_home = np.zeros(3)
+        # home, east/north of the boot position: moved to where the copter believes it is
+        # when it arms (ArduCopter/AP_Arming.cpp AP_Arming_Copter::arm: home not locked is
+        # reset to the current location), so RTL returns to the estimate it armed at
+        self.home_en = np.zeros(2)
         self._do_done: list[int] = []  # DO commands started, reached at the next update
         self._phase_before_item = ""
         self.fence = FenceGuard(self.tangent.to_en)  # AC_Fence + AP_Rally
@@ -279,6 +283,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             return [mode_not_armable(self.mode)]
         self.armed = True
         self._armed_on_ground_since = now
+        self.home_en = self.position[:2].copy()
         return None
 
     def disarm(self) -> None:

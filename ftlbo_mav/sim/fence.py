@@ -77,11 +77,11 @@ class FenceGuard:
         altitude fence (the polygon's distance is not emulated: 0)."""
         return max(0.0, float(position[2]) - float(params.get("FENCE_ALT_MAX", 100.0)))
 
-    def return_target(self, position: np.ndarray) -> np.ndarray:
-        """Where RTL goes: ``(east, north, alt)``; home is ``(0, 0, 0)``."""
-        k = ap.rtl_target(position[:2], (0.0, 0.0), self.rally[:, :2]) if len(
+    def return_target(self, position: np.ndarray, home_en=(0.0, 0.0)) -> np.ndarray:
+        """Where RTL goes: ``(east, north, alt)``, home at ``home_en`` and altitude 0."""
+        k = ap.rtl_target(position[:2], home_en, self.rally[:, :2]) if len(
             self.rally) else None
-        return np.zeros(3) if k is None else self.rally[k].copy()
+        return np.array([*home_en, 0.0], float) if k is None else self.rally[k].copy()
 
     def rtl_alt_limit(self, params: Mapping[str, float]) -> float | None:
         """The highest RTL return altitude the altitude fence allows, or None."""

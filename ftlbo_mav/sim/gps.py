@@ -19,10 +19,10 @@ seconds (recorded on ArduCopter 4.5.6 SITL, ``tests/data/ardupilot-4.5.6/gps.jso
 position moves away by the fused part of the step. On the ground it is the other way
 round: the copter stands where it was placed and its estimate moves by the fused error
 (``Vehicle._stand_still``), so it takes off believing it is at home plus its error.
-:meth:`GpsError.transient` is the part not yet fused. What the copter reports: GLOBAL_POSITION_INT the estimate (the
-position it flies), GPS_RAW_INT the receiver's reading (the truth plus the error: the
-estimate plus the unfused part), SIM_STATE the truth (the estimate less the fused
-error).
+:meth:`GpsError.transient` is the part not yet fused. What the copter reports:
+GLOBAL_POSITION_INT the estimate (the position it flies), GPS_RAW_INT the receiver's
+reading (the truth plus the error: the estimate plus the unfused part), SIM_STATE the
+truth (the estimate less the fused error).
 
 Reported, as SITL does: the fix type (6, RTK fixed, by default: SITL's) and the
 accuracy ``SIM_GPS_ACC`` (0.3 m by default) as GPS_RAW_INT's ``h_acc``.

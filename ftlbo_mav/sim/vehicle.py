@@ -118,6 +118,7 @@ class LinkState:
     next_beat: float = 0.0
     next_timesync: float = 0.0
     home_sent: bool = False
+    home_at: tuple[float, float] = (0.0, 0.0)  # the home (east, north) last sent
     outbox: list = field(default_factory=list)
 
 
@@ -231,8 +232,15 @@ class Vehicle:
         return {MISSION_TYPE_FENCE: self.fence, MISSION_TYPE_RALLY: self.rally}.get(
             kind, self.missions)
 
+    def current_home(self) -> tuple[float, float, float]:
+        """Home as ArduCopter holds it now: where it booted, then where it believed it
+        was when it last armed (:attr:`.autopilot.Autopilot.home_en`)."""
+        ap = self.autopilot
+        lat, lon = ap.tangent.to_latlon(float(ap.home_en[0]), float(ap.home_en[1]))
+        return (lat, lon, self.home[2])
+
     def home_for_missions(self, now: float) -> None:
-        self.missions.home = self.home if self.home_set(now) else None
+        self.missions.home = self.current_home() if self.home_set(now) else None
 
     def _announce(self, texts: list, link: Link | None) -> list:
         """The autopilot's STATUSTEXT and MISSION_ITEM_REACHED for every active link;
@@ -264,9 +272,14 @@ class Vehicle:
             if now >= st.next_timesync:
                 st.next_timesync += TIMESYNC_S
                 msgs.append(R.MAVLink_timesync_message(0, int((now - self.boot_time) * 1e9)))
+            home_at = tuple(self.autopilot.home_en.tolist())
             if not st.home_sent and self.home_set(now):
                 st.home_sent = True  # AP_AHRS on setting home: MSG_HOME and MSG_ORIGIN
+                st.home_at = home_at
                 msgs += self.home_messages(now)
+            elif st.home_sent and st.home_at != home_at:  # AP_AHRS::set_home: MSG_HOME
+                st.home_at = home_at
+                msgs.append(self.home_messages(now)[0])
             for msgid, period in st.periods.items():
                 if now >= st.due[msgid]:
                     st.due[msgid] = max(st.due[msgid] + period, now - period)
@@ -440,12 +453,16 @@ class Vehicle:
         return now - self.boot_time >= self.boot.prearm_s
 
     def home_messages(self, now: float) -> list:
-        lat, lon, alt = self.home
+        """HOME_POSITION (the current home) and GPS_GLOBAL_ORIGIN (the EKF origin: where
+        it booted)."""
         usec = int((now - self.boot_time) * 1e6)
-        ilat, ilon, ialt = round(lat * 1e7), round(lon * 1e7), int(round(alt * 1000))
-        return [R.MAVLink_home_position_message(ilat, ilon, ialt, 0, 0, 0,
-                                                [float("nan")] * 4, 0, 0, 0, usec),
-                R.MAVLink_gps_global_origin_message(ilat, ilon, ialt, usec)]
+        lat, lon, alt = self.current_home()
+        olat, olon, _ = self.home
+        ialt = int(round(alt * 1000))
+        return [R.MAVLink_home_position_message(round(lat * 1e7), round(lon * 1e7), ialt,
+                                                0, 0, 0, [float("nan")] * 4, 0, 0, 0, usec),
+                R.MAVLink_gps_global_origin_message(round(olat * 1e7), round(olon * 1e7),
+                                                    ialt, usec)]
 
     def mission_current(self):
         """MISSION_CURRENT (GCS_Common.cpp send_mission_current): seq (the current

@@ -79,3 +79,43 @@ def test_the_estimate_is_where_it_flies_the_truth_is_off_by_the_error():
     true = _en(v, v.message(R.MAVLINK_MSG_ID_SIM_STATE, t), frame)
     assert np.allclose(est, 0.0, atol=0.01) and np.allclose(raw, est, atol=0.01)
     assert np.allclose(est - true, v.gps.error(t - v.boot_time), atol=0.02)
+
+
+def test_home_is_where_it_believed_it_was_when_it_armed_and_rtl_lands_it_there():
+    """ArduCopter/AP_Arming.cpp AP_Arming_Copter::arm: home (not locked) is reset to the
+    current location, the estimate. A copter whose GPS reads 1 m east of where it stands
+    arms with home 1 m east of its boot position; RTL brings its estimate back there,
+    which is where it truly took off."""
+    from ftlbo_mav.sim.modes.common import GUIDED, RTL
+
+    gps = GpsErrorOptions(glitches=((0.0, 1.0, 0.0),))  # 1 m east from boot on
+    v = Vehicle(sysid=1, home=HOME, boot_time=0.0, options=VehicleOptions(gps=gps))
+    ap = v.autopilot
+    t = 0.0
+    while t < 30.0:  # on the ground while EKF3 takes the error up (about 5 s)
+        t += 0.05
+        v.tick(t)
+    assert ap.set_mode(GUIDED, t) and ap.arm(t) is None
+    v.tick(t)
+    home = v.message(R.MAVLINK_MSG_ID_HOME_POSITION, t)
+    est = v.message(R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, t)
+    assert (home.latitude, home.longitude) == (est.lat, est.lon)
+    frame = LocalFrame(*HOME[:2])
+    east = frame.to_enu(lat_deg=[home.latitude * 1e-7], lon_deg=[home.longitude * 1e-7])[0, 0]
+    assert east == pytest.approx(1.0, abs=0.03)
+    ap.takeoff(4.0)
+    while ap.position[2] < 3.9:
+        t += 0.05
+        v.tick(t)
+    assert ap.goto(np.array([20.0, 5.0, 4.0]))
+    while np.linalg.norm(ap.position - [20.0, 5.0, 4.0]) > 0.05:
+        t += 0.05
+        v.tick(t)
+    assert ap.set_mode(RTL, t)
+    while ap.armed and t < 300.0:
+        t += 0.05
+        v.tick(t)
+    assert not ap.armed
+    truth = v.message(R.MAVLINK_MSG_ID_SIM_STATE, t)
+    landed = frame.to_enu(lat_deg=[truth.lat_int * 1e-7], lon_deg=[truth.lon_int * 1e-7])[0]
+    assert np.hypot(*landed[:2]) < 0.05  # where it truly took off

@@ -22,7 +22,7 @@ class ModeRTL:
         nav = self.nav_params()
         self.nav = WaypointNav(nav, self.position.copy(),
                                nav.rtl_speed if nav.rtl_speed > 0 else None)
-        target = self.fence.return_target(self.position)
+        target = self.fence.return_target(self.position, self.home_en)
         alt = max(float(self.position[2]), nav.rtl_alt, float(target[2]))
         limit = self.fence.rtl_alt_limit(self.params)
         if limit is not None:
