@@ -299,10 +299,7 @@ def one_flight(plan_dir: Path, homes, *, binary, speedup, seed, wander_m, tau_s,
                     source = parse_source(f"ntrip://me:secret@127.0.0.1:{caster.port}/BASE1")
                     forwarder = stack.enter_context(
                         RtcmForwarder(frames_from(source), fleet.links))
-                    stack.callback(lambda: corrections.update(
-                        frames=forwarder.frames, bytes=forwarder.bytes,
-                        bytes_per_s=round(forwarder.bytes_per_s(), 1),
-                        dropped=forwarder.dropped, error=forwarder.error))
+                    stack.callback(lambda: corrections.update(forwarder.summary()))
                 fly(planned, fleet.vehicles, options=options, timing=Timing(), say=say,
                     tick=lambda: None, keeper=keeper)
         except PreflightError as exc:

@@ -140,8 +140,7 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
             version=v.status.firmware_version) | {"sysid": v.sysid}
             for v in monitor.vehicles}
     if rtcm is not None:
-        summary["rtcm"] = {"frames": rtcm.frames, "bytes": rtcm.bytes, "dropped": rtcm.dropped,
-                           "bytes_per_s": round(rtcm.bytes_per_s(), 1), "error": rtcm.error}
+        summary["rtcm"] = rtcm.summary()
     files = {"flight.csv": monitor.record.to_csv(),
              "summary.json": json.dumps(summary, indent=2) + "\n"}
     if len(times):

@@ -217,6 +217,11 @@ class RtcmForwarder:
         elapsed = time.monotonic() - self._started
         return self.bytes / elapsed if elapsed > 0 else 0.0
 
+    def summary(self) -> dict:
+        """What it sent, as summary.json's ``rtcm`` says it."""
+        return {"frames": self.frames, "bytes": self.bytes, "dropped": self.dropped,
+                "bytes_per_s": round(self.bytes_per_s(), 1), "error": self.error}
+
     def send(self, frame: bytes) -> None:
         try:
             parts = self._sequencer.messages(frame)
