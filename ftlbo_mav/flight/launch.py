@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
@@ -81,10 +82,9 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
 
 def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
                    say: Callable[[str], None], poll: Callable[[], None] = lambda: None
-                   ) -> list[float]:
+                   ) -> None:
     """Hovering, each vehicle moves (GUIDED) to its leg's start point where its own
-    estimate puts it off by more than ``options.start_tolerance_m``; returns how far
-    each was (metres, horizontal).
+    estimate puts it off by more than ``options.start_tolerance_m`` (horizontally).
 
     A copter is placed at its home; with an uncorrected GPS its estimate is off by the
     GPS error, it takes off where it believes it stands, and starts its legs from there
@@ -99,19 +99,17 @@ def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], op
     starts = []
     for i, mission in enumerate(planned.missions):
         lat, lon, _alt = planned.frame.to_lla(planned.paths[i][0])
-        starts.append((float(lat), float(lon), takeoff_item(mission)[1]))
+        starts.append(_Point(float(lat), float(lon), takeoff_item(mission)[1]))
 
     def away(v, start) -> float:
-        s = v.status
-        if s.lat_deg is None:
+        if v.status.lat_deg is None:
             return float("inf")
-        enu = planned.frame.to_enu(lat_deg=[s.lat_deg, start[0]], lon_deg=[s.lon_deg, start[1]])
-        return float(np.hypot(*(enu[0, :2] - enu[1, :2])))
+        return _ground_distance(planned.frame, v.status, start)
 
     first = [away(v, st) for v, st in zip(vehicles, starts)]
     moving = [i for i, d in enumerate(first) if d > tolerance]
     if not moving:
-        return first
+        return
     say("moving to the start points first (each vehicle's own estimate): " + ", ".join(
         f"{vehicles[i].name} {first[i]:.2f} m off" for i in moving))
     for i in moving:
@@ -127,14 +125,14 @@ def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], op
             raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         pending = [i for i in moving if not there(vehicles[i], starts[i])]
         if not pending:
-            return first
+            return
         now = time.monotonic()
         if now >= deadline:
             say("not at the start point after {:g} s, starting anyway: {}".format(
                 options.align_timeout_s, ", ".join(
                     f"{vehicles[i].name} {away(vehicles[i], starts[i]):.2f} m off"
                     for i in pending)))
-            return first
+            return
         if now - resent >= 2.0:  # SET_POSITION_TARGET is never acknowledged: say it again
             resent = now
             for i in pending:
@@ -180,6 +178,14 @@ def first_leg(mission, frame: LocalFrame, *, hold_m: float = 0.5) -> tuple[int, 
             continue
         return it.seq, speeds
     return seq + 1, []
+
+
+class _Point(NamedTuple):
+    """A position as mission items and vehicle statuses give one (altitude above home)."""
+
+    lat_deg: float
+    lon_deg: float
+    alt_m: float
 
 
 def _ground_distance(frame: LocalFrame, a, b) -> float:
