@@ -285,19 +285,16 @@ def ntrip_frames(source: Source, *, timeout_s: float = 10.0) -> Iterator[bytes]:
             try:
                 item = out.get(timeout=0.2)
             except queue.Empty:
-                item = None
-            if item is None:
-                if not client.connected:
+                if not client.connected:  # refused, or a sourcetable: it has stopped
                     _check_refusal(client, where)
                     return
                 waited += 0.2
                 if waited >= timeout_s:
-                    raise RtcmError(f"{where}: nothing received for {timeout_s:g} s")
+                    raise RtcmError(f"{where}: nothing received for {timeout_s:g} s") from None
                 continue
             raw = item[0] if isinstance(item, tuple) else item
-            if isinstance(raw, list):  # the sourcetable, parsed
-                raise RtcmError(f"{where}: no such mountpoint (the caster sent its "
-                                "sourcetable)")
+            if isinstance(raw, list):  # the sourcetable, parsed: the client stops
+                continue
             if not raw:  # pygnssutils reads b"" for ever once the caster closed
                 return
             waited = 0.0
