@@ -6,6 +6,7 @@ stderr and a non-zero exit code; a traceback is a bug.
 
 from __future__ import annotations
 
+import importlib
 import signal
 import sys
 import threading
@@ -26,10 +27,32 @@ from .scenario import AUTO, load_scenario
 from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINTS, MIN_STUDENTS
 from .scenario.reader import scenario_inputs
 
+LAZY_COMMANDS = {
+    "upload": "ftlbo_mav.link.commands:upload",
+    "download": "ftlbo_mav.link.commands:download",
+    "sim": "ftlbo_mav.sim.commands:sim",
+    "fly": "ftlbo_mav.flight.commands:fly_command",
+    "monitor": "ftlbo_mav.flight.commands:monitor",
+    "abort": "ftlbo_mav.flight.commands:abort_command",
+}
+"""The commands that talk MAVLink, imported only when one of them runs (or ``--help``
+lists them): ``plan`` starts without pymavlink's links and the emulator (click's
+documented lazy loading, "Advanced Patterns")."""
+
 
 class _Group(click.Group):
     """The command group; a bad option value or usage, like every other bad input, ends in
-    one line (``error: ...``) and exit code 2, rather than click's usage block."""
+    one line (``error: ...``) and exit code 2, rather than click's usage block. The
+    commands of :data:`LAZY_COMMANDS` are imported when asked for."""
+
+    def list_commands(self, ctx):
+        return sorted({*super().list_commands(ctx), *LAZY_COMMANDS})
+
+    def get_command(self, ctx, name):
+        if name in LAZY_COMMANDS and name not in self.commands:
+            module, attribute = LAZY_COMMANDS[name].split(":")
+            self.add_command(getattr(importlib.import_module(module), attribute), name)
+        return super().get_command(ctx, name)
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
              **extra):
@@ -64,7 +87,9 @@ def _terminate(_signum, _frame) -> None:
     raise KeyboardInterrupt
 
 
-# Commands are registered below, one module per concern.
+# Commands are registered below, one module per concern; the MAVLink bridge
+# (link/commands.py: upload, download), the emulator (sim/commands.py: sim) and the
+# flights (flight/commands.py: fly, monitor, abort) through LAZY_COMMANDS.
 
 
 def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
@@ -359,16 +384,6 @@ def plot_command(folder, out_dir):
         click.echo(f"  wrote {path}")
 
 
-# The MAVLink bridge (ftlbo_mav/link/commands.py): upload, download; the emulator
-# (ftlbo_mav/sim/commands.py): sim.
-from .link.commands import download, upload
-from .sim.commands import sim
-
-main.add_command(upload)
-main.add_command(download)
-main.add_command(sim)
-
-
 # The comparison of algorithms over seeds (ftlbo_mav/compare.py).
 @main.command("compare")
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=str))
@@ -414,9 +429,3 @@ def compare_command(scenario, out_dir, runs, algorithms, processes, iterations, 
     click.echo(table_markdown(result), nl=False)
     for path in paths:
         click.echo(f"  wrote {path}")
-
-from .flight.commands import abort_command, fly_command, monitor
-
-main.add_command(fly_command)
-main.add_command(monitor)
-main.add_command(abort_command)

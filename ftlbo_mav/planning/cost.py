@@ -100,9 +100,20 @@ def segment_axis_distances(problem: PlanningProblem, paths: np.ndarray) -> np.nd
 
 
 COMPILED_FROM = 400
-"""UAVs x cylinders from which the safety term runs compiled (:mod:`._cost_jit`, some 6
+"""UAVs x cylinders from which the safety term runs compiled (:mod:`._cost_jit`, some 25
 times faster per distance, no temporaries); below, numpy's arrays (numba's start-up, 0.3 s
 in a new process, costs more than such problems save)."""
+COMPILED_SEGMENTS_FROM = 4000
+"""UAVs x cylinders x segments per student from which the safety term runs compiled
+however few the cylinders (3 UAVs among 100 trees with 18 waypoints: 5,700; every
+evaluation of a class then costs some 0.7 ms in numpy's arrays, 0.03 ms compiled)."""
+
+
+def _compiled(problem: PlanningProblem) -> bool:
+    """Whether the safety term of ``problem`` runs compiled (:data:`COMPILED_FROM`,
+    :data:`COMPILED_SEGMENTS_FROM`)."""
+    pairs = problem.uav_count * len(problem.radii)
+    return pairs >= COMPILED_FROM or pairs * (problem.waypoints + 1) >= COMPILED_SEGMENTS_FROM
 
 
 def _safety(problem: PlanningProblem, paths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -113,7 +124,7 @@ def _safety(problem: PlanningProblem, paths: np.ndarray) -> tuple[np.ndarray, np
         return np.zeros(S), np.zeros(S)
     J = P - 1
     radii = np.tile(problem.radii, problem.uav_count)[:, None]  # (NK, 1)
-    if problem.uav_count * K >= COMPILED_FROM:
+    if _compiled(problem):
         from ._cost_jit import safety
 
         return safety(np.ascontiguousarray(paths), _axes(problem), radii[:, 0],
@@ -154,7 +165,7 @@ def _terms(problem: PlanningProblem, waypoints: np.ndarray) -> tuple[CostTerms, 
     S = waypoints.shape[0]
     per_student = (waypoints.shape[1] + 1) * max(problem.uav_count * len(problem.radii), 1)
     step = max(_CHUNK_ELEMENTS // per_student, 1)
-    if problem.uav_count * len(problem.radii) >= COMPILED_FROM:
+    if _compiled(problem):
         step = S  # compiled: no temporaries to bound
     if S > step:  # bounded memory for big classes, many UAVs, obstacles or waypoints
         parts = [_terms(problem, waypoints[i : i + step]) for i in range(0, S, step)]

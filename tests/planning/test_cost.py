@@ -165,6 +165,28 @@ def test_the_compiled_safety_term_is_numpys(monkeypatch):
     waypoints = line[None] + rng.normal(0, 15, (40, 6, 3)) * [1, 1, 0]
     compiled = cost_module.search_cost(problem, waypoints)
     monkeypatch.setattr(cost_module, "COMPILED_FROM", 10**9)
+    monkeypatch.setattr(cost_module, "COMPILED_SEGMENTS_FROM", 10**9)
     arrays = cost_module.search_cost(problem, waypoints)
     assert 0 < np.isfinite(cost_module.cost_terms(problem, waypoints).safety).sum() < 40
     assert np.allclose(compiled, arrays, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_segment_touching_a_cylinder_is_inside_compiled_or_not(monkeypatch, compiled):
+    """``d <= R`` is inside (infinite safety) in both forms of the safety term, also at
+    ``d == R`` exactly, where the depth is 0 (the compiled loop counts hits, it does not
+    read them from the depth)."""
+    from ftlbo_mav.planning import cost as cost_module
+
+    monkeypatch.setattr(cost_module, "COMPILED_FROM", 1 if compiled else 10**9)
+    monkeypatch.setattr(cost_module, "COMPILED_SEGMENTS_FROM", 1 if compiled else 10**9)
+    problem = PlanningProblem(
+        start=np.array([0.0, 1.0, 4.0]), goal=np.array([20.0, 1.0, 4.0]),
+        offsets=np.zeros((1, 3)), centres=np.array([[10.0, 0.0]]), radii=np.array([1.0]),
+        h_min=2.0, h_max=7.0, area_lower=np.full(2, -50.0), area_upper=np.full(2, 50.0),
+        waypoints=1, weights=np.array([1.0, 1.0, 1.0]))
+    touching = np.array([[[10.0, 1.0, 4.0]]])
+    apart = np.array([[[10.0, 1.5, 4.0]]])
+    assert np.isinf(cost_module.safety_cost(problem, problem.full_paths(touching))[0])
+    assert cost_module.search_cost(problem, touching)[0] == cost_module.INFEASIBLE
+    assert np.isfinite(cost_module.safety_cost(problem, problem.full_paths(apart))[0])
