@@ -44,46 +44,102 @@ def disc_grid(centres, radii, lo0, lo1, cell, nx, ny):
     return starts, items
 
 
+@njit(cache=True)
+def _walk_clear(ax, ay, qx, qy, centres, radii, starts, items, lo0, lo1, cell, nx, ny, tol,
+                stamp, e):
+    """Whether the segment ``(ax, ay) -> (qx, qy)`` enters no disc's interior, walked in
+    steps of half a cell, every disc of the 3 x 3 cells around each step tested once
+    (``stamp``: per disc the last segment ``e`` it was tested against)."""
+    bx, by = qx - ax, qy - ay
+    seg2 = max(bx * bx + by * by, 1e-18)
+    steps = int(math.sqrt(bx * bx + by * by) / (0.5 * cell)) + 1
+    for s in range(steps + 1):
+        f = s / steps
+        gx = int(math.floor((ax + f * bx - lo0) / cell))
+        gy = int(math.floor((ay + f * by - lo1) / cell))
+        for yy in range(max(gy - 1, 0), min(gy + 2, ny)):
+            for xx in range(max(gx - 1, 0), min(gx + 2, nx)):
+                c = yy * nx + xx
+                for m in range(starts[c], starts[c + 1]):
+                    k = items[m]
+                    if stamp[k] == e:
+                        continue
+                    stamp[k] = e  # a race with another segment only repeats a test
+                    cx, cy = centres[k, 0] - ax, centres[k, 1] - ay
+                    t = min(max((cx * bx + cy * by) / seg2, 0.0), 1.0)
+                    d = math.hypot(cx - t * bx, cy - t * by)
+                    if d < radii[k] * (1 - tol) - tol:
+                        return False
+    return True
+
+
 @njit(cache=True, parallel=True)
 def clear_through_grid(p, q, centres, radii, starts, items, lo0, lo1, cell, nx, ny, tol):
     """``(E,)``: True where the segment ``p[e] -> q[e]`` enters no disc's interior (the
     test of :func:`.geometric.segments_clear`, the same arithmetic), each segment walked
-    in steps of half a cell, every disc of the 3 x 3 cells around each step tested once."""
+    through the grid (:func:`_walk_clear`)."""
     E, C = p.shape[0], centres.shape[0]
     clear = np.ones(E, np.bool_)
     stamp = np.full(C, -1, np.int64)  # the last segment each disc was tested against
     for e in prange(E):
-        ax, ay = p[e, 0], p[e, 1]
-        bx, by = q[e, 0] - ax, q[e, 1] - ay
-        seg2 = max(bx * bx + by * by, 1e-18)
-        steps = int(math.sqrt(bx * bx + by * by) / (0.5 * cell)) + 1
-        blocked = False
-        for s in range(steps + 1):
-            f = s / steps
-            gx = int(math.floor((ax + f * bx - lo0) / cell))
-            gy = int(math.floor((ay + f * by - lo1) / cell))
-            for yy in range(max(gy - 1, 0), min(gy + 2, ny)):
-                for xx in range(max(gx - 1, 0), min(gx + 2, nx)):
-                    c = yy * nx + xx
-                    for m in range(starts[c], starts[c + 1]):
-                        k = items[m]
-                        if stamp[k] == e:
-                            continue
-                        stamp[k] = e  # a race with another segment only repeats a test
-                        cx, cy = centres[k, 0] - ax, centres[k, 1] - ay
-                        t = min(max((cx * bx + cy * by) / seg2, 0.0), 1.0)
-                        d = math.hypot(cx - t * bx, cy - t * by)
-                        if d < radii[k] * (1 - tol) - tol:
-                            blocked = True
-                            break
-                    if blocked:
-                        break
-                if blocked:
-                    break
-            if blocked:
-                break
-        clear[e] = not blocked
+        clear[e] = _walk_clear(p[e, 0], p[e, 1], q[e, 0], q[e, 1], centres, radii, starts,
+                               items, lo0, lo1, cell, nx, ny, tol, stamp, e)
     return clear
+
+
+@njit(cache=True, parallel=True)
+def clear_bitangents(i, j, centres, radii, marked, lower, upper, starts, items, lo0, lo1,
+                     cell, nx, ny, tol):
+    """The four bitangents of each disc pair ``(i[m], j[m])`` made and tested in one pass:
+    ``ok (4, M)``, ``angle_i (4, M)``, ``angle_j (4, M)``, rows the outer (+, -) and inner
+    (+, -) bitangents as :func:`.geometric._bitangents` makes them (the same arithmetic);
+    ``ok`` where the bitangent exists, neither end lies in a ``marked`` bin
+    (:func:`.geometric._buried_bins`), both ends lie in the rectangle ``lower``..``upper``
+    (:func:`.geometric._in_rectangle`) and the segment enters no disc (:func:`_walk_clear`).
+    Not one candidate array of millions: only the verdicts and angles."""
+    M, C = len(i), centres.shape[0]
+    bins = marked.shape[1]
+    two_pi = 2.0 * math.pi
+    width = two_pi / bins
+    tol0 = tol * (1 + abs(upper[0] - lower[0]))
+    tol1 = tol * (1 + abs(upper[1] - lower[1]))
+    ok = np.zeros((4, M), np.bool_)
+    angle_i = np.zeros((4, M))
+    angle_j = np.zeros((4, M))
+    stamp = np.full(C, -1, np.int64)
+    for m in prange(M):
+        a, b = i[m], j[m]
+        vx, vy = centres[b, 0] - centres[a, 0], centres[b, 1] - centres[a, 1]
+        d = math.hypot(vx, vy)
+        phi = math.atan2(vy, vx)
+        ra, rb = radii[a], radii[b]
+        for kind in range(4):
+            if kind < 2:
+                if not d > abs(ra - rb) + tol:
+                    continue
+                x = (ra - rb) / d
+            else:
+                if not d > ra + rb + tol:
+                    continue
+                x = (ra + rb) / d
+            alpha = math.acos(min(max(x, -1.0), 1.0))
+            ai = phi + alpha if kind % 2 == 0 else phi + -1.0 * alpha
+            aj = ai if kind < 2 else ai + math.pi
+            angle_i[kind, m], angle_j[kind, m] = ai, aj
+            if marked[a, int(math.floor((ai % two_pi) / width)) % bins]:
+                continue
+            if marked[b, int(math.floor((aj % two_pi) / width)) % bins]:
+                continue
+            px, py = centres[a, 0] + ra * math.cos(ai), centres[a, 1] + ra * math.sin(ai)
+            qx, qy = centres[b, 0] + rb * math.cos(aj), centres[b, 1] + rb * math.sin(aj)
+            if not (lower[0] - tol0 <= px <= upper[0] + tol0
+                    and lower[1] - tol1 <= py <= upper[1] + tol1
+                    and lower[0] - tol0 <= qx <= upper[0] + tol0
+                    and lower[1] - tol1 <= qy <= upper[1] + tol1):
+                continue
+            ok[kind, m] = _walk_clear(px, py, qx, qy, centres, radii, starts, items, lo0, lo1,
+                                      cell, nx, ny, tol, stamp, kind * M + m)
+    return ok, angle_i, angle_j
 
 
 @njit(cache=True)

@@ -372,20 +372,26 @@ def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, up
     t_disc, t_angle, keys_p, keys_q, ps, qs = [], [], [], [], [], []
     count = 0
 
-    def keep(pk, pq, disc_p, ang_p, disc_q, ang_q, fixed_p, fixed_q):
+    def keep(pk, pq, disc_p, ang_p, disc_q, ang_q, fixed_p, fixed_q, *, tested=False):
         """Candidates from ``pk`` keys (-1, -2; or 0: the tangent ``disc_p``, ``ang_p``)
-        to ``pq`` likewise; ``fixed_*``: the start's or goal's point where the key is < 0."""
+        to ``pq`` likewise; ``fixed_*``: the start's or goal's point where the key is < 0.
+        ``tested``: the candidates are the clear ones already (:func:`_clear_bitangents`)."""
         nonlocal count
-        alive = np.ones(len(pk), bool)
-        for keys, disc, ang in ((pk, disc_p, ang_p), (pq, disc_q, ang_q)):
-            on = keys >= 0
-            alive[on] &= ~_buried(discs, disc[on], ang[on], marked=marked)
-        pk, pq = pk[alive], pq[alive]
-        disc_p, ang_p, disc_q, ang_q = disc_p[alive], ang_p[alive], disc_q[alive], ang_q[alive]
+        if not tested:
+            alive = np.ones(len(pk), bool)
+            for keys, disc, ang in ((pk, disc_p, ang_p), (pq, disc_q, ang_q)):
+                on = keys >= 0
+                alive[on] &= ~_buried(discs, disc[on], ang[on], marked=marked)
+            pk, pq = pk[alive], pq[alive]
+            disc_p, ang_p = disc_p[alive], ang_p[alive]
+            disc_q, ang_q = disc_q[alive], ang_q[alive]
         p = np.where((pk >= 0)[:, None], _on_circle(discs, disc_p, ang_p), fixed_p)
         q = np.where((pq >= 0)[:, None], _on_circle(discs, disc_q, ang_q), fixed_q)
-        ok = _in_rectangle(p, lower, upper) & _in_rectangle(q, lower, upper)
-        ok[ok] = _clear_through_grid(p[ok], q[ok], discs, grid)
+        if tested:
+            ok = np.ones(len(pk), bool)
+        else:
+            ok = _in_rectangle(p, lower, upper) & _in_rectangle(q, lower, upper)
+            ok[ok] = _clear_through_grid(p[ok], q[ok], discs, grid)
         for keys, disc, ang in ((pk, disc_p, ang_p), (pq, disc_q, ang_q)):
             on = ok & (keys >= 0)
             keys[on] = count + np.arange(on.sum())
@@ -401,15 +407,41 @@ def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, up
         disc, angle = _point_tangents(point, discs)
         n = len(disc)
         keep(np.full(n, key), np.zeros(n, int), disc, angle, disc, angle, point, point)
-    i, j = np.triu_indices(len(discs.radii), 1)
-    for a in range(0, len(i), _PAIR_CHUNK):
-        di, ai, dj, aj = _bitangents(discs, (i[a:a + _PAIR_CHUNK], j[a:a + _PAIR_CHUNK]))
+    C = len(discs.radii)
+    for a in range(0, C * (C - 1) // 2, _PAIR_CHUNK):
+        di, ai, dj, aj = _clear_bitangents(discs, *_triu_chunk(C, a, a + _PAIR_CHUNK),
+                                           marked, grid, lower, upper)
         n = len(di)
-        keep(np.zeros(n, int), np.zeros(n, int), di, ai, dj, aj, start, goal)
+        keep(np.zeros(n, int), np.zeros(n, int), di, ai, dj, aj, start, goal, tested=True)
     none = np.zeros(1, int)
     keep(np.array([-1]), np.array([-2]), none, np.zeros(1), none, np.zeros(1), start, goal)
     return (np.concatenate(t_disc), np.concatenate(t_angle), np.concatenate(keys_p),
             np.concatenate(keys_q), np.concatenate(ps), np.concatenate(qs))
+
+
+def _triu_chunk(C: int, begin: int, end: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs ``begin`` to ``end`` (exclusive) of ``np.triu_indices(C, 1)``, in its order,
+    without making all ``C (C - 1) / 2`` of them."""
+    k = np.arange(begin, min(end, C * (C - 1) // 2), dtype=np.int64)
+    rows = np.arange(C, dtype=np.int64)
+    before = rows * C - rows * (rows + 1) // 2  # pairs in the rows above row i
+    i = np.searchsorted(before, k, side="right") - 1
+    return i, k - before[i] + i + 1
+
+
+def _clear_bitangents(discs: Discs, i: np.ndarray, j: np.ndarray, marked, grid, lower, upper):
+    """The clear bitangents of the disc pairs ``(i, j)`` as (disc_i, angle_i, disc_j,
+    angle_j), in :func:`_bitangents`' order: the tests of :func:`_clear_segments`'
+    ``keep`` (ends not buried, in the rectangle, the segment clear) made compiled in one
+    pass over the pairs (:func:`._geometric_jit.clear_bitangents`), with no array of
+    every candidate."""
+    from ._geometric_jit import clear_bitangents
+
+    ok, angle_i, angle_j = clear_bitangents(i, j, discs.centres, discs.radii, marked,
+                                            np.asarray(lower, float), np.asarray(upper, float),
+                                            *grid, _TOL)
+    return (np.concatenate([i[row] for row in ok]), angle_i[ok], np.concatenate(
+        [j[row] for row in ok]), angle_j[ok])
 
 
 def _in_rectangle(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
