@@ -47,30 +47,71 @@ def disc_grid(centres, radii, lo0, lo1, cell, nx, ny):
 @njit(cache=True)
 def _walk_clear(ax, ay, qx, qy, centres, radii, starts, items, lo0, lo1, cell, nx, ny, tol,
                 stamp, e):
-    """Whether the segment ``(ax, ay) -> (qx, qy)`` enters no disc's interior, walked in
-    steps of half a cell, every disc of the 3 x 3 cells around each step tested once
-    (``stamp``: per disc the last segment ``e`` it was tested against)."""
+    """Whether the segment ``(ax, ay) -> (qx, qy)`` enters no disc's interior: the discs of
+    every cell the segment crosses are tested, each once (``stamp``: per disc the last
+    segment ``e`` it was tested against), the cells visited in the segment's order
+    (Amanatides and Woo's traversal, clipped to the grid). A disc the segment enters
+    holds a point of it in its bounding box, so it is listed in a cell the segment
+    crosses (:func:`disc_grid`)."""
     bx, by = qx - ax, qy - ay
     seg2 = max(bx * bx + by * by, 1e-18)
-    steps = int(math.sqrt(bx * bx + by * by) / (0.5 * cell)) + 1
-    for s in range(steps + 1):
-        f = s / steps
-        gx = int(math.floor((ax + f * bx - lo0) / cell))
-        gy = int(math.floor((ay + f * by - lo1) / cell))
-        for yy in range(max(gy - 1, 0), min(gy + 2, ny)):
-            for xx in range(max(gx - 1, 0), min(gx + 2, nx)):
-                c = yy * nx + xx
-                for m in range(starts[c], starts[c + 1]):
-                    k = items[m]
-                    if stamp[k] == e:
-                        continue
-                    stamp[k] = e  # a race with another segment only repeats a test
-                    cx, cy = centres[k, 0] - ax, centres[k, 1] - ay
-                    t = min(max((cx * bx + cy * by) / seg2, 0.0), 1.0)
-                    d = math.hypot(cx - t * bx, cy - t * by)
-                    if d < radii[k] * (1 - tol) - tol:
-                        return False
-    return True
+    # the segment in cell units, clipped to the grid's box [0, nx] x [0, ny]
+    x0, y0 = (ax - lo0) / cell, (ay - lo1) / cell
+    dx, dy = bx / cell, by / cell
+    t0, t1 = 0.0, 1.0
+    for p, q in ((-dx, x0), (dx, nx - x0), (-dy, y0), (dy, ny - y0)):
+        if p == 0.0:
+            if q < 0.0:
+                return True  # parallel to a side and outside: no disc there
+        elif p < 0.0:
+            t0 = max(t0, q / p)
+        else:
+            t1 = min(t1, q / p)
+    if t0 > t1:
+        return True
+    gx = min(max(int(math.floor(x0 + t0 * dx)), 0), nx - 1)
+    gy = min(max(int(math.floor(y0 + t0 * dy)), 0), ny - 1)
+    ex = min(max(int(math.floor(x0 + t1 * dx)), 0), nx - 1)
+    ey = min(max(int(math.floor(y0 + t1 * dy)), 0), ny - 1)
+    step_x = 1 if ex > gx else -1
+    step_y = 1 if ey > gy else -1
+    # the segment's parameter where it crosses the next cell side in x and in y
+    if dx > 0.0:
+        next_x, delta_x = (gx + 1 - x0) / dx, 1.0 / dx
+    elif dx < 0.0:
+        next_x, delta_x = (gx - x0) / dx, -1.0 / dx
+    else:
+        next_x, delta_x = math.inf, math.inf
+    if dy > 0.0:
+        next_y, delta_y = (gy + 1 - y0) / dy, 1.0 / dy
+    elif dy < 0.0:
+        next_y, delta_y = (gy - y0) / dy, -1.0 / dy
+    else:
+        next_y, delta_y = math.inf, math.inf
+    left_x, left_y = abs(ex - gx), abs(ey - gy)
+    while True:
+        c = gy * nx + gx
+        for m in range(starts[c], starts[c + 1]):
+            k = items[m]
+            if stamp[k] == e:
+                continue
+            stamp[k] = e  # a race with another segment only repeats a test
+            cx, cy = centres[k, 0] - ax, centres[k, 1] - ay
+            t = min(max((cx * bx + cy * by) / seg2, 0.0), 1.0)
+            d = math.hypot(cx - t * bx, cy - t * by)
+            if d < radii[k] * (1 - tol) - tol:
+                return False
+        if left_x == 0 and left_y == 0:
+            return True
+        # one cell on, to the end cell by a staircase whatever the round-off
+        if left_y == 0 or (left_x > 0 and next_x < next_y):
+            gx += step_x
+            next_x += delta_x
+            left_x -= 1
+        else:
+            gy += step_y
+            next_y += delta_y
+            left_y -= 1
 
 
 @njit(cache=True, parallel=True)

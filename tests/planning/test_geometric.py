@@ -361,3 +361,31 @@ def test_the_compiled_coverage_is_the_python_walks():
         compiled = G._circles_covered(discs, lower, upper)
         assert 0 < walks.sum() < count
         np.testing.assert_array_equal(compiled, walks)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_compiled_walk_through_the_grid_tests_as_every_disc_does(seed):
+    """The compiled test of segments against discs through the grid (each segment's cells
+    in turn) says what testing every segment against every disc says: random segments,
+    many tangent to a disc, some beyond the grid, some along a cell side, some a point."""
+    from ftlbo_mav.planning import geometric as G
+
+    rng = np.random.default_rng(seed)
+    C = 300
+    centres = rng.uniform(0.0, 100.0, (C, 2))
+    radii = rng.uniform(0.5, 4.0, C)
+    discs = G.Discs(centres, radii, np.arange(C), np.zeros(C, int))
+    k = rng.integers(0, C, 3000)
+    angle = rng.uniform(0, 2 * np.pi, 3000)
+    on_circle = centres[k] + radii[k, None] * np.column_stack([np.cos(angle), np.sin(angle)])
+    p = np.concatenate([on_circle[:1000], rng.uniform(-30.0, 130.0, (1500, 2)),
+                        np.repeat([[0.0, 50.0], [-20.0, -20.0]], 250, axis=0)])
+    q = np.concatenate([on_circle[1000:2000], rng.uniform(-30.0, 130.0, (1500, 2)),
+                        np.column_stack([rng.uniform(0.0, 100.0, 250), np.full(250, 50.0)]),
+                        np.full((250, 2), -20.0)])
+    p[-10:] = q[-10:] = on_circle[-10:]  # segments of no length on a circle
+    compiled = G._clear_through_grid(p, q, discs)
+    every = np.array([G.segments_clear(p[a:a + 1], q[a:a + 1], discs)[0]
+                      for a in range(len(p))])
+    assert 0 < every.sum() < len(p)
+    np.testing.assert_array_equal(compiled, every)
