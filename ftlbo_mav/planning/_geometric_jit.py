@@ -319,3 +319,75 @@ def circles_covered(first, centre, half):
                 break
         out[c] = covered
     return out
+
+
+@njit(cache=True)
+def _touch(xi, yi, ri, xj, yj, rj):
+    """:func:`.geometric._touching`'s test, ``hypot(dx, dy) <= ri + rj + 1e-6``, decided
+    on the squares where they are clear of round-off by far, by ``hypot`` itself near the
+    edge."""
+    dx, dy = xj - xi, yj - yi
+    d2 = dx * dx + dy * dy
+    reach = ri + rj + 1e-6
+    if d2 < reach * reach * (1.0 - 1e-9):
+        return True
+    if d2 > reach * reach * (1.0 + 1e-9):
+        return False
+    return math.hypot(dx, dy) <= reach
+
+
+@njit(cache=True)
+def _partners(i, centres, radii, gx, gy, nx, ny, starts, items, out_j, at):
+    """The discs touching disc ``i`` among the 3 x 3 cells around its own, written to
+    ``out_j[at:]`` when ``at >= 0``; their count."""
+    n = 0
+    for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+        for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+            c = yy * nx + xx
+            for m in range(starts[c], starts[c + 1]):
+                j = items[m]
+                if j != i and _touch(centres[i, 0], centres[i, 1], radii[i], centres[j, 0],
+                                     centres[j, 1], radii[j]):
+                    if at >= 0:
+                        out_j[at + n] = j
+                    n += 1
+    return n
+
+
+@njit(cache=True, parallel=True)
+def touching_pairs(centres, radii, cell):
+    """Every ordered pair ``(i, j)``, ``i != j``, of discs that touch or overlap
+    (:func:`_touch`), ordered by ``i`` then ``j``: each disc in the square cell of side
+    ``cell`` (at least twice the largest radius) holding its centre, its partners among
+    the discs of the 3 x 3 cells around. Two passes over the discs in parallel (count,
+    then fill), no candidate arrays."""
+    C = centres.shape[0]
+    lo0, lo1 = centres[:, 0].min(), centres[:, 1].min()
+    gx = np.empty(C, np.int64)
+    gy = np.empty(C, np.int64)
+    for k in range(C):
+        gx[k] = int((centres[k, 0] - lo0) / cell)
+        gy[k] = int((centres[k, 1] - lo1) / cell)
+    nx, ny = gx.max() + 1, gy.max() + 1
+    counts = np.zeros(nx * ny + 1, np.int64)
+    for k in range(C):
+        counts[gy[k] * nx + gx[k] + 1] += 1
+    starts = np.cumsum(counts)
+    items = np.empty(C, np.int64)
+    fill = starts[:-1].copy()
+    for k in range(C):
+        c = gy[k] * nx + gx[k]
+        items[fill[c]] = k
+        fill[c] += 1
+    found = np.zeros(C + 1, np.int64)
+    none = np.empty(0, np.int64)
+    for i in prange(C):
+        found[i + 1] = _partners(i, centres, radii, gx, gy, nx, ny, starts, items, none, -1)
+    first = np.cumsum(found)
+    pair_i = np.empty(first[-1], np.int64)
+    pair_j = np.empty(first[-1], np.int64)
+    for i in prange(C):
+        n = _partners(i, centres, radii, gx, gy, nx, ny, starts, items, pair_j, first[i])
+        pair_i[first[i]:first[i] + n] = i
+        pair_j[first[i]:first[i] + n].sort()
+    return pair_i, pair_j

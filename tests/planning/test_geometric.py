@@ -296,6 +296,11 @@ def test_the_grid_finds_the_same_touching_pairs_as_the_sort():
         si, sj = G._touching(centres, radii, order[a], order[b])
         assert set(zip(i.tolist(), j.tolist())) == set(zip(si.tolist(), sj.tolist()))
         assert len(i) == len(si) and np.all(np.diff(i) >= 0)
+        from ftlbo_mav.planning._geometric_jit import touching_pairs
+
+        ci, cj = touching_pairs(centres, radii, 2.0 * radii.max() + 1e-6)  # compiled
+        np.testing.assert_array_equal(ci, i)
+        np.testing.assert_array_equal(cj, j)
 
 
 def triangle_among_trees(seed: int, *, trees: int) -> PlanningProblem:
