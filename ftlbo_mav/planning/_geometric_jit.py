@@ -272,53 +272,39 @@ def dijkstra(indptr, indices, weights, straight, source, leg_penalty):
 
 
 @njit(cache=True)
-def circles_covered(first, centre, half):
-    """``(C,)``: whether the open intervals ``(centre, half)`` of each circle,
-    ``[first[c], first[c + 1])``, cover the whole of it
-    (:func:`.geometric._circle_covered`, the same walk)."""
+def _spans_cover(centre, half, n):
+    """Whether the open intervals ``(centre[:n], half[:n])`` of one circle cover the whole
+    of it (:func:`.geometric._circle_covered`, the same walk); ``centre`` is reused."""
     two_pi = 2.0 * math.pi
-    C = len(first) - 1
-    out = np.zeros(C, np.bool_)
-    for c in range(C):
-        lo, hi = first[c], first[c + 1]
-        n = hi - lo
-        if n == 0:
-            continue
-        a = np.empty(n)
-        b = np.empty(n)
-        whole = False
-        for m in range(n):
-            h = half[lo + m]
-            if h >= math.pi:
-                whole = True
-                break
-            a[m] = (centre[lo + m] - h) % two_pi
-            b[m] = a[m] + 2 * h
-        if whole:
-            out[c] = True
-            continue
-        for m in range(1, n):  # sort the spans as Python sorts its tuples (a, then b)
-            x, y = a[m], b[m]
-            k = m - 1
-            while k >= 0 and (a[k] > x or (a[k] == x and b[k] > y)):
-                a[k + 1], b[k + 1] = a[k], b[k]
-                k -= 1
-            a[k + 1], b[k + 1] = x, y
-        begin, reach = a[0], b[0]
-        covered = False
-        for step in range(1, 2 * n):  # spans[1:], then every span a turn later
-            if step < n:
-                x, y = a[step], b[step]
-            else:
-                x, y = a[step - n] + two_pi, b[step - n] + two_pi
-            if x >= reach - 1e-9:
-                break
-            reach = max(reach, y)
-            if reach > begin + two_pi + 1e-9:
-                covered = True
-                break
-        out[c] = covered
-    return out
+    if n == 0:
+        return False
+    a = np.empty(n)
+    b = np.empty(n)
+    for m in range(n):
+        h = half[m]
+        if h >= math.pi:
+            return True
+        a[m] = (centre[m] - h) % two_pi
+        b[m] = a[m] + 2 * h
+    for m in range(1, n):  # sort the spans as Python sorts its tuples (a, then b)
+        x, y = a[m], b[m]
+        k = m - 1
+        while k >= 0 and (a[k] > x or (a[k] == x and b[k] > y)):
+            a[k + 1], b[k + 1] = a[k], b[k]
+            k -= 1
+        a[k + 1], b[k + 1] = x, y
+    begin, reach = a[0], b[0]
+    for step in range(1, 2 * n):  # spans[1:], then every span a turn later
+        if step < n:
+            x, y = a[step], b[step]
+        else:
+            x, y = a[step - n] + two_pi, b[step - n] + two_pi
+        if x >= reach - 1e-9:
+            return False
+        reach = max(reach, y)
+        if reach > begin + two_pi + 1e-9:
+            return True
+    return False
 
 
 @njit(cache=True)
@@ -354,13 +340,11 @@ def _partners(i, centres, radii, gx, gy, nx, ny, starts, items, out_j, at):
     return n
 
 
-@njit(cache=True, parallel=True)
-def touching_pairs(centres, radii, cell):
-    """Every ordered pair ``(i, j)``, ``i != j``, of discs that touch or overlap
-    (:func:`_touch`), ordered by ``i`` then ``j``: each disc in the square cell of side
-    ``cell`` (at least twice the largest radius) holding its centre, its partners among
-    the discs of the 3 x 3 cells around. Two passes over the discs in parallel (count,
-    then fill), no candidate arrays."""
+@njit(cache=True)
+def _centre_grid(centres, cell):
+    """Each disc in the square cell of side ``cell`` holding its centre: its cell
+    ``gx``, ``gy``, the grid's ``nx``, ``ny`` and the discs of each cell, ascending, as
+    ``starts (nx*ny + 1,)`` and ``items``."""
     C = centres.shape[0]
     lo0, lo1 = centres[:, 0].min(), centres[:, 1].min()
     gx = np.empty(C, np.int64)
@@ -379,6 +363,18 @@ def touching_pairs(centres, radii, cell):
         c = gy[k] * nx + gx[k]
         items[fill[c]] = k
         fill[c] += 1
+    return gx, gy, nx, ny, starts, items
+
+
+@njit(cache=True, parallel=True)
+def touching_pairs(centres, radii, cell):
+    """Every ordered pair ``(i, j)``, ``i != j``, of discs that touch or overlap
+    (:func:`_touch`), ordered by ``i`` then ``j``: each disc in the square cell of side
+    ``cell`` (at least twice the largest radius) holding its centre, its partners among
+    the discs of the 3 x 3 cells around. Two passes over the discs in parallel (count,
+    then fill), no candidate arrays."""
+    C = centres.shape[0]
+    gx, gy, nx, ny, starts, items = _centre_grid(centres, cell)
     found = np.zeros(C + 1, np.int64)
     none = np.empty(0, np.int64)
     for i in prange(C):
@@ -391,3 +387,79 @@ def touching_pairs(centres, radii, cell):
         pair_i[first[i]:first[i] + n] = i
         pair_j[first[i]:first[i] + n].sort()
     return pair_i, pair_j
+
+
+@njit(cache=True, parallel=True)
+def rim_discs(centres, radii, lower, upper, cell, tol):
+    """``keep (C,)``, ``rim (C,)``: the discs :func:`.geometric.formation_discs` keeps,
+    found without pair arrays. ``keep``: a disc inside another is dropped (of equal ones
+    the first is kept); ``rim``: then a kept disc whose circle the other kept discs and
+    the rectangle ``lower``..``upper`` cover wholly (:func:`.geometric._covered_arcs`,
+    :func:`.geometric._forbidden_arrays`, :func:`_spans_cover`: the same arithmetic).
+    Each disc's partners come from the 3 x 3 cells of side ``cell`` (at least twice the
+    largest radius) around its own."""
+    C = centres.shape[0]
+    gx, gy, nx, ny, starts, items = _centre_grid(centres, cell)
+    keep = np.ones(C, np.bool_)
+    for i in prange(C):
+        xi, yi, ri = centres[i, 0], centres[i, 1], radii[i]
+        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+                c = yy * nx + xx
+                for m in range(starts[c], starts[c + 1]):
+                    j = items[m]
+                    if j == i or not _touch(xi, yi, ri, centres[j, 0], centres[j, 1],
+                                            radii[j]):
+                        continue
+                    d = math.hypot(centres[j, 0] - xi, centres[j, 1] - yi)
+                    if d + ri <= radii[j] + tol and (d + radii[j] > ri + tol or i > j):
+                        keep[i] = False
+    out = keep.copy()
+    for i in prange(C):
+        if not keep[i]:
+            continue
+        xi, yi, ri = centres[i, 0], centres[i, 1], radii[i]
+        n = 0
+        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+                c = yy * nx + xx
+                n += starts[c + 1] - starts[c]
+        centre = np.empty(n + 4)
+        half = np.empty(n + 4)
+        n = 0
+        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+                c = yy * nx + xx
+                for m in range(starts[c], starts[c + 1]):
+                    j = items[m]
+                    if j == i or not keep[j]:
+                        continue
+                    vx, vy = centres[j, 0] - xi, centres[j, 1] - yi
+                    d = math.hypot(vx, vy)
+                    rj = radii[j]
+                    if d >= ri + rj or d + rj <= ri:  # apart, or j inside i
+                        continue
+                    if d + ri <= rj:  # i's whole circle inside j
+                        centre[n], half[n] = 0.0, math.pi
+                    else:
+                        cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
+                        centre[n] = math.atan2(vy, vx)
+                        half[n] = math.acos(min(max(cos_a, -1.0), 1.0))
+                    n += 1
+        for side in range(4):  # west, east, south, north
+            if side == 0:
+                normal, h = math.pi, xi - lower[0]
+            elif side == 1:
+                normal, h = 0.0, upper[0] - xi
+            elif side == 2:
+                normal, h = -0.5 * math.pi, yi - lower[1]
+            else:
+                normal, h = 0.5 * math.pi, upper[1] - yi
+            if h <= -ri:  # the whole circle beyond the side
+                centre[n], half[n] = 0.0, math.pi
+                n += 1
+            elif h < ri:
+                centre[n], half[n] = normal, math.acos(h / ri)
+                n += 1
+        out[i] = not _spans_cover(centre, half, n)
+    return keep, out

@@ -352,20 +352,26 @@ def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
     assert G.shortest_routes(problem, count=4)[0].length > 0
 
 
-def test_the_compiled_coverage_is_the_python_walks():
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_compiled_rim_is_the_discs_the_arrays_keep(monkeypatch, seed):
+    """From COMPILED_RIM_FROM discs formation_discs keeps its discs compiled, with no pair
+    arrays: the same discs, in the same order, as the arrays of every touching pair and
+    the walks around each circle; with UAVs stacked on one offset (equal discs), trees of
+    every size (discs inside others) and trees cut by the area's sides."""
     from ftlbo_mav.planning import geometric as G
 
-    rng = np.random.default_rng(11)
-    for count, side in ((400, 40.0), (600, 120.0)):  # piled up, and apart; some at the sides
-        centres = rng.uniform(-3.0, side + 3.0, (count, 2))
-        discs = G.Discs(centres, rng.uniform(0.5, 4.0, count), np.zeros(count, int),
-                        np.zeros(count, int))
-        lower, upper = np.array([0.0, 0.0]), np.array([side, side])
-        walks = np.array([G._circle_covered(iv)
-                          for iv in G._forbidden_intervals(discs, lower, upper)], bool)
-        compiled = G._circles_covered(discs, lower, upper)
-        assert 0 < walks.sum() < count
-        np.testing.assert_array_equal(compiled, walks)
+    rng = np.random.default_rng(seed)
+    grid = np.stack(np.meshgrid(np.arange(6) * 2.0, np.arange(4) * 2.0), -1).reshape(-1, 2)
+    offsets = np.column_stack([np.concatenate([grid, grid[:5]]), np.zeros(len(grid) + 5)])
+    problem = field(offsets=offsets, centres=rng.uniform(-35.0, 35.0, (60, 2)),
+                    radii=rng.uniform(0.3, 6.0, 60))
+    monkeypatch.setattr(G, "COMPILED_RIM_FROM", 10**9)
+    arrays = G.formation_discs(problem)
+    monkeypatch.setattr(G, "COMPILED_RIM_FROM", 1)
+    compiled = G.formation_discs(problem)
+    assert 0 < len(arrays.radii) < problem.uav_count * 60
+    for name in ("centres", "radii", "cylinder", "uav"):
+        np.testing.assert_array_equal(getattr(compiled, name), getattr(arrays, name))
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
