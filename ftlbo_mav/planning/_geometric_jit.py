@@ -154,16 +154,14 @@ def clear_bitangents(i, j, centres, radii, marked, lower, upper, starts, items, 
         d = math.hypot(vx, vy)
         phi = math.atan2(vy, vx)
         ra, rb = radii[a], radii[b]
+        outer = d > abs(ra - rb) + tol
+        inner = d > ra + rb + tol
+        alpha_outer = math.acos(min(max((ra - rb) / d, -1.0), 1.0)) if outer else 0.0
+        alpha_inner = math.acos(min(max((ra + rb) / d, -1.0), 1.0)) if inner else 0.0
         for kind in range(4):
-            if kind < 2:
-                if not d > abs(ra - rb) + tol:
-                    continue
-                x = (ra - rb) / d
-            else:
-                if not d > ra + rb + tol:
-                    continue
-                x = (ra + rb) / d
-            alpha = math.acos(min(max(x, -1.0), 1.0))
+            if not (outer if kind < 2 else inner):
+                continue
+            alpha = alpha_outer if kind < 2 else alpha_inner
             ai = phi + alpha if kind % 2 == 0 else phi + -1.0 * alpha
             aj = ai if kind < 2 else ai + math.pi
             angle_i[kind, m], angle_j[kind, m] = ai, aj
