@@ -103,10 +103,12 @@ COMPILED_FROM = 400
 """UAVs x cylinders from which the safety term runs compiled (:mod:`._cost_jit`, some 25
 times faster per distance, no temporaries); below, numpy's arrays (numba's start-up, 0.3 s
 in a new process, costs more than such problems save)."""
-COMPILED_SEGMENTS_FROM = 4000
+COMPILED_SEGMENTS_FROM = 3000
 """UAVs x cylinders x segments per student from which the safety term runs compiled
-however few the cylinders (3 UAVs among 100 trees with 18 waypoints: 5,700; every
-evaluation of a class then costs some 0.7 ms in numpy's arrays, 0.03 ms compiled)."""
+however few the cylinders (3 UAVs among 100 trees with 10 to 18 waypoints: 3,300 to
+5,700; an evaluation of a class then costs some 0.4-0.7 ms in numpy's arrays, 0.03 ms
+compiled). Ten UAVs among 20 trees with 10 waypoints (2,200) stay in numpy: their plan
+evaluates some 100 classes, less than numba's start-up."""
 
 
 def _compiled(problem: PlanningProblem) -> bool:
