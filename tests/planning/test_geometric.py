@@ -320,6 +320,8 @@ def test_the_graph_made_a_chunk_at_a_time_is_the_same_graph(monkeypatch, seed):
     from ftlbo_mav.planning import geometric as G
 
     problem = triangle_among_trees(seed, trees=60)
+    monkeypatch.setattr(G, "ARRAY_GRAPH_LOADED_FROM", 10**9)  # lists, to count the edges
+    monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 10**9)
     whole = G.shortest_routes(problem, count=4)
     graph = G._Graph(problem, G.formation_discs(problem))
     monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 1)
@@ -338,6 +340,7 @@ def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
 
     problem = triangle_among_trees(7, trees=45)
     discs = G.formation_discs(problem)
+    monkeypatch.setattr(G, "ARRAY_GRAPH_LOADED_FROM", 10**9)  # lists even with numba loaded
     lists = G._Graph(problem, discs)
     monkeypatch.setattr(G, "ARRAY_GRAPH_FROM", 1)
     arrays = G._Graph(problem, discs)
