@@ -45,11 +45,11 @@ def disc_grid(centres, radii, lo0, lo1, cell, nx, ny):
 
 
 @njit(cache=True)
-def _walk_clear(ax, ay, qx, qy, centres, radii, starts, items, lo0, lo1, cell, nx, ny, tol,
-                stamp, e):
+def _walk_clear(ax, ay, qx, qy, centres, radii, starts, items, lo0, lo1, cell, nx, ny, tol):
     """Whether the segment ``(ax, ay) -> (qx, qy)`` enters no disc's interior: the discs of
-    every cell the segment crosses are tested, each once (``stamp``: per disc the last
-    segment ``e`` it was tested against), the cells visited in the segment's order
+    every cell the segment crosses are tested (a disc in two such cells twice: cheaper
+    than a shared record of the discs tested, which the threads would write to in
+    turn), the cells visited in the segment's order
     (Amanatides and Woo's traversal, clipped to the grid). A disc the segment enters
     holds a point of it in its bounding box, so it is listed in a cell the segment
     crosses (:func:`disc_grid`)."""
@@ -93,9 +93,6 @@ def _walk_clear(ax, ay, qx, qy, centres, radii, starts, items, lo0, lo1, cell, n
         c = gy * nx + gx
         for m in range(starts[c], starts[c + 1]):
             k = items[m]
-            if stamp[k] == e:
-                continue
-            stamp[k] = e  # a race with another segment only repeats a test
             cx, cy = centres[k, 0] - ax, centres[k, 1] - ay
             t = min(max((cx * bx + cy * by) / seg2, 0.0), 1.0)
             d = math.hypot(cx - t * bx, cy - t * by)
@@ -119,12 +116,11 @@ def clear_through_grid(p, q, centres, radii, starts, items, lo0, lo1, cell, nx, 
     """``(E,)``: True where the segment ``p[e] -> q[e]`` enters no disc's interior (the
     test of :func:`.geometric.segments_clear`, the same arithmetic), each segment walked
     through the grid (:func:`_walk_clear`)."""
-    E, C = p.shape[0], centres.shape[0]
+    E = p.shape[0]
     clear = np.ones(E, np.bool_)
-    stamp = np.full(C, -1, np.int64)  # the last segment each disc was tested against
     for e in prange(E):
         clear[e] = _walk_clear(p[e, 0], p[e, 1], q[e, 0], q[e, 1], centres, radii, starts,
-                               items, lo0, lo1, cell, nx, ny, tol, stamp, e)
+                               items, lo0, lo1, cell, nx, ny, tol)
     return clear
 
 
@@ -138,7 +134,7 @@ def clear_bitangents(i, j, centres, radii, marked, lower, upper, starts, items, 
     (:func:`.geometric._buried_bins`), both ends lie in the rectangle ``lower``..``upper``
     (:func:`.geometric._in_rectangle`) and the segment enters no disc (:func:`_walk_clear`).
     Not one candidate array of millions: only the verdicts and angles."""
-    M, C = len(i), centres.shape[0]
+    M = len(i)
     bins = marked.shape[1]
     two_pi = 2.0 * math.pi
     width = two_pi / bins
@@ -147,7 +143,6 @@ def clear_bitangents(i, j, centres, radii, marked, lower, upper, starts, items, 
     ok = np.zeros((4, M), np.bool_)
     angle_i = np.zeros((4, M))
     angle_j = np.zeros((4, M))
-    stamp = np.full(C, -1, np.int64)
     for m in prange(M):
         a, b = i[m], j[m]
         vx, vy = centres[b, 0] - centres[a, 0], centres[b, 1] - centres[a, 1]
@@ -177,7 +172,7 @@ def clear_bitangents(i, j, centres, radii, marked, lower, upper, starts, items, 
                     and lower[1] - tol1 <= qy <= upper[1] + tol1):
                 continue
             ok[kind, m] = _walk_clear(px, py, qx, qy, centres, radii, starts, items, lo0, lo1,
-                                      cell, nx, ny, tol, stamp, kind * M + m)
+                                      cell, nx, ny, tol)
     return ok, angle_i, angle_j
 
 
