@@ -28,6 +28,7 @@ duplicates arriving on several links); the emulator does not model that.
 
 from __future__ import annotations
 
+import math
 import socket
 import threading
 import time
@@ -275,11 +276,13 @@ def ntrip_frames(source: Source, *, timeout_s: float = 10.0) -> Iterator[bytes]:
     where = f"--rtcm ntrip://{source.host}:{source.port}/{source.mountpoint}"
     out: queue.Queue = queue.Queue()
     stop = threading.Event()  # run()'s default Event is shared by every client
-    client = GNSSNTRIPClient(retries=0, timeout=max(1, round(timeout_s)))
+    # The client's own socket timeout stops it without a word (a log line): give it longer
+    # than ours, so a silent caster is always ours to report.
+    client = GNSSNTRIPClient(retries=0, timeout=math.ceil(timeout_s) + 3)
     client.run(server=source.host, port=source.port, https=0, mountpoint=source.mountpoint,
                ntripuser=source.user or "anon", ntrippassword=source.password or "password",
                ggainterval=-1, output=out, stopevent=stop)
-    waited = 0.0
+    last = time.monotonic()
     try:
         while True:
             try:
@@ -288,8 +291,7 @@ def ntrip_frames(source: Source, *, timeout_s: float = 10.0) -> Iterator[bytes]:
                 if not client.connected:  # refused, or a sourcetable: it has stopped
                     _check_refusal(client, where)
                     return
-                waited += 0.2
-                if waited >= timeout_s:
+                if time.monotonic() - last >= timeout_s:
                     raise RtcmError(f"{where}: nothing received for {timeout_s:g} s") from None
                 continue
             raw = item[0] if isinstance(item, tuple) else item
@@ -297,8 +299,8 @@ def ntrip_frames(source: Source, *, timeout_s: float = 10.0) -> Iterator[bytes]:
                 continue
             if not raw:  # pygnssutils reads b"" for ever once the caster closed
                 return
-            waited = 0.0
             yield bytes(raw)
+            last = time.monotonic()
     finally:
         client.stop()
 
