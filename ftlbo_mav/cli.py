@@ -17,6 +17,7 @@ import numpy as np
 
 from . import __version__
 from .cli_errors import user_errors
+from .energy import BATTERY_VIOLATION
 from .gnss import classes_within
 from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files, read_plan
 from .mission.files import OutputFolder
@@ -182,13 +183,14 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
             files = {**files, **figure_files(result)}
         paths = out.write_all(files)
     click.echo(format_summary(result))
-    for line in format_survey(result):
+    for line in format_survey(result) + format_battery(result):
         click.echo(line)
     _say_written(paths)
     if not result.feasible:
         for line in result.violations:
             click.echo(f"  violation: {line}", err=True)
-        hint = _navigation_hint(scn, seed=seed, iterations=iterations, students=students,
+        hint = None if all(v.startswith(BATTERY_VIOLATION) for v in result.violations) else \
+            _navigation_hint(scn, seed=seed, iterations=iterations, students=students,
                                 waypoints=waypoints, algorithm=algorithm)
         if hint:
             click.echo(hint, err=True)
@@ -313,6 +315,20 @@ def _flown(result) -> str:
              + (f", separation {true_sep.min():.2f} m" if np.isfinite(true_sep.min()) else ""))
     return (f"; flown path (predicted): clearance {p.clearance.min():.2f} m"
             + (f" ({', '.join(did)})" if did else "") + truly)
+
+
+def format_battery(result) -> list[str]:
+    """With a ``[battery]``: each UAV's predicted charge and what it lands with."""
+    b, charges = result.scenario.battery, result.charges
+    if b is None or charges is None:
+        return []
+    worst = max(range(len(charges)), key=lambda n: charges[n].total_mah)
+    c = charges[worst]
+    left = b.capacity_mah - c.total_mah
+    return [f"battery ({b.describe()}): the missions use "
+            f"{min(x.total_mah for x in charges):.0f}-{c.total_mah:.0f} mAh in "
+            f"{c.seconds / 60.0:.1f} min at most; uav{worst + 1} lands with {left:.0f} mAh "
+            f"({100.0 * left / b.capacity_mah:.0f} %)"]
 
 
 def format_survey(result) -> list[str]:

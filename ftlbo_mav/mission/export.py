@@ -168,6 +168,7 @@ def plan_document(
         "corner_allowance": plan.scenario.mission.corner_allowance_m,
         "vehicle": vehicle_params(sc.vehicle),
         "predicted": _predicted_document(plan),
+        "battery": None if sc.battery is None else sc.battery.document(),
         "min_separation": plan.scenario.min_separation_m,
         "area": {
             "corner_a": [sc.corner_a.lat_deg, sc.corner_a.lon_deg],
@@ -203,6 +204,7 @@ def plan_document(
                 "mission_file": f"{m.name}.waypoints" if written else None,
                 "mission_sha256": (digests or {}).get(m.name) if written else None,
                 **_uav_predicted(plan, n),
+                **_uav_battery(plan, n),
                 **_fence_document(m.name, fences, n, written),
                 **({"photos": photos[n].count} if photos else {}),
             }
@@ -261,6 +263,22 @@ def _uav_predicted(plan: Plan, n: int) -> dict:
         "predicted_leg_seconds": [round(float(t), 2) for t in p.leg_seconds[n]],
         "predicted_seconds": round(float(p.seconds[n]), 2),
     }
+
+
+def _uav_battery(plan: Plan, n: int) -> dict:
+    """Per UAV, when the scenario has a ``[battery]``: its mission's predicted charge
+    (mAh: takeoff, legs, landing, all), what it would land with, and from each path
+    point reached what is left to use to the end (``fly`` holds the vehicle to it)."""
+    if plan.charges is None:
+        return {}
+    c, b = plan.charges[n], plan.scenario.battery
+    left = b.capacity_mah - c.total_mah
+    return {"battery": {
+        "mah": round(c.total_mah, 1), "takeoff_mah": round(c.takeoff_mah, 1),
+        "legs_mah": round(c.legs_mah, 1), "landing_mah": round(c.end_mah, 1),
+        "seconds": round(c.seconds, 1), "lands_with_mah": round(left, 1),
+        "lands_with_pct": round(100.0 * left / b.capacity_mah, 1),
+        "to_end_mah": [round(float(v), 1) for v in c.to_end_mah]}}
 
 
 def _fence_document(name: str, fences: list[UavFence] | None, n: int, written: bool) -> dict:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..ardupilot.flight_path import stepwise_budget
+from ..energy import MissionCharge, charge_problem, mission_charges
 from ..errors import BadInput
 from ..scenario import AUTO, PlannerSettings, Scenario, relay_lanes
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
@@ -135,6 +136,9 @@ class Plan:
     replans: int = 0
     """Times the route was planned again to avoid corner stops (:data:`REPLANS`); the
     best of the plans is kept, ``seconds`` counts them all."""
+    charges: tuple[MissionCharge, ...] | None = None
+    """Each UAV's predicted battery use (:mod:`ftlbo_mav.energy`), when the scenario
+    has a ``[battery]``; a mission that would land below the reserve is a violation."""
     lanes_inset_m: float = 0.0
     """How much further inside the area than its margin the survey's lanes were laid
     so that the copters' predicted swings stay inside (:data:`SURVEY_RELAYS`; 0: not)."""
@@ -371,10 +375,17 @@ def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Pla
                              radii=own_radii, pair_error_m=sc.navigation.pair_m)
     flown = predicted_violations(plan.problem, prediction, clearance_m=keep,
                                  obstacle_radii=own_radii, min_separation_m=sc.min_separation_m)
+    charges = None
+    if sc.battery is not None:
+        homes = plan.uav_paths[:, 0] * np.array([1.0, 1.0, 0.0])  # each on the ground below
+        charges = tuple(mission_charges(sc.battery, sc.vehicle, prediction,
+                                        end_action=sc.mission.end_action, homes=homes))
+        flown = list(flown) + [why for n, c in enumerate(charges)
+                               if (why := charge_problem(f"uav{n + 1}", c, sc.battery))]
     seconds = time.perf_counter() - t0
     return replace(plan, violations=plan.violations + tuple(flown), holds_s=holds,
                    prediction=prediction, corners_moved=moved, predict_seconds=seconds,
-                   seconds=plan.seconds + seconds, stopped_for=stopped_for)
+                   seconds=plan.seconds + seconds, stopped_for=stopped_for, charges=charges)
 
 
 def _with_centroid(leg: Leg, centroid: np.ndarray) -> Leg:

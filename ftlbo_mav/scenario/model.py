@@ -13,6 +13,7 @@ from functools import cached_property
 import numpy as np
 
 from ..ardupilot.navigation import Navigation
+from ..energy import Battery
 from ..geo import LocalFrame
 from ..gnss import NavigationBudget, budget
 from ..obstacles import Cylinder
@@ -166,6 +167,9 @@ class Scenario:
     """How well the copters know where they are (the ``[navigation]`` table,
     :mod:`ftlbo_mav.gnss`): the clearance and the separation are kept on the true
     position, this much beyond the predicted one."""
+    battery: Battery | None = None
+    """Each UAV's battery (the ``[battery]`` table, :mod:`ftlbo_mav.energy`): the plan
+    predicts what each mission uses of it and keeps its reserve. None: not checked."""
     dropped_obstacles: int = 0
     """Obstacles of the file that cannot touch any UAV's path inside the area (their
     disc, radius + clearance, does not reach it): left out of ``obstacles``."""

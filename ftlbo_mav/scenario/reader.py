@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from ..ardupilot.navigation import VEHICLE_PARAMS, vehicle_navigation
+from ..energy import Battery
 from ..errors import ScenarioError
 from ..formation import PLANES, closest_pair, regular_formation
 from ..gnss import CLASSES, NavigationBudget, budget, largest_error_for, true_distance, would_do
@@ -121,6 +122,8 @@ def parse_scenario(
     planner = _read_planner(root.table("planner", required=False))
     mission = _read_mission(root.table("mission", required=False))
     vehicle = _read_vehicle(root.table("vehicle", required=False))
+    battery = _read_battery(root.table("battery", required=False),
+                            cruise_speed_m_s=mission.speed_m_s or vehicle.wp_speed)
     root.done()
 
     scenario = Scenario(
@@ -141,6 +144,7 @@ def parse_scenario(
         min_separation_m=separation,
         vehicle=vehicle,
         navigation=navigation,
+        battery=battery,
     )
     _check_area_size(scenario)
     if obstacles_file:
@@ -535,6 +539,41 @@ def _read_navigation(t: Table | None) -> NavigationBudget:
     t.used.add("horizontal_error")
     t.done()
     return budget(name, error)
+
+
+def _read_battery(t: Table | None, *, cruise_speed_m_s: float) -> Battery | None:
+    """``[battery]``: each UAV's battery (:mod:`ftlbo_mav.energy`). ``capacity`` (mAh),
+    ``reserve`` (per cent of it to land with, default 25), and ``hover_current`` (A) or
+    ``endurance`` (minutes of hover on a full battery); optional ``cruise_current`` (A
+    at ``cruise_speed`` m/s, default the mission's speed or WPNAV_SPEED's 10 m/s) and
+    ``induced_velocity`` (m/s, the rotor's in hover)."""
+    if t is None:
+        return None
+    capacity = t.number("capacity", lo=0.0, hi=1_000_000.0, lo_open=True, unit="mAh")
+    reserve = t.number("reserve", 25.0, lo=0.0, hi=100.0, unit="%")
+    if reserve >= 100.0:
+        raise t.error("reserve", "must be below 100 %: nothing would be left to fly with")
+    if t.has("hover_current") == t.has("endurance"):
+        raise t.error("hover_current", "give the hover current (A) or the endurance "
+                      "(minutes of hover on a full battery), one of them")
+    extra = dict(reserve_pct=reserve, source="[battery]", cruise_speed_m_s=cruise_speed_m_s)
+    if t.has("cruise_current"):
+        extra["cruise_current_a"] = t.number("cruise_current", lo=0.0, hi=1000.0,
+                                             lo_open=True, unit="A")
+    if t.has("cruise_speed"):
+        extra["cruise_speed_m_s"] = t.number("cruise_speed", lo=0.0, hi=50.0, lo_open=True,
+                                             unit="m/s")
+    if t.has("induced_velocity"):
+        extra["induced_velocity_m_s"] = t.number("induced_velocity", lo=0.0, hi=50.0,
+                                                 lo_open=True, unit="m/s")
+    if t.has("hover_current"):
+        hover = t.number("hover_current", lo=0.0, hi=1000.0, lo_open=True, unit="A")
+        battery = Battery(capacity_mah=capacity, hover_current_a=hover, **extra)
+    else:
+        minutes = t.number("endurance", lo=0.0, hi=10_000.0, lo_open=True, unit="min")
+        battery = Battery.from_endurance(capacity, minutes, **extra)
+    t.done()
+    return battery
 
 
 def _check_geometry(s: Scenario) -> None:
