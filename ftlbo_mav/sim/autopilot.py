@@ -33,7 +33,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ..ardupilot import battery as ap_battery
 from ..ardupilot import fence as ap_fence
+from ..ardupilot.battery import BatteryMonitor
 from ..ardupilot.camera import CAMERA_PARAM_DEFAULTS, DistanceTrigger, feedback_message
 from ..ardupilot.commands import (
     ARMABLE_MODES,
@@ -71,10 +73,11 @@ from .physics import FlightLimits, VerticalShaper, WaypointNav
 from .wind import Gusts
 
 PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS, **CAMERA_PARAM_DEFAULTS,
-                  **SIM_GPS_PARAM_DEFAULTS}
+                  **SIM_GPS_PARAM_DEFAULTS, **ap_battery.BATTERY_PARAM_DEFAULTS}
 FENCE_CHECK_S = 1.0 / ap_fence.FENCE_CHECK_HZ
 
 STEP_S = 0.02
+BATTERY_CHECK_S = 0.1  # AP_BattMonitor::read at 10 Hz (Copter's scheduler table)
 _WGS84_A = 6378137.0
 _WGS84_E2 = 6.69437999014e-3
 
@@ -159,6 +162,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self._follower: PositionFollower | None = None  # AC_PosControl, while AC_WPNav flies
         self._followed_until: float | None = None
         self._land_target = np.zeros(3)  # where a landing's descent holds the copter
+        self.battery = BatteryMonitor()  # AP_BattMonitor's first battery
+        self._battery_check = 0.0
 
     # -- what the vehicle knows about itself
     @property
@@ -347,6 +352,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             result = R.MAV_RESULT_ACCEPTED if self.set_mode(LAND, now) else result
         elif cmd == R.MAV_CMD_DO_PAUSE_CONTINUE:
             result = self._pause_continue(int(p[0]))
+        elif cmd == R.MAV_CMD_BATTERY_RESET:
+            result = self.battery_reset(p[0], p[1])
         elif cmd == R.MAV_CMD_DO_CHANGE_SPEED:
             if p[1] > 0:  # GCS_MAVLINK handle_MAV_CMD_DO_CHANGE_SPEED -> set_speed_xy
                 self.change_speed(float(p[1]))
@@ -409,6 +416,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             self._flush_do(out)
             self._step(dt, out)
             self._camera_step()
+            self._battery_step(dt, out)
             self._fence_step(out)
             out += self._take_pending()
         self._flush_do(out)
@@ -436,6 +444,42 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self._pending.append(feedback_message(
             time_usec=int(self.time * 1e6), image=image & 0xFFFF, lat_e7=round(lat * 1e7),
             lon_e7=round(lon * 1e7), alt_msl_m=alt + self.home_alt_m, alt_rel_m=alt))
+
+    def _battery_step(self, dt: float, out: list) -> None:
+        """AP_BattMonitor::read and check_failsafes at 10 Hz (ardupilot/battery.py): the
+        airframe's current in the air (FlightLimits.power), none on the ground; a new
+        failsafe while armed says so, and Copter::handle_battery_failsafe takes its
+        action: disarm on the ground, else BATT_FS_*_ACT's mode."""
+        in_air = self.armed and not self.landed
+        v = self.velocity
+        amps = (float(self.options.limits.power.current_a(math.hypot(v[0], v[1]), v[2]))
+                if in_air else 0.0)
+        self.battery.draw(amps, dt)
+        if self.time < self._battery_check:
+            return
+        self._battery_check = self.time + BATTERY_CHECK_S
+        event = self.battery.check(self.params, self.time, armed=self.armed)
+        if event is None:
+            return
+        words, action = event
+        out.append(_text((R.MAV_SEVERITY_WARNING, words)))
+        if action < 0:
+            return
+        out.append(_text((R.MAV_SEVERITY_WARNING, ap_battery.handler_texts(landed=self.landed))))
+        if self.landed or action == ap_battery.ACTION_TERMINATE:
+            self.disarm()
+            return
+        mode = ap_battery.failsafe_mode(action, rtl=RTL, land=LAND)
+        if mode is not None and not self.set_mode(mode, self.time) and mode == RTL:
+            self.set_mode(LAND, self.time)  # set_mode_RTL_or_land_with_pause
+
+    def battery_reset(self, mask: float, percent: float) -> int:
+        """MAV_CMD_BATTERY_RESET (GCS_Common.cpp handle_command_battery_reset): bit 0 of
+        ``mask`` is the first (only) battery."""
+        if not int(mask) & 1:
+            return R.MAV_RESULT_FAILED
+        self.battery.reset(percent, self.params, self.time)
+        return R.MAV_RESULT_ACCEPTED
 
     def _fence_step(self, out: list) -> None:
         """Copter::fence_check at 25 Hz (ArduCopter/fence.cpp): a new breach while armed

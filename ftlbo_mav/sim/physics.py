@@ -37,9 +37,20 @@ from ..ardupilot.wpnav import (  # re-exported: the emulator's autopilot imports
     WaypointNav,
     stopping_distance,
 )
+from ..energy import Battery
 
 __all__ = ["FlightLimits", "VerticalShaper", "WP_RADIUS_MIN", "WP_SPEED_MIN", "WaypointNav",
            "landing_rate", "stopping_distance", "varied"]
+
+
+SITL_POWER = Battery(capacity_mah=3300.0, hover_current_a=28.12, cruise_current_a=30.55,
+                     cruise_speed_m_s=9.85, induced_velocity_m_s=15.0,
+                     source="ArduCopter 4.5.6 SITL, default quad (battery.json)")
+"""What SITL's default quad draws (tests/data/ardupilot-4.5.6/battery.json ``summary``,
+BATT_CAPACITY 3300 mAh, 12.6 V held): 28.12 A hovering at 10 m, 30.55 A cruising at
+9.85 m/s, 30.7 A climbing at 2.5 m/s and 26.9 A descending at 1.5 m/s (the climb and
+descent ratios, 1.093 and 0.958, give momentum theory's ``v_h`` 14 and 17.5 m/s: 15 m/s
+is taken). 0 A on the ground, armed or not, until the takeoff spools the motors up."""
 
 
 @dataclass(frozen=True)
@@ -56,6 +67,8 @@ class FlightLimits:
     ArduPilot itself; per-vehicle variation, :func:`varied`). It is not a parameter: the
     vehicle holds and reports the WPNAV_JERK it was given, as every copter of a fleet set
     up from one parameter file does.
+    ``power``: the current its motors draw in the air (:class:`~ftlbo_mav.energy.Battery`'s
+    model; :data:`SITL_POWER`, SITL's default quad; none on the ground, as recorded).
     ``hover_error_m``: how far below its altitude target the copter hovers after a
     takeoff (SITL: 5.975 m for 6 m when AUTO started, flight.json and flight_speed.json;
     it is why the first leg of a mission started where the copter hovers still takes
@@ -71,6 +84,7 @@ class FlightLimits:
     jerk_factor: float = 1.0
     hover_error_m: float = 0.025
     airframe: Airframe = DEFAULT_AIRFRAME
+    power: Battery = field(default_factory=lambda: SITL_POWER)
 
     @property
     def speed_m_s(self) -> float:

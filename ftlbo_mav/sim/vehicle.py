@@ -492,8 +492,12 @@ class Vehicle:
                 present |= R.MAV_SYS_STATUS_GEOFENCE
                 enabled |= R.MAV_SYS_STATUS_GEOFENCE if fence[1] else 0
                 health |= 0 if fence[2] else R.MAV_SYS_STATUS_GEOFENCE
-            return R.MAVLink_sys_status_message(present, enabled, health, 0, 12600, -1, 100,
-                                                0, 0, 0, 0, 0, 0)
+            b = self.autopilot.battery  # GCS_MAVLINK::send_sys_status: mV, cA, per cent
+            return R.MAVLink_sys_status_message(
+                present, enabled, health, 0, round(b.voltage * 1000), round(b.current_a * 100),
+                b.remaining_pct(self.autopilot.params), 0, 0, 0, 0, 0, 0)
+        if msgid == R.MAVLINK_MSG_ID_BATTERY_STATUS:
+            return self.battery_status()
         if msgid == R.MAVLINK_MSG_ID_GPS_RAW_INT:
             return self.gps_message(now, fix)
         if msgid == R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT:
@@ -530,6 +534,18 @@ class Vehicle:
         if de == 0 and dn == 0:
             return self.state.lat_deg, self.state.lon_deg
         return ap.tangent.to_latlon(ap.position[0] + de, ap.position[1] + dn)
+
+    def battery_status(self):
+        """BATTERY_STATUS as GCS_MAVLINK::send_battery_status fills it for an analog
+        monitor without cells (battery.json): voltages[0] the pack's mV, the rest unused;
+        no temperature; mAh and hJ consumed; no time remaining."""
+        ap = self.autopilot
+        b = ap.battery
+        volts = [round(b.voltage * 1000)] + [0xFFFF] * 9
+        return R.MAVLink_battery_status_message(
+            0, R.MAV_BATTERY_FUNCTION_UNKNOWN, R.MAV_BATTERY_TYPE_UNKNOWN, 0x7FFF, volts,
+            int(b.current_a * 100), int(b.consumed_mah), int(b.consumed_wh * 36.0),
+            b.remaining_pct(ap.params), 0, b.charge_state())
 
     def sim_state(self, now: float):
         """SIM_STATE (SITL's true state, libraries/SITL/SITL.cpp ``sim_state_send``): the
