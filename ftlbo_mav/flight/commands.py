@@ -31,7 +31,7 @@ from .planned import PlannedFlight, load_planned_flight
 from .policy import FaultPolicy
 from .report import render_report_png, summarize
 from .vehicle import FlightAborted, FlightError
-from .watch import describe, landing_points, observe, watch_from_outside
+from .watch import battery_watch, describe, landing_points, observe, watch_from_outside
 
 _link_options = [
     click.option("--sysid", "sysid_text", required=True, type=SYSIDS,
@@ -338,7 +338,8 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
         view = LiveView(watch, sys.stderr)
         departures = DepartureWatch(len(sysids),
                                     landing=landing_points(planned) if planned else None,
-                                    navigation=planned.navigation if planned else None)
+                                    navigation=planned.navigation if planned else None,
+                                    battery=battery_watch(planned))
         events: list[str] = []
         end = time.monotonic() + duration if duration else float("inf")
         flew = set()

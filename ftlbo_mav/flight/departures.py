@@ -15,6 +15,8 @@ vehicle
   ``stall_s`` plus the item's hold time): ``no progress``;
 - lands (disarms) farther than ``landed_away_m`` from where its mission lands:
   ``landed away``;
+- has less charge left than the rest of its mission needs with half the plan's reserve
+  (:mod:`.battery`; a plan with a ``[battery]``): ``battery``;
 - no longer knows well enough where it is (its GPS or EKF past the plan's navigation
   budget, a GPS glitch, ArduCopter's own glitch or EKF variance announcement:
   :mod:`.navigation`): ``navigation``;
@@ -32,10 +34,11 @@ import numpy as np
 
 from ..ardupilot.failsafes import departure_text
 from ..gnss import NavigationBudget
+from .battery import BatteryWatch
 from .navigation import EkfReport, GpsReport, NavigationWatch
 
-LINK_LOST, LINK_BACK, MODE, FAILSAFE, FENCE, CRASH, NAVIGATION = (
-    "link lost", "link back", "mode", "failsafe", "fence", "crash", "navigation")
+LINK_LOST, LINK_BACK, MODE, FAILSAFE, FENCE, CRASH, NAVIGATION, BATTERY = (
+    "link lost", "link back", "mode", "failsafe", "fence", "crash", "navigation", "battery")
 DISARMED_AIRBORNE, NO_PROGRESS, LANDED_AWAY = "disarmed in the air", "no progress", "landed away"
 # departures the vehicle (its pilot, its failsafe, another station) chose: the flight
 # never commands that vehicle against them
@@ -80,6 +83,7 @@ class Seen:
     gps: GpsReport | None = None
     ekf: EkfReport | None = None
     gps_jump_m: float = 0.0
+    battery_pct: int | None = None
 
 
 @dataclass(frozen=True)
@@ -125,8 +129,10 @@ class DepartureWatch:
 
     def __init__(self, count: int, *, options: WatchOptions = WatchOptions(),
                  landing: Sequence[np.ndarray | None] | None = None,
-                 navigation: NavigationBudget | None = None) -> None:
+                 navigation: NavigationBudget | None = None,
+                 battery: BatteryWatch | None = None) -> None:
         self.options = options
+        self.battery = battery
         self.navigation = None if navigation is None else NavigationWatch(count, navigation)
         self.tracks = [_Track() for _ in range(count)]
         self.expected: list[str | None] = [None] * count
@@ -192,6 +198,11 @@ class DepartureWatch:
             why = self.navigation.check(i, s.gps, s.ekf, now, jump_m=s.gps_jump_m)
             if why is not None:
                 out += self._once(i, NAVIGATION, why, now)
+        # its charge against the rest of its mission, in the air
+        if self.battery is not None and s.armed and s.alt_m > o.airborne_m:
+            why = self.battery.check(i, s.battery_pct, s.seq)
+            if why is not None:
+                out += self._once(i, BATTERY, why, now)
         # mode
         if s.asked_t != tr.asked_t:  # this station asked for a mode: the one before it
             tr.asked_t, tr.mode_at_ask = s.asked_t, s.mode  # may linger a moment

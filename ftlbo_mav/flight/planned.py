@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..energy import battery_from_document
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
 from ..gnss import NO_BUDGET, NavigationBudget, budget_from_document
@@ -14,6 +15,7 @@ from ..mission.export import check_plan_folder, plan_from_document, read_plan_js
 from ..mission.fence_files import FenceSet, read_fence_set
 from ..mission.items import CMD_NAV_TAKEOFF, MissionItem
 from ..mission.waypoints import read_waypoints
+from .battery import MissionBattery
 
 
 class PlanFolderError(FtlboError):
@@ -49,6 +51,7 @@ class PlannedFlight:
     predicted_separation: np.ndarray | None = None
     vehicle: dict[str, float] | None = None  # plan.json's [vehicle] parameters, if any
     navigation: NavigationBudget = NO_BUDGET  # plan.json's navigation budget
+    battery: MissionBattery | None = None  # plan.json's [battery] and each mission's charge
 
     @property
     def count(self) -> int:
@@ -92,6 +95,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
         separated = [_predicted(u, "predicted_separation_m") for u in uavs]
         vehicle = {str(k): float(v) for k, v in (doc.get("vehicle") or {}).items()}
         navigation = budget_from_document(doc.get("navigation"))
+        battery = _mission_battery(doc)
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise PlanFolderError(f"{doc_path}: not a plan.json written by ftlbo-mav ({exc})") from None
     missions = []
@@ -108,7 +112,17 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
                          clearance, fences,
                          None if None in predicted else np.array(predicted, float),
                          None if None in separated else np.array(separated, float),
-                         vehicle or None, navigation)
+                         vehicle or None, navigation, battery)
+
+
+def _mission_battery(doc: dict) -> MissionBattery | None:
+    """plan.json's ``battery`` and each UAV's predicted charge, when the plan has them."""
+    battery = battery_from_document(doc.get("battery"))
+    if battery is None or not all("battery" in u for u in doc["uavs"]):
+        return None
+    return MissionBattery(battery, tuple(float(u["battery"]["mah"]) for u in doc["uavs"]),
+                          tuple(np.array(u["battery"]["to_end_mah"], float)
+                                for u in doc["uavs"]))
 
 
 def _predicted(uav: dict, key: str) -> float | None:

@@ -21,6 +21,7 @@ from ..link.mission_protocol import download_mission
 from ..link.params import read_vehicle_params
 from ..link.transfer import Timing
 from .fleet import concurrently
+from .battery import preflight_problem as battery_preflight
 from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
 from .vehicle import FlightVehicle
@@ -122,19 +123,23 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     deadline = time.monotonic() + ready_timeout_s
 
     def reported(v: FlightVehicle) -> bool:
-        return v.status.gps_raw is not None and v.status.ekf_raw is not None
+        return (v.status.gps_raw is not None and v.status.ekf_raw is not None
+                and (planned.battery is None or v.status.battery_pct is not None))
 
     while time.monotonic() < deadline and not all(
             is_ready(v.link, v.sysid) and reported(v) for v in vehicles):
         time.sleep(0.1)
     problems = []
-    for v, why, problem in zip(vehicles, onboard, firmware):
+    for i, (v, why, problem) in enumerate(zip(vehicles, onboard, firmware)):
         why = list(why)
         if problem is not None and not any_firmware:
             why.append(problem)
         if not is_ready(v.link, v.sysid):
             why += readiness_problems(v.link, v.sysid)
         why += navigation_problems(planned, v)
+        if planned.battery is not None:
+            short = battery_preflight(planned.battery, i, v.status.battery_pct)
+            why += [short] if short else []
         if v.status.armed:
             why.append("already armed")
         if why:

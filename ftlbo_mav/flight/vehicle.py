@@ -92,6 +92,10 @@ class Status:
     gps_raw: object | None = None
     ekf_raw: object | None = None
     gps_jump_m: float = 0.0  # the largest GPS jump while armed (flight/navigation.py)
+    # SYS_STATUS: the charge left (per cent; None: not reported, -1 on the wire) and the
+    # current drawn (A)
+    battery_pct: int | None = None
+    battery_current_a: float = 0.0
     # what the vehicle says it is: HEARTBEAT type and autopilot, AUTOPILOT_VERSION's
     # flight_sw_version (asked for at pre-flight; ardupilot/firmware.py judges them)
     vehicle_type: int | None = None
@@ -181,6 +185,9 @@ class FlightVehicle:
                 s.gps_raw = msg
             elif kind == "EKF_STATUS_REPORT":
                 s.ekf_raw = msg
+            elif kind == "SYS_STATUS":
+                s.battery_pct = None if msg.battery_remaining < 0 else int(msg.battery_remaining)
+                s.battery_current_a = max(msg.current_battery, 0) / 100.0
             elif kind == "COMMAND_ACK":
                 s.acks[msg.command] = msg.result
                 if (msg.command == R.MAV_CMD_DO_SET_MODE and msg.result == R.MAV_RESULT_ACCEPTED

@@ -16,6 +16,7 @@ import numpy as np
 from ..ardupilot.fence import rtl_target
 from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
+from .battery import BatteryWatch
 from .departures import DEFAULT_WATCH, DepartureWatch, Event, Seen, WatchOptions
 from .keeper import FormationKeeper
 from .navigation import ekf_report, gps_report
@@ -84,6 +85,13 @@ def last_leg_seq(mission) -> int:
     return mission[-1].seq - 1 if mission[-1].command != CMD_NAV_LOITER_UNLIM else mission[-1].seq
 
 
+def battery_watch(planned: PlannedFlight | None) -> BatteryWatch | None:
+    """The in-flight battery watch of a plan with a ``[battery]`` (None: without)."""
+    if planned is None or planned.battery is None:
+        return None
+    return BatteryWatch(planned.battery, planned.missions)
+
+
 def observe(v: FlightVehicle, planned: PlannedFlight | None) -> Seen:
     """A snapshot of ``v`` for the departure watch (no position without a plan)."""
     s = v.status
@@ -95,7 +103,8 @@ def observe(v: FlightVehicle, planned: PlannedFlight | None) -> Seen:
     return Seen(mode=s.mode, armed=s.armed, alt_m=s.alt_m, heard_t=s.heard_t,
                 link_up=v.link_up, asked_mode=v.asked_mode, asked_t=v.asked_t,
                 texts=tuple(s.text_log), text_count=s.text_count, position=position,
-                seq=s.seq, gps=gps, ekf=ekf_report(s.ekf_raw), gps_jump_m=s.gps_jump_m)
+                seq=s.seq, gps=gps, ekf=ekf_report(s.ekf_raw), gps_jump_m=s.gps_jump_m,
+                battery_pct=s.battery_pct)
 
 
 def watch_from_outside(departures: DepartureWatch, vehicles: Sequence[FlightVehicle],
@@ -129,7 +138,8 @@ class FlightWatch:
         self.on_event = on_event
         self.departures = DepartureWatch(len(vehicles), options=options,
                                          landing=landing_points(planned),
-                                         navigation=planned.navigation)
+                                         navigation=planned.navigation,
+                                         battery=battery_watch(planned))
         self.response = Response(policy, budget_s=budget_s,
                                  lost_wait_s=lost_wait_s,
                                  route_check=self.rtl_problem, landing=self.landing)
