@@ -1,0 +1,89 @@
+"""A battery that ends the flight: the example planned with SITL's quad's battery
+(3300 mAh, 28 A in hover), one copter's charge set low with MAV_CMD_BATTERY_RESET from
+its second port, as ArduPilot accepts it armed or not (tests/data/ardupilot-4.5.6/
+battery.json). ``fly`` refuses a copter that cannot fly its mission with the reserve, and
+one that runs short in flight is a departure, answered as the others are.
+
+The emulator, or ArduPilot SITL when ARDUPILOT_SITL is set.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from pathlib import Path
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from ftlbo_mav.mission.export import write_plan
+from ftlbo_mav.planning.planner import plan
+from ftlbo_mav.scenario import load_scenario
+
+from ..conftest import EXAMPLE
+from .fleet import vehicles
+from .test_departures import HOMES, OPTIONS, SPEEDUP, SecondPort, _fly_with, _in_auto_for, _upload
+
+pytestmark = pytest.mark.sitl
+
+SITL_QUAD = "\n[battery]\ncapacity = 3300\nhover_current = 28.12\nreserve = 25\n"
+
+
+@pytest.fixture(scope="module")
+def battery_plan(tmp_path_factory) -> Path:
+    """The example with SITL's quad's battery: each mission uses 7 to 9 % of it."""
+    folder = tmp_path_factory.mktemp("battery")
+    scenario = folder / "example.toml"
+    scenario.write_text(EXAMPLE.read_text() + SITL_QUAD)
+    write_plan(plan(load_scenario(scenario)), folder / "plan")
+    doc = json.loads((folder / "plan" / "plan.json").read_text())
+    assert all(5 < u["battery"]["mah"] / 33 < 12 for u in doc["uavs"]), doc["uavs"]
+    return folder / "plan"
+
+
+def _reset(port: SecondPort, percent: float) -> None:
+    port.conn.mav.command_long_send(port.sysid, 1, R.MAV_CMD_BATTERY_RESET, 0, 1, percent,
+                                    0, 0, 0, 0, 0)
+
+
+def test_a_copter_without_the_charge_for_its_mission_is_refused(battery_plan, tmp_path):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(battery_plan, fleet.urls)
+        port = SecondPort(fleet.serial1_urls[1], 2)
+        try:
+            _reset(port, 8)  # 264 mAh: the mission needs ~230 and the reserve 825
+            result, _took = _fly_with(battery_plan, fleet.urls, time.monotonic)
+            assert not port.wait(lambda p: p.armed, 1.0)
+        finally:
+            port.close()
+    out = result.output
+    assert result.exit_code != 0 and "Traceback" not in out, out
+    assert "pre-flight failed, nothing armed" in out
+    assert "uav2 (sysid 2): battery at 8 % (264 of 3300 mAh)" in out, out
+    assert "uav1 (sysid 1): battery" not in out and "uav3 (sysid 3): battery" not in out
+
+
+def test_a_copter_running_short_mid_leg_is_a_departure_and_the_flight_ends(battery_plan):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(battery_plan, fleet.urls)
+        port = SecondPort(fleet.serial1_urls[1], 2)
+
+        def fault():
+            _in_auto_for(port, 3.0)
+            _reset(port, 12)  # 396 mAh: less than what is left and half the reserve
+            return time.monotonic()
+
+        try:
+            result, took = _fly_with(battery_plan, fleet.urls, fault)
+        finally:
+            port.close()
+    out = result.output
+    assert result.exit_code == 1 and "Traceback" not in out, out
+    # 12 % is 396 mAh; the copter draws on, so ArduPilot's whole per cent may say 11
+    assert re.search(r"uav2 \(sysid 2\): battery: 1[12] % left \(3\d\d mAh\): the rest of "
+                     r"its mission needs \d+ mAh", out), out
+    assert "stopped on its track (pause)" in out
+    assert took < 60.0
+    summary = json.loads((battery_plan / "flight" / "summary.json").read_text())
+    assert any(line.startswith("uav2 (sysid 2): battery") for line in summary["departures"])
