@@ -92,7 +92,7 @@ class Battery:
 
     def document(self) -> dict:
         return {"capacity_mah": self.capacity_mah, "reserve_pct": self.reserve_pct,
-                "hover_current_a": round(self.hover_current_a, 3),
+                "hover_current_a": self.hover_current_a,
                 "cruise_current_a": self.cruise_current_a,
                 "cruise_speed_m_s": self.cruise_speed_m_s,
                 "induced_velocity_m_s": self.induced_velocity_m_s, "source": self.source}
