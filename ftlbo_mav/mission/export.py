@@ -168,7 +168,7 @@ def plan_document(
         "corner_allowance": plan.scenario.mission.corner_allowance_m,
         "vehicle": vehicle_params(sc.vehicle),
         "predicted": _predicted_document(plan),
-        "battery": None if sc.battery is None else sc.battery.document(),
+        **({} if sc.battery is None else {"battery": sc.battery.document()}),
         "min_separation": plan.scenario.min_separation_m,
         "area": {
             "corner_a": [sc.corner_a.lat_deg, sc.corner_a.lon_deg],
