@@ -31,9 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 
 SOLO = dict(capacity_mah=5200.0, endurance_min=20.0, reserve_pct=25.0)
-"""The 3DR Solo's smart battery (5,200 mAh, 14.8 V) and its flight time with a gimbal and
-camera, "up to 20 minutes" (3DR, Solo user manual, specifications): the documented
-example of a ``[battery]`` table (docs/flight.md)."""
+"""The 3DR Solo's smart battery (5,200 mAh, 14.8 V, 4S) and the flight time 3DR gave for
+it with a gimbal and camera, about 20 minutes, taken as hover endurance; 25 % kept to
+land with: the documented example of a ``[battery]`` table (README, docs/flight.md)."""
 
 INDUCED_VELOCITY_M_S = 6.0
 """``v_h`` by default: momentum theory's sqrt(T / (2 rho A)) for a 1.8 kg quad with four
