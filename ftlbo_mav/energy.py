@@ -207,14 +207,10 @@ def charge_problem(name: str, charge: MissionCharge, battery: Battery) -> str | 
     if charge.total_mah <= battery.usable_mah:
         return None
     left = battery.capacity_mah - charge.total_mah
-    return (f"{BATTERY_VIOLATION}{name}'s mission uses {charge.total_mah:.0f} mAh of {battery.capacity_mah:g} "
-            f"(takeoff {charge.takeoff_mah:.0f}, legs {charge.legs_mah:.0f}, landing "
-            f"{charge.end_mah:.0f}); it would land with {max(left, 0.0):.0f} mAh "
+    return (f"{BATTERY_VIOLATION}{name}'s mission uses {charge.total_mah:.0f} mAh of "
+            f"{battery.capacity_mah:g} (takeoff {charge.takeoff_mah:.0f}, legs "
+            f"{charge.legs_mah:.0f}, landing {charge.end_mah:.0f}); it would land with "
+            f"{max(left, 0.0):.0f} mAh "
             f"({100.0 * left / battery.capacity_mah:.0f} %), below the "
             f"{battery.reserve_pct:g} % reserve")
-
-
-def hover_minutes(battery: Battery) -> float:
-    """Minutes of hover on the usable charge (a figure for messages)."""
-    return battery.usable_mah / 1000.0 / battery.hover_current_a * 60.0
 

@@ -23,8 +23,8 @@ Each part follows ArduPilot 4.5.6 and is held to a SITL recording
   RTL), or ``"Battery Failsafe - Disarming"`` on the ground; an action of lower priority
   than one already taken is not taken again (Copter::_failsafe_priorities);
 - MAV_CMD_BATTERY_RESET (GCS_Common.cpp handle_command_battery_reset; param1 the
-  battery mask, param2 the per cent, held to 0..100): consumed becomes ``(100 - p) %`` of the capacity
-  and the failsafe state is set to what that gives *silently*
+  battery mask, param2 the per cent, held to 0..100): consumed becomes ``(100 - p) %``
+  of the capacity and the failsafe state is set to what that gives *silently*
   (AP_BattMonitor_Backend::reset_remaining): a reset below a threshold announces nothing
   and changes no mode (recorded: charge state LOW, no text, the copter stays in
   GUIDED). Accepted armed or not.
@@ -137,7 +137,7 @@ class BatteryMonitor:
     def check(self, params, now: float, *, armed: bool) -> tuple[str, int] | None:
         """AP_BattMonitor::check_failsafes: ``(text, action)`` when a worse failsafe is
         reached while armed and its action is as urgent as any taken before (the
-        handler is then called: :func:`handler_texts`); ``(text, -1)`` when only the
+        handler is then called: :func:`handler_text`); ``(text, -1)`` when only the
         text is sent; None."""
         if not armed:
             return None
@@ -167,6 +167,6 @@ class BatteryMonitor:
             self.highest_priority = len(PRIORITIES)
 
 
-def handler_texts(*, landed: bool) -> str:
+def handler_text(*, landed: bool) -> str:
     """Copter::handle_battery_failsafe's announcement: on the ground it disarms."""
     return DISARMING_TEXT if landed else FAILSAFE_TEXT

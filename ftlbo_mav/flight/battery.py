@@ -37,11 +37,11 @@ class MissionBattery:
     total_mah: tuple[float, ...]
     to_end: tuple[np.ndarray, ...]
 
-    def need_mah(self, i: int, seq: int, mission: Sequence[MissionItem]) -> float:
-        """What vehicle ``i`` still needs when its current mission item is ``seq``: all
-        of it up to its takeoff; heading for path point k, what is left from point k-1
-        (from where the leg began: an upper bound); past the last point, its landing."""
-        waypoints = _waypoint_seqs(mission)
+    def need_mah(self, i: int, seq: int, waypoints: Sequence[int]) -> float:
+        """What vehicle ``i`` still needs when its current mission item is ``seq``
+        (``waypoints``: its path points' items, :func:`waypoint_seqs`): all of it up to
+        its takeoff; heading for path point k, what is left from point k-1 (from where
+        the leg began: an upper bound); past the last point, its landing."""
         if not waypoints or seq <= waypoints[0]:
             return self.total_mah[i]
         k = int(np.searchsorted(waypoints, seq, side="left"))  # heading for point k
@@ -51,7 +51,7 @@ class MissionBattery:
         return self.battery.capacity_mah * pct / 100.0
 
 
-def _waypoint_seqs(mission: Sequence[MissionItem]) -> list[int]:
+def waypoint_seqs(mission: Sequence[MissionItem]) -> list[int]:
     """The seq of each path point's NAV_WAYPOINT (after NAV_TAKEOFF), in order."""
     after = next((it.seq for it in mission if it.command == CMD_NAV_TAKEOFF), None)
     if after is None:
@@ -80,12 +80,13 @@ class BatteryWatch:
 
     def __init__(self, plan: MissionBattery, missions: Sequence[Sequence[MissionItem]]
                  ) -> None:
-        self.plan, self.missions = plan, [list(m) for m in missions]
+        self.plan = plan
+        self.waypoints = [waypoint_seqs(m) for m in missions]  # once, not every check
 
     def check(self, i: int, pct: int | None, seq: int) -> str | None:
         if pct is None or seq < 0:
             return None
-        need = self.plan.need_mah(i, seq, self.missions[i])
+        need = self.plan.need_mah(i, seq, self.waypoints[i])
         floor = need + 0.5 * self.plan.battery.reserve_mah
         have = self.plan.remaining_mah(pct)
         if have >= floor:

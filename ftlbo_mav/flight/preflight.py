@@ -20,8 +20,8 @@ from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
 from ..link.params import read_vehicle_params
 from ..link.transfer import Timing
-from .fleet import concurrently
 from .battery import preflight_problem as battery_preflight
+from .fleet import concurrently
 from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
 from .vehicle import FlightVehicle

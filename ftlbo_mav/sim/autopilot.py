@@ -465,7 +465,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         out.append(_text((R.MAV_SEVERITY_WARNING, words)))
         if action < 0:
             return
-        out.append(_text((R.MAV_SEVERITY_WARNING, ap_battery.handler_texts(landed=self.landed))))
+        out.append(_text((R.MAV_SEVERITY_WARNING, ap_battery.handler_text(landed=self.landed))))
         if self.landed or action == ap_battery.ACTION_TERMINATE:
             self.disarm()
             return
