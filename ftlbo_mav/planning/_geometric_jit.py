@@ -124,56 +124,109 @@ def clear_through_grid(p, q, centres, radii, starts, items, lo0, lo1, cell, nx, 
     return clear
 
 
+@njit(cache=True)
+def _pair_tangents(xa, ya, ra, xb, yb, rb, tol):
+    """What the bitangents of discs ``a`` and ``b`` share: ``phi`` (the direction from
+    ``a`` to ``b``), whether the outer and the inner pair exist and their half-angles
+    (:func:`.geometric._bitangents`, the same arithmetic)."""
+    vx, vy = xb - xa, yb - ya
+    d = math.hypot(vx, vy)
+    phi = math.atan2(vy, vx)
+    outer = d > abs(ra - rb) + tol
+    inner = d > ra + rb + tol
+    alpha_outer = math.acos(min(max((ra - rb) / d, -1.0), 1.0)) if outer else 0.0
+    alpha_inner = math.acos(min(max((ra + rb) / d, -1.0), 1.0)) if inner else 0.0
+    return phi, outer, inner, alpha_outer, alpha_inner
+
+
+@njit(cache=True)
+def _kind_angles(phi, alpha_outer, alpha_inner, kind):
+    """The tangent angles on ``a`` and on ``b`` of bitangent ``kind``: 0, 1 the outer (+,
+    -), 2, 3 the inner (+, -) as :func:`.geometric._bitangents` makes them."""
+    alpha = alpha_outer if kind < 2 else alpha_inner
+    ai = phi + alpha if kind % 2 == 0 else phi + -1.0 * alpha
+    aj = ai if kind < 2 else ai + math.pi
+    return ai, aj
+
+
+@njit(cache=True)
+def pair_rows(C):
+    """``(C,)``: the index of pair ``(a, a + 1)`` in ``np.triu_indices(C, 1)``'s order:
+    the pairs of the rows above ``a``."""
+    rows = np.arange(C)
+    return rows * C - rows * (rows + 1) // 2
+
+
+_PAIR_BLOCK = 4096  # pairs a thread takes at a time (walked row by row, no pair arrays)
+
+
 @njit(cache=True, parallel=True)
-def clear_bitangents(i, j, centres, radii, marked, lower, upper, starts, items, lo0, lo1,
-                     cell, nx, ny, tol):
-    """The four bitangents of each disc pair ``(i[m], j[m])`` made and tested in one pass:
-    ``ok (4, M)``, ``angle_i (4, M)``, ``angle_j (4, M)``, rows the outer (+, -) and inner
-    (+, -) bitangents as :func:`.geometric._bitangents` makes them (the same arithmetic);
-    ``ok`` where the bitangent exists, neither end lies in a ``marked`` bin
-    (:func:`.geometric._buried_bins`), both ends lie in the rectangle ``lower``..``upper``
-    (:func:`.geometric._in_rectangle`) and the segment enters no disc (:func:`_walk_clear`).
-    Not one candidate array of millions: only the verdicts and angles."""
-    M = len(i)
+def bitangent_verdicts(begin, end, centres, radii, marked, lower, upper, starts, items, lo0,
+                       lo1, cell, nx, ny, tol):
+    """``ok (4, end - begin)``: for the disc pairs ``begin`` to ``end`` (exclusive) of
+    ``np.triu_indices(C, 1)``'s order, which of their four bitangents (rows as
+    :func:`_kind_angles`) exist, have neither end in a ``marked`` bin
+    (:func:`.geometric._buried_bins`), have both ends in the rectangle ``lower``..``upper``
+    (:func:`.geometric._in_rectangle`) and enter no disc (:func:`_walk_clear`). Only the
+    verdicts are written (a byte a candidate, not two angles of eight): the pairs are
+    walked in blocks, row by row, with no pair arrays; :func:`bitangent_angles` gives the
+    angles of the clear ones."""
+    C = centres.shape[0]
+    before = pair_rows(C)
     bins = marked.shape[1]
     two_pi = 2.0 * math.pi
     width = two_pi / bins
     tol0 = tol * (1 + abs(upper[0] - lower[0]))
     tol1 = tol * (1 + abs(upper[1] - lower[1]))
+    M = end - begin
     ok = np.zeros((4, M), np.bool_)
-    angle_i = np.zeros((4, M))
-    angle_j = np.zeros((4, M))
-    for m in prange(M):
-        a, b = i[m], j[m]
-        vx, vy = centres[b, 0] - centres[a, 0], centres[b, 1] - centres[a, 1]
-        d = math.hypot(vx, vy)
-        phi = math.atan2(vy, vx)
-        ra, rb = radii[a], radii[b]
-        outer = d > abs(ra - rb) + tol
-        inner = d > ra + rb + tol
-        alpha_outer = math.acos(min(max((ra - rb) / d, -1.0), 1.0)) if outer else 0.0
-        alpha_inner = math.acos(min(max((ra + rb) / d, -1.0), 1.0)) if inner else 0.0
-        for kind in range(4):
-            if not (outer if kind < 2 else inner):
-                continue
-            alpha = alpha_outer if kind < 2 else alpha_inner
-            ai = phi + alpha if kind % 2 == 0 else phi + -1.0 * alpha
-            aj = ai if kind < 2 else ai + math.pi
-            angle_i[kind, m], angle_j[kind, m] = ai, aj
-            if marked[a, int(math.floor((ai % two_pi) / width)) % bins]:
-                continue
-            if marked[b, int(math.floor((aj % two_pi) / width)) % bins]:
-                continue
-            px, py = centres[a, 0] + ra * math.cos(ai), centres[a, 1] + ra * math.sin(ai)
-            qx, qy = centres[b, 0] + rb * math.cos(aj), centres[b, 1] + rb * math.sin(aj)
-            if not (lower[0] - tol0 <= px <= upper[0] + tol0
-                    and lower[1] - tol1 <= py <= upper[1] + tol1
-                    and lower[0] - tol0 <= qx <= upper[0] + tol0
-                    and lower[1] - tol1 <= qy <= upper[1] + tol1):
-                continue
-            ok[kind, m] = _walk_clear(px, py, qx, qy, centres, radii, starts, items, lo0, lo1,
-                                      cell, nx, ny, tol)
-    return ok, angle_i, angle_j
+    for block in prange((M + _PAIR_BLOCK - 1) // _PAIR_BLOCK):
+        first = begin + block * _PAIR_BLOCK
+        a = np.searchsorted(before, first, side="right") - 1
+        b = first - before[a] + a + 1
+        for m in range(first - begin, min(first - begin + _PAIR_BLOCK, M)):
+            xa, ya, ra = centres[a, 0], centres[a, 1], radii[a]
+            xb, yb, rb = centres[b, 0], centres[b, 1], radii[b]
+            phi, outer, inner, alpha_outer, alpha_inner = _pair_tangents(xa, ya, ra, xb, yb,
+                                                                         rb, tol)
+            for kind in range(4):
+                if not (outer if kind < 2 else inner):
+                    continue
+                ai, aj = _kind_angles(phi, alpha_outer, alpha_inner, kind)
+                if marked[a, int(math.floor((ai % two_pi) / width)) % bins]:
+                    continue
+                if marked[b, int(math.floor((aj % two_pi) / width)) % bins]:
+                    continue
+                px, py = xa + ra * math.cos(ai), ya + ra * math.sin(ai)
+                qx, qy = xb + rb * math.cos(aj), yb + rb * math.sin(aj)
+                if not (lower[0] - tol0 <= px <= upper[0] + tol0
+                        and lower[1] - tol1 <= py <= upper[1] + tol1
+                        and lower[0] - tol0 <= qx <= upper[0] + tol0
+                        and lower[1] - tol1 <= qy <= upper[1] + tol1):
+                    continue
+                ok[kind, m] = _walk_clear(px, py, qx, qy, centres, radii, starts, items, lo0,
+                                          lo1, cell, nx, ny, tol)
+            b += 1
+            if b == C:
+                a += 1
+                b = a + 1
+    return ok
+
+
+@njit(cache=True)
+def bitangent_angles(i, j, kind, centres, radii, tol):
+    """``angle_i``, ``angle_j`` ``(K,)``: the tangent angles of bitangent ``kind[k]`` of
+    the pair ``(i[k], j[k])``, ``i < j``, as :func:`bitangent_verdicts` made them."""
+    K = len(i)
+    angle_i = np.empty(K)
+    angle_j = np.empty(K)
+    for k in range(K):
+        a, b = i[k], j[k]
+        phi, _, _, alpha_outer, alpha_inner = _pair_tangents(
+            centres[a, 0], centres[a, 1], radii[a], centres[b, 0], centres[b, 1], radii[b],
+            tol)
+        angle_i[k], angle_j[k] = _kind_angles(phi, alpha_outer, alpha_inner, kind[k])
+    return angle_i, angle_j
 
 
 @njit(cache=True)

@@ -372,6 +372,8 @@ chunk of disc pairs at a time (:func:`_clear_segments`), keeping only the clear 
 2,500 discs make 12 million candidate bitangents, 2 GB at once; 300 discs (3 UAVs among
 100 trees) 0.1 s a graph in arrays, some 10 ms compiled."""
 _PAIR_CHUNK = 1 << 18
+_VERDICT_CHUNKS = 64
+"""Chunks of pairs judged in one compiled call: 16.8 million pairs, 67 MB of verdicts."""
 
 
 def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, upper):
@@ -420,10 +422,7 @@ def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, up
         disc, angle = _point_tangents(point, discs)
         n = len(disc)
         keep(np.full(n, key), np.zeros(n, int), disc, angle, disc, angle, point, point)
-    C = len(discs.radii)
-    for a in range(0, C * (C - 1) // 2, _PAIR_CHUNK):
-        di, ai, dj, aj = _clear_bitangents(discs, *_triu_chunk(C, a, a + _PAIR_CHUNK),
-                                           marked, grid, lower, upper)
+    for di, ai, dj, aj in _clear_bitangents(discs, marked, grid, lower, upper):
         n = len(di)
         keep(np.zeros(n, int), np.zeros(n, int), di, ai, dj, aj, start, goal, tested=True)
     none = np.zeros(1, int)
@@ -432,29 +431,33 @@ def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, up
             np.concatenate(keys_q), np.concatenate(ps), np.concatenate(qs))
 
 
-def _triu_chunk(C: int, begin: int, end: int) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs ``begin`` to ``end`` (exclusive) of ``np.triu_indices(C, 1)``, in its order,
-    without making all ``C (C - 1) / 2`` of them."""
-    k = np.arange(begin, min(end, C * (C - 1) // 2), dtype=np.int64)
-    rows = np.arange(C, dtype=np.int64)
-    before = rows * C - rows * (rows + 1) // 2  # pairs in the rows above row i
-    i = np.searchsorted(before, k, side="right") - 1
-    return i, k - before[i] + i + 1
+def _clear_bitangents(discs: Discs, marked, grid, lower, upper):
+    """The clear bitangents of every disc pair, a chunk of :data:`_PAIR_CHUNK` pairs of
+    ``np.triu_indices(C, 1)``'s order at a time, each as (disc_i, angle_i, disc_j,
+    angle_j) in :func:`_bitangents`' order: the tests of :func:`_clear_segments`' ``keep``
+    (ends not buried, in the rectangle, the segment clear) made compiled in one pass over
+    :data:`_VERDICT_CHUNKS` chunks (:func:`._geometric_jit.bitangent_verdicts`), and the
+    angles made again for the clear ones only (:func:`._geometric_jit.bitangent_angles`):
+    no array of every candidate."""
+    from ._geometric_jit import bitangent_angles, bitangent_verdicts, pair_rows
 
-
-def _clear_bitangents(discs: Discs, i: np.ndarray, j: np.ndarray, marked, grid, lower, upper):
-    """The clear bitangents of the disc pairs ``(i, j)`` as (disc_i, angle_i, disc_j,
-    angle_j), in :func:`_bitangents`' order: the tests of :func:`_clear_segments`'
-    ``keep`` (ends not buried, in the rectangle, the segment clear) made compiled in one
-    pass over the pairs (:func:`._geometric_jit.clear_bitangents`), with no array of
-    every candidate."""
-    from ._geometric_jit import clear_bitangents
-
-    ok, angle_i, angle_j = clear_bitangents(i, j, discs.centres, discs.radii, marked,
-                                            np.asarray(lower, float), np.asarray(upper, float),
-                                            *grid, _TOL)
-    return (np.concatenate([i[row] for row in ok]), angle_i[ok], np.concatenate(
-        [j[row] for row in ok]), angle_j[ok])
+    C = len(discs.radii)
+    before = pair_rows(C)
+    pairs = C * (C - 1) // 2
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    span = _PAIR_CHUNK * _VERDICT_CHUNKS
+    for begin in range(0, pairs, span):
+        end = min(begin + span, pairs)
+        ok = bitangent_verdicts(begin, end, discs.centres, discs.radii, marked, lower, upper,
+                                *grid, _TOL)
+        for a in range(0, end - begin, _PAIR_CHUNK):
+            part = ok[:, a:a + _PAIR_CHUNK]
+            kind, at = np.nonzero(part)  # kind-major, pairs in order: _bitangents' order
+            k = begin + a + at
+            i = np.searchsorted(before, k, side="right") - 1
+            j = k - before[i] + i + 1
+            angle_i, angle_j = bitangent_angles(i, j, kind, discs.centres, discs.radii, _TOL)
+            yield i, angle_i, j, angle_j
 
 
 def _in_rectangle(points: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
