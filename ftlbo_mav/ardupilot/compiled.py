@@ -56,28 +56,48 @@ _sqrt_controller = njit(cache=True)(navigation.sqrt_controller)
 _limit_accel = njit(cache=True)(poscontrol._limit_accel)
 
 
-def legs_of(points: np.ndarray, nav: Navigation, desired_speed: float) -> tuple:
+def legs_of(points: np.ndarray, nav: Navigation, desired_speed: float, *, first: int = 1,
+            known: dict | None = None) -> tuple:
     """Every leg ``points[k-1] -> points[k]`` planned as AC_WPNav plans it
     (:meth:`.wpnav.WaypointNav._plan`: SCurve.calculate_track from rest to rest), as
     arrays indexed by the leg's end point ``k`` (row 0 unused): ``pieces`` ``(P, 23, 6)``,
-    ``planned`` ``(P,)``, ``track`` and ``unit`` ``(P, 3)``, ``vel_max`` ``(P,)``."""
+    ``planned`` ``(P,)``, ``track`` and ``unit`` ``(P, 3)``, ``vel_max`` ``(P,)``.
+
+    ``first``: only the legs from the one ending at ``points[first]`` on (the rows before
+    stay empty: a flight resumed there never reads them). ``known``: the legs planned
+    already, by their two ends (a leg depends on nothing else, once ``nav`` and
+    ``desired_speed`` are fixed: the caller keeps one per pair of them); the legs planned
+    here are added."""
     P = len(points)
     pieces = np.zeros((P, PIECES, 6))
     planned = np.zeros(P, np.bool_)
     track, unit, vel_max = np.zeros((P, 3)), np.zeros((P, 3)), np.zeros(P)
     jerk, snap = nav.scurve_jerk_snap()
-    for k in range(1, P):
-        leg = SCurve()
-        leg.calculate_track(points[k - 1], points[k], desired_speed, nav.wp_speed_up,
-                            nav.wp_speed_dn, nav.wp_accel, nav.wp_accel_z, snap, jerk)
-        vel_max[k] = leg.vel_max
-        track[k], unit[k] = leg.track, leg.unit
-        if leg.planned:
-            planned[k] = True
-            pieces[k] = [(q.end_time, q.kind, q.jerk, q.accel, q.vel, q.pos) for q in leg.p]
-        else:
-            pieces[k, 0] = [leg.p[0].end_time, FLAT, 0.0, 0.0, 0.0, 0.0]
+    for k in range(max(first, 1), P):
+        key = points[k - 1:k + 1].tobytes()
+        row = known.get(key) if known is not None else None
+        if row is None:
+            row = _leg(points[k - 1], points[k], nav, desired_speed, jerk, snap)
+            if known is not None:
+                known[key] = row
+        pieces[k], planned[k], track[k], unit[k], vel_max[k] = row
     return pieces, planned, track, unit, vel_max
+
+
+def _leg(a: np.ndarray, b: np.ndarray, nav: Navigation, desired_speed: float, jerk: float,
+         snap: float) -> tuple:
+    """One row of :func:`legs_of`: the leg ``a -> b``'s pieces, planned, track, unit,
+    vel_max."""
+    leg = SCurve()
+    leg.calculate_track(a, b, desired_speed, nav.wp_speed_up, nav.wp_speed_dn, nav.wp_accel,
+                        nav.wp_accel_z, snap, jerk)
+    pieces = np.zeros((PIECES, 6))
+    if leg.planned:
+        pieces[:] = [(q.end_time, q.kind, q.jerk, q.accel, q.vel, q.pos) for q in leg.p]
+    else:
+        pieces[0] = [leg.p[0].end_time, FLAT, 0.0, 0.0, 0.0, 0.0]
+    return pieces, bool(leg.planned), np.array(leg.track, float), np.array(leg.unit, float), \
+        float(leg.vel_max)
 
 
 def nav_params(nav: Navigation, airframe: Airframe | None, desired_speed: float) -> np.ndarray:
@@ -221,159 +241,94 @@ def _follow(f, prm, dt, tx, ty, tvx, tvy, tax, tay):
     f[12], f[13], f[14] = carry, limit_x, limit_y
 
 
+SNAP_INTS = 8  # prev, this, nxt, k, n, wp_reached, fast, waiting
+SNAP_FLOATS = 47  # see _pack
+"""The loop's state when it starts a waypoint (:func:`fly`'s snapshots): every number that
+lives from one step to the next."""
+
+
+@njit(cache=True)
+def _pack(si, sf, prev, this, nxt, k, n, wp_reached, fast, waiting, prev_t, this_t, nxt_t,
+          prev_sq, this_sq, nxt_sq, offset_vel, offset_accel, track_scaler, t, wait_until,
+          origin, destination, target, target_vel, target_accel, f, here, velocity):
+    si[0], si[1], si[2], si[3], si[4] = prev, this, nxt, k, n
+    si[5], si[6], si[7] = wp_reached, fast, waiting
+    sf[0], sf[1], sf[2], sf[3], sf[4], sf[5] = prev_t, this_t, nxt_t, prev_sq, this_sq, nxt_sq
+    sf[6], sf[7], sf[8], sf[9], sf[10] = offset_vel, offset_accel, track_scaler, t, wait_until
+    sf[11:14], sf[14:17], sf[17:20] = origin, destination, target
+    sf[20:23], sf[23:26], sf[26:41] = target_vel, target_accel, f
+    sf[41:44], sf[44:47] = here, velocity
+
+
 @njit(cache=True)
 def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, follow,
-        settled_m, settled_m_s, settle_steps):
+        settled_m, settled_m_s, settle_steps, resume_i, resume_f, prior_times,
+        prior_positions, prior_reached):
     """flight_path.fly_path_stepwise as one loop: ``(status, steps, times, positions,
-    reached)``, the first ``steps`` rows of ``times`` and ``positions`` filled (status
-    :data:`OUT_OF_TIME` when the mission was not flown within ``budget`` steps)."""
+    reached, snap_i, snap_f)``, the first ``steps`` rows of ``times`` and ``positions``
+    filled (status :data:`OUT_OF_TIME` when the mission was not flown within ``budget``
+    steps); ``snap_i (P, SNAP_INTS)``, ``snap_f (P, SNAP_FLOATS)``: row ``k`` the loop's
+    state as it starts waypoint ``k`` (``snap_i[k, 3] == k`` where it did), which depends
+    on ``points[:k + 1]`` and ``holds[:k]`` only.
+
+    A flight resumed from such a row (``resume_i``, ``resume_f``; the rows before it of
+    ``prior_times``, ``prior_positions`` and ``prior_reached`` from the same flight)
+    goes on exactly as the whole flight would from there (the same numbers in the same
+    order); ``resume_i[3] == 0``: from the start."""
     P = points.shape[0]
     rows = budget + settle_steps + 1
     times = np.empty(rows)
     positions = np.empty((rows, 3))
     reached = np.zeros(P)
+    snap_i = np.zeros((P, SNAP_INTS), np.int64)
+    snap_f = np.zeros((P, SNAP_FLOATS))
     radius, corner_accel, posxy_p = prm[0], prm[1], prm[2]
     wp_accel, wp_jerk, jerk_xy, desired = prm[3], prm[4], prm[5], prm[6]
-    # WaypointNav state: the three legs (-1: an empty SCurve), their times and
-    # position_sq; origin, destination, target, its velocity and acceleration
-    prev, this, nxt = -1, -1, -1
-    prev_t = this_t = nxt_t = 0.0
-    _prev_sq = this_sq = nxt_sq = 0.0
-    wp_reached, fast = True, False
-    origin = points[0].copy()
-    destination = points[0].copy()
-    target = points[0].copy()
-    target_vel = np.zeros(3)
-    target_accel = np.zeros(3)
-    offset_vel, offset_accel, track_scaler = desired, 0.0, 1.0
     out = np.zeros((3, 3))
-    f = np.zeros(15)  # PositionFollower at rest on the first point
-    f[0], f[1] = points[0, 0], points[0, 1]
-    here = points[0].copy()
-    velocity = np.zeros(3)
-    times[0] = 0.0
-    positions[0] = points[0]
-    n = 1
-    k, t, waiting, wait_until = 1, 0.0, False, 0.0
-    # start(1): ModeAuto::do_nav_wp / set_next_wp (set_destination, set_destination_next)
-    prev, prev_t, _prev_sq = this, this_t, this_sq
-    origin = destination.copy()
-    destination = points[k].copy()
-    this, this_t, this_sq = k, 0.0, 0.0
-    nxt, nxt_t, nxt_sq = -1, 0.0, 0.0
-    fast, wp_reached = False, False
-    if holds[k] <= 0 and k + 1 < P:
-        nxt, nxt_t, nxt_sq, fast = k + 1, 0.0, 0.0, True
+    if resume_i[3] == 0:
+        # WaypointNav state: the three legs (-1: an empty SCurve), their times and
+        # position_sq; origin, destination, target, its velocity and acceleration
+        prev, this, nxt = -1, -1, -1
+        prev_t = this_t = nxt_t = 0.0
+        _prev_sq = this_sq = nxt_sq = 0.0
+        wp_reached, fast = True, False
+        origin = points[0].copy()
+        destination = points[0].copy()
+        target = points[0].copy()
+        target_vel = np.zeros(3)
+        target_accel = np.zeros(3)
+        offset_vel, offset_accel, track_scaler = desired, 0.0, 1.0
+        f = np.zeros(15)  # PositionFollower at rest on the first point
+        f[0], f[1] = points[0, 0], points[0, 1]
+        here = points[0].copy()
+        velocity = np.zeros(3)
+        times[0] = 0.0
+        positions[0] = points[0]
+        n = 1
+        k, t, waiting, wait_until = 1, 0.0, False, 0.0
+    else:
+        prev, this, nxt, k, n = resume_i[0], resume_i[1], resume_i[2], resume_i[3], resume_i[4]
+        wp_reached, fast, waiting = resume_i[5] != 0, resume_i[6] != 0, resume_i[7] != 0
+        prev_t, this_t, nxt_t = resume_f[0], resume_f[1], resume_f[2]
+        _prev_sq, this_sq, nxt_sq = resume_f[3], resume_f[4], resume_f[5]
+        offset_vel, offset_accel, track_scaler = resume_f[6], resume_f[7], resume_f[8]
+        t, wait_until = resume_f[9], resume_f[10]
+        origin, destination = resume_f[11:14].copy(), resume_f[14:17].copy()
+        target, target_vel = resume_f[17:20].copy(), resume_f[20:23].copy()
+        target_accel, f = resume_f[23:26].copy(), resume_f[26:41].copy()
+        here, velocity = resume_f[41:44].copy(), resume_f[44:47].copy()
+        times[:n] = prior_times[:n]
+        positions[:n] = prior_positions[:n]
+        reached[:k] = prior_reached[:k]
     done_all = False
-    for _step in range(budget):
-        t += dt
-        # WaypointNav.advance: _time_scale (Navigation.track_clock_step)
-        offset_vel += offset_accel * dt
-        want = _sqrt_controller(desired - offset_vel, jerk_xy / wp_accel, jerk_xy, dt)
-        want = max(-wp_accel, min(wp_accel, want))
-        offset_accel += max(-jerk_xy * dt, min(jerk_xy * dt, want - offset_accel))
-        scale = offset_vel / desired
-        # _track_scale
-        if follow:
-            speed = math.sqrt(target_vel[0] ** 2 + target_vel[1] ** 2 + target_vel[2] ** 2)
-            wanted = 1.0
-            if speed > 0:
-                track_error = 0.0
-                track_velocity = 0.0
-                for i in range(3):
-                    direction = target_vel[i] / speed
-                    track_error += (target[i] - here[i]) * direction
-                    track_velocity += velocity[i] * direction
-                wanted = min(max(0.05 + (track_velocity - posxy_p * track_error) / speed,
-                                 0.1), 1.0)
-            tc = wp_accel / wp_jerk if wp_jerk > 0 else 1.0
-            track_scaler += (wanted - track_scaler) * min(dt / tc, 1.0)
-        step = dt * scale * track_scaler
-        # SCurve.advance_target_along_track
-        out[:] = 0.0
-        prev_t, _prev_sq = _advance_curve(pieces, planned, unit, prev, prev_t, step, out)
-        if prev >= 0:
-            for i in range(3):
-                out[0, i] -= track[prev, i]
-        this_t, this_sq = _advance_curve(pieces, planned, unit, this, this_t, step, out)
-        this_end = _time_end(pieces, planned, this)
-        done = this_t >= this_end or this_sq >= _track_sq(track, this)
-        left = this_end - this_t if (this >= 0 and planned[this]) else 0.0
-        if (fast and abs(nxt_t) < _EPS
-                and this_t >= _piece_end(pieces, planned, this, CONST)
-                - _piece_end(pieces, planned, nxt, ACCEL_MAX)
-                and this_sq >= 0.25 * _track_sq(track, this)):
-            _j, a1, v1, x1 = _state_at(pieces, planned, this, this_t + left / 2)
-            _j, a2, v2, x2 = _state_at(pieces, planned, nxt, left / 2)
-            tp0 = tp1 = tp2 = 0.0
-            tv0 = tv1 = ta0 = ta1 = 0.0
-            if this >= 0:
-                tp0 = unit[this, 0] * x1 - track[this, 0]
-                tp1 = unit[this, 1] * x1 - track[this, 1]
-                tp2 = unit[this, 2] * x1 - track[this, 2]
-                tv0, tv1 = unit[this, 0] * v1, unit[this, 1] * v1
-                ta0, ta1 = unit[this, 0] * a1, unit[this, 1] * a1
-            if nxt >= 0:
-                tp0 += unit[nxt, 0] * x2
-                tp1 += unit[nxt, 1] * x2
-                tp2 += unit[nxt, 2] * x2
-                tv0 += unit[nxt, 0] * v2
-                tv1 += unit[nxt, 1] * v2
-                ta0 += unit[nxt, 0] * a2
-                ta1 += unit[nxt, 1] * a2
-            speed_min = min(vel_max[this] if this >= 0 else 0.0,
-                            vel_max[nxt] if nxt >= 0 else 0.0)
-            if (left < _time_end(pieces, planned, nxt) / 2
-                    and math.sqrt(tp0 * tp0 + tp1 * tp1 + tp2 * tp2) < radius
-                    and math.hypot(tv0, tv1) < speed_min
-                    and math.hypot(ta0, ta1) < corner_accel):
-                nxt_t, nxt_sq = _advance_curve(pieces, planned, unit, nxt, nxt_t, step, out)
-        elif not abs(nxt_t) < _EPS:
-            nxt_t, nxt_sq = _advance_curve(pieces, planned, unit, nxt, nxt_t, step, out)
-            if nxt_t >= (this_end - this_t if (this >= 0 and planned[this]) else 0.0):
-                done = True
-        # back in WaypointNav.advance: the speed offset's acceleration, the time scale
-        for i in range(3):
-            pos_i = origin[i] + out[0, i]
-            vel_i = out[1, i]
-            offset = vel_i * (offset_accel / desired)
-            target[i] = pos_i
-            target_vel[i] = vel_i * scale
-            target_accel[i] = out[2, i] * scale * scale + offset
-        if not wp_reached and done:
-            if fast:
-                wp_reached = True
-            else:
-                gap = math.sqrt((here[0] - destination[0]) ** 2 + (here[1] - destination[1]) ** 2
-                                + (here[2] - destination[2]) ** 2)
-                if gap <= radius:
-                    wp_reached = True
-        # the copter follows (fly_path_stepwise)
-        if follow:
-            _follow(f, prm, dt, target[0], target[1], target_vel[0], target_vel[1],
-                    target_accel[0], target_accel[1])
-            here[0], here[1], here[2] = f[0], f[1], target[2]
-            velocity[0], velocity[1], velocity[2] = f[2], f[3], target_vel[2]
-        else:
-            here[:] = target
-        times[n] = t
-        positions[n] = here
-        n += 1
-        if not wp_reached:
-            continue
-        if holds[k] > 0 and not waiting:  # ModeAuto::verify_nav_wp: the hold
-            reached[k] = t
-            waiting, wait_until = True, t + holds[k]
-        if waiting and t < wait_until - 1e-9:
-            continue
-        if not waiting:
-            reached[k] = t
-        waiting = False
-        k += 1
-        if k == P:
-            done_all = True
-            break
-        # start(k): set_destination (reached, so no re-init), set_destination_next
+    steps_left = budget - (n - 1)
+    while True:
+        # start(k): ModeAuto::do_nav_wp / set_next_wp (set_destination, set_destination_next;
+        # reached already, so no re-init)
+        _pack(snap_i[k], snap_f[k], prev, this, nxt, k, n, wp_reached, fast, waiting, prev_t,
+              this_t, nxt_t, _prev_sq, this_sq, nxt_sq, offset_vel, offset_accel,
+              track_scaler, t, wait_until, origin, destination, target, target_vel,
+              target_accel, f, here, velocity)
         prev, prev_t, _prev_sq = this, this_t, this_sq
         origin = destination.copy()
         destination = points[k].copy()
@@ -386,8 +341,125 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
         fast, wp_reached = False, False
         if holds[k] <= 0 and k + 1 < P:
             nxt, nxt_t, nxt_sq, fast = k + 1, 0.0, 0.0, True
+        # fly until waypoint k is reached (and held)
+        next_point = False
+        while steps_left > 0:
+            steps_left -= 1
+            t += dt
+            # WaypointNav.advance: _time_scale (Navigation.track_clock_step)
+            offset_vel += offset_accel * dt
+            want = _sqrt_controller(desired - offset_vel, jerk_xy / wp_accel, jerk_xy, dt)
+            want = max(-wp_accel, min(wp_accel, want))
+            offset_accel += max(-jerk_xy * dt, min(jerk_xy * dt, want - offset_accel))
+            scale = offset_vel / desired
+            # _track_scale
+            if follow:
+                speed = math.sqrt(target_vel[0] ** 2 + target_vel[1] ** 2 + target_vel[2] ** 2)
+                wanted = 1.0
+                if speed > 0:
+                    track_error = 0.0
+                    track_velocity = 0.0
+                    for i in range(3):
+                        direction = target_vel[i] / speed
+                        track_error += (target[i] - here[i]) * direction
+                        track_velocity += velocity[i] * direction
+                    wanted = min(max(0.05 + (track_velocity - posxy_p * track_error) / speed,
+                                     0.1), 1.0)
+                tc = wp_accel / wp_jerk if wp_jerk > 0 else 1.0
+                track_scaler += (wanted - track_scaler) * min(dt / tc, 1.0)
+            step = dt * scale * track_scaler
+            # SCurve.advance_target_along_track
+            out[:] = 0.0
+            prev_t, _prev_sq = _advance_curve(pieces, planned, unit, prev, prev_t, step, out)
+            if prev >= 0:
+                for i in range(3):
+                    out[0, i] -= track[prev, i]
+            this_t, this_sq = _advance_curve(pieces, planned, unit, this, this_t, step, out)
+            this_end = _time_end(pieces, planned, this)
+            done = this_t >= this_end or this_sq >= _track_sq(track, this)
+            left = this_end - this_t if (this >= 0 and planned[this]) else 0.0
+            if (fast and abs(nxt_t) < _EPS
+                    and this_t >= _piece_end(pieces, planned, this, CONST)
+                    - _piece_end(pieces, planned, nxt, ACCEL_MAX)
+                    and this_sq >= 0.25 * _track_sq(track, this)):
+                _j, a1, v1, x1 = _state_at(pieces, planned, this, this_t + left / 2)
+                _j, a2, v2, x2 = _state_at(pieces, planned, nxt, left / 2)
+                tp0 = tp1 = tp2 = 0.0
+                tv0 = tv1 = ta0 = ta1 = 0.0
+                if this >= 0:
+                    tp0 = unit[this, 0] * x1 - track[this, 0]
+                    tp1 = unit[this, 1] * x1 - track[this, 1]
+                    tp2 = unit[this, 2] * x1 - track[this, 2]
+                    tv0, tv1 = unit[this, 0] * v1, unit[this, 1] * v1
+                    ta0, ta1 = unit[this, 0] * a1, unit[this, 1] * a1
+                if nxt >= 0:
+                    tp0 += unit[nxt, 0] * x2
+                    tp1 += unit[nxt, 1] * x2
+                    tp2 += unit[nxt, 2] * x2
+                    tv0 += unit[nxt, 0] * v2
+                    tv1 += unit[nxt, 1] * v2
+                    ta0 += unit[nxt, 0] * a2
+                    ta1 += unit[nxt, 1] * a2
+                speed_min = min(vel_max[this] if this >= 0 else 0.0,
+                                vel_max[nxt] if nxt >= 0 else 0.0)
+                if (left < _time_end(pieces, planned, nxt) / 2
+                        and math.sqrt(tp0 * tp0 + tp1 * tp1 + tp2 * tp2) < radius
+                        and math.hypot(tv0, tv1) < speed_min
+                        and math.hypot(ta0, ta1) < corner_accel):
+                    nxt_t, nxt_sq = _advance_curve(pieces, planned, unit, nxt, nxt_t, step,
+                                                   out)
+            elif not abs(nxt_t) < _EPS:
+                nxt_t, nxt_sq = _advance_curve(pieces, planned, unit, nxt, nxt_t, step, out)
+                if nxt_t >= (this_end - this_t if (this >= 0 and planned[this]) else 0.0):
+                    done = True
+            # back in WaypointNav.advance: the speed offset's acceleration, the time scale
+            for i in range(3):
+                pos_i = origin[i] + out[0, i]
+                vel_i = out[1, i]
+                offset = vel_i * (offset_accel / desired)
+                target[i] = pos_i
+                target_vel[i] = vel_i * scale
+                target_accel[i] = out[2, i] * scale * scale + offset
+            if not wp_reached and done:
+                if fast:
+                    wp_reached = True
+                else:
+                    gap = math.sqrt((here[0] - destination[0]) ** 2
+                                    + (here[1] - destination[1]) ** 2
+                                    + (here[2] - destination[2]) ** 2)
+                    if gap <= radius:
+                        wp_reached = True
+            # the copter follows (fly_path_stepwise)
+            if follow:
+                _follow(f, prm, dt, target[0], target[1], target_vel[0], target_vel[1],
+                        target_accel[0], target_accel[1])
+                here[0], here[1], here[2] = f[0], f[1], target[2]
+                velocity[0], velocity[1], velocity[2] = f[2], f[3], target_vel[2]
+            else:
+                here[:] = target
+            times[n] = t
+            positions[n] = here
+            n += 1
+            if not wp_reached:
+                continue
+            if holds[k] > 0 and not waiting:  # ModeAuto::verify_nav_wp: the hold
+                reached[k] = t
+                waiting, wait_until = True, t + holds[k]
+            if waiting and t < wait_until - 1e-9:
+                continue
+            if not waiting:
+                reached[k] = t
+            waiting = False
+            next_point = True
+            break
+        if not next_point:
+            break  # out of steps
+        k += 1
+        if k == P:
+            done_all = True
+            break
     if not done_all:
-        return OUT_OF_TIME, n, times, positions, reached
+        return OUT_OF_TIME, n, times, positions, reached, snap_i, snap_f
     if follow:  # the copter comes to rest on its goal (past it, and back)
         gx, gy, gz = points[P - 1, 0], points[P - 1, 1], points[P - 1, 2]
         for _s in range(settle_steps):
@@ -400,4 +472,4 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
             times[n] = t
             positions[n] = here
             n += 1
-    return OK, n, times, positions, reached
+    return OK, n, times, positions, reached, snap_i, snap_f

@@ -147,16 +147,98 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     from . import compiled
 
     global _compiled_loaded
-    legs = compiled.legs_of(points, nav, desired)
     prm = compiled.nav_params(nav, airframe, desired)
-    status, n, times, positions, reached = compiled.fly(
+    model = (prm.tobytes(), dt, airframe is not None)
+    flown = _FLOWN.get(model, points, holds)
+    if isinstance(flown, FlownPath):  # flown compiled before in this process
+        _compiled_loaded = True
+        return flown
+    legs = compiled.legs_of(points, nav, desired, first=flown.k - 1 if flown else 1,
+                            known=_FLOWN.legs(model, nav, desired))
+    resume = (flown.resume() if flown else
+              (np.zeros(compiled.SNAP_INTS, np.int64), np.zeros(compiled.SNAP_FLOATS),
+               np.zeros(0), np.zeros((0, 3)), np.zeros(0)))
+    status, n, times, positions, reached, snap_i, snap_f = compiled.fly(
         points, holds, *legs, prm, dt, budget, airframe is not None, SETTLED_M, SETTLED_M_S,
-        int(SETTLE_BUDGET_S / dt))
+        int(SETTLE_BUDGET_S / dt), *resume)
     _compiled_loaded = True
     if status != compiled.OK:
         raise RuntimeError(f"the path of {len(points)} points was not flown within "
                            f"{budget * dt:.0f} s")
-    return FlownPath(times[:n].copy(), positions[:n].copy(), reached)
+    path = FlownPath(times[:n].copy(), positions[:n].copy(), reached)
+    _FLOWN.add(model, points, holds, path, snap_i, snap_f)
+    return path
+
+
+@dataclass(frozen=True, eq=False)
+class _Resume:
+    """Where a flight flown before can be taken up: waypoint ``k``'s snapshot."""
+
+    k: int
+    path: FlownPath
+    snap_i: np.ndarray
+    snap_f: np.ndarray
+
+    def resume(self) -> tuple:
+        return (self.snap_i[self.k], self.snap_f[self.k], self.path.times,
+                self.path.positions, self.path.reached)
+
+
+class _Flown:
+    """The flights flown compiled lately, and the legs planned for them: a plan predicts
+    one mission again and again while it moves a corner here and there
+    (:func:`..planning.predicted.keep_clearance`), and none of what comes before the
+    first point moved changes. A mission that shares its first points with one flown here
+    is taken up at the last waypoint they share (:func:`.compiled.fly`'s snapshots: the
+    state there depends on the points up to it and the holds before it only), and every
+    leg whose two ends were planned before is not planned again; the numbers are the
+    ones the whole flight gives (``tests/ardupilot/test_compiled.py``)."""
+
+    FLIGHTS = 8  # flights kept, the newest first
+    LEGS = 20_000  # legs kept per model, then forgotten all at once
+
+    def __init__(self) -> None:
+        self._flights: list[tuple] = []
+        self._legs: dict[tuple, dict] = {}
+
+    def legs(self, model: tuple, nav: Navigation, desired: float) -> dict:
+        key = (model[0], nav.scurve_jerk_snap(), nav.wp_speed_up, nav.wp_speed_dn,
+               nav.wp_accel, nav.wp_accel_z, desired)
+        known = self._legs.setdefault(key, {})
+        if len(known) > self.LEGS:
+            known.clear()
+        return known
+
+    def get(self, model: tuple, points: np.ndarray, holds: np.ndarray
+            ) -> FlownPath | _Resume | None:
+        """The flight of ``points`` itself when it was flown, else where the flight that
+        shares most of its start can be taken up (None: nowhere past its first leg)."""
+        best: _Resume | None = None
+        P = len(points)
+        for key, old_points, old_holds, path, snap_i, snap_f in self._flights:
+            if key != model:
+                continue
+            m = min(len(old_points), P)
+            same = np.all(old_points[:m] == points[:m], axis=1)
+            shared = int(np.argmin(same)) if not same.all() else m
+            held = old_holds[:m] == holds[:m]
+            same_holds = int(np.argmin(held)) if not held.all() else m
+            if shared == P == len(old_points) and same_holds == P:
+                return FlownPath(path.times.copy(), path.positions.copy(),
+                                 path.reached.copy())
+            # the state at waypoint k depends on points[:k + 1] and holds[:k]
+            k = min(shared - 1, same_holds, m - 1)
+            if k >= 2 and snap_i[k, 3] == k and (best is None or k > best.k):
+                best = _Resume(k, path, snap_i, snap_f)
+        return best
+
+    def add(self, model, points, holds, path, snap_i, snap_f) -> None:
+        kept = FlownPath(path.times.copy(), path.positions.copy(), path.reached.copy())
+        self._flights.insert(0, (model, points.copy(), holds.copy(), kept, snap_i, snap_f))
+        del self._flights[self.FLIGHTS:]
+
+
+_FLOWN = _Flown()
 
 
 def fly_path_stepwise(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,

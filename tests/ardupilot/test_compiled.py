@@ -119,3 +119,83 @@ def _compiled(points, **kwargs):
 
     with fp.stepwise_budget(0.0):  # nothing left for the stepwise loop: compiled
         return fp.fly_path(points, **kwargs)
+
+
+def _fresh(points, **kwargs):
+    """``points`` flown compiled from the first point, nothing flown before reused."""
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    saved = fp._FLOWN
+    fp._FLOWN = fp._Flown()
+    try:
+        return _compiled(points, **kwargs)
+    finally:
+        fp._FLOWN = saved
+
+
+def _taken_up(monkeypatch) -> list[int]:
+    """The waypoints the compiled flights are taken up at from now on (0: the start)."""
+    from ftlbo_mav.ardupilot import compiled
+
+    at: list[int] = []
+    real = compiled.fly
+
+    def spy(*args):
+        at.append(int(args[14][3]))  # resume_i: its waypoint
+        return real(*args)
+
+    monkeypatch.setattr(compiled, "fly", spy)
+    return at
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_corner_moved_is_flown_from_the_last_waypoint_before_it(seed, monkeypatch):
+    # issue 30: what comes before a moved corner is not flown again, and the flight is
+    # the one flown from the start, number for number
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    monkeypatch.setattr(fp, "_FLOWN", fp._Flown())
+    rng = np.random.default_rng(100 + seed)
+    points = np.cumsum(np.vstack([[0.0, 0.0, 5.0],
+                                  rng.normal(0.0, 1.0, (11, 3)) * [20.0, 20.0, 0.5]]), axis=0)
+    holds = np.where(rng.random(12) < 0.25, 1, 0) if seed % 2 else None
+    _compiled(points, holds_s=holds)
+    at = _taken_up(monkeypatch)
+    for j in (9, 4, 7):
+        moved = points.copy()
+        moved[j, :2] += rng.normal(0.0, 0.4, 2)
+        again = _compiled(moved, holds_s=holds)
+        whole = _fresh(moved, holds_s=holds)
+        assert np.array_equal(again.times, whole.times)
+        assert np.array_equal(again.positions, whole.positions)
+        assert np.array_equal(again.reached, whole.reached)
+    assert at[0::2] == [8, 3, 6]  # taken up at the waypoint before the moved corner
+
+
+def test_a_flight_flown_again_is_not_flown_and_its_copy_is_the_callers(monkeypatch):
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    monkeypatch.setattr(fp, "_FLOWN", fp._Flown())
+    points = np.array([[0.0, 0.0, 5.0], [30.0, 0.0, 5.0], [30.0, 30.0, 6.0], [0.0, 40.0, 5.0]])
+    first = _compiled(points)
+    at = _taken_up(monkeypatch)
+    first.positions[:] = 0.0  # the caller's to change
+    again = _compiled(points)
+    assert at == []  # not flown again
+    assert np.array_equal(again.positions, _fresh(points).positions)
+
+
+def test_a_hold_changed_before_a_corner_is_flown_from_before_the_hold(monkeypatch):
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    monkeypatch.setattr(fp, "_FLOWN", fp._Flown())
+    points = np.array([[0.0, 0.0, 5.0], [30.0, 0.0, 5.0], [30.0, 30.0, 6.0], [0.0, 40.0, 5.0],
+                       [-20.0, 10.0, 5.0], [-30.0, -20.0, 5.0]])
+    _compiled(points)
+    at = _taken_up(monkeypatch)
+    holds = np.array([0, 0, 1, 0, 0, 0])  # a stop at point 2: the state from 3 on changes
+    moved = points.copy()
+    moved[4, :2] += 0.5
+    flown = _compiled(moved, holds_s=holds)
+    assert at == [2]
+    assert np.array_equal(flown.positions, _fresh(moved, holds_s=holds).positions)
