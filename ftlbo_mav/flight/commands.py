@@ -209,8 +209,9 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
               type=click.Choice([p.value for p in FaultPolicy]), default="rally",
               show_default=True,
               help="When one vehicle leaves the plan (link lost, a mode or failsafe it was "
-                   "not asked for, no progress): the others stop, then RTL to their rally "
-                   "points and land (rally), or land where they are (land), or carry on "
+                   "not asked for, no progress): the others stop, then fly home together on "
+                   "routes planned then and land there, or RTL to their rally points where "
+                   "no route exists (rally), or land where they are (land), or carry on "
                    "(continue). The one that left is never commanded against its choice.")
 @click.option("--lost-wait", type=FiniteFloat(0, 50), default=15.0, show_default=True,
               help="Seconds a vehicle whose link is lost is waited for (it may fly on and "

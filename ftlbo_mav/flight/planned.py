@@ -52,6 +52,11 @@ class PlannedFlight:
     vehicle: dict[str, float] | None = None  # plan.json's [vehicle] parameters, if any
     navigation: NavigationBudget = NO_BUDGET  # plan.json's navigation budget
     battery: MissionBattery | None = None  # plan.json's [battery] and each mission's charge
+    # plan.json's min_separation, altitude band (above home) and area (ENU east/north:
+    # lower, upper), for the routes home (flight/homeward.py)
+    min_separation_m: float = 2.0
+    band: tuple[float, float] | None = None
+    area: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def count(self) -> int:
@@ -96,6 +101,12 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
         vehicle = {str(k): float(v) for k, v in (doc.get("vehicle") or {}).items()}
         navigation = budget_from_document(doc.get("navigation"))
         battery = _mission_battery(doc)
+        min_separation = float(doc.get("min_separation", 2.0))
+        area = doc["area"]
+        band = ((float(area["min_altitude"]), float(area["max_altitude"]))
+                if "min_altitude" in area else None)
+        corners = frame.to_enu(lat_deg=[lat_a, lat_b], lon_deg=[lon_a, lon_b])[:, :2]
+        box = (corners.min(axis=0), corners.max(axis=0))
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise PlanFolderError(f"{doc_path}: not a plan.json written by ftlbo-mav ({exc})") from None
     missions = []
@@ -112,7 +123,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
                          clearance, fences,
                          None if None in predicted else np.array(predicted, float),
                          None if None in separated else np.array(separated, float),
-                         vehicle or None, navigation, battery)
+                         vehicle or None, navigation, battery, min_separation, band, box)
 
 
 def _mission_battery(doc: dict) -> MissionBattery | None:

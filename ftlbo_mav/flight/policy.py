@@ -5,10 +5,14 @@
 - ``rally`` (default): the others stop where they are, within one watch cycle of the
   departure: on the legs with MAV_CMD_DO_PAUSE_CONTINUE, which stops the copter *on its
   planned track* (AC_WPNav shapes its track clock to zero), elsewhere with BRAKE (which
-  stops along the direction of flight, off the track in a turn). Once stopped (or after
-  ``stop_s``) each goes to its rally point and lands there: ArduCopter's RTL, which
-  climbs where it is and flies a straight line to the nearer of home and the vehicle's
-  rally points (ArduCopter/mode_rtl.cpp, AP_Rally::calc_best_rally_or_home_location)
+  stops along the direction of flight, off the track in a turn). Once all have stopped
+  (or after ``stop_s``) they go home together (``homeward``, :mod:`.homeward`): routes
+  planned at that moment, each on its own layer, clear of the obstacles on the predicted
+  flown path, of one another on one clock and of the vehicle that left, flown as
+  uploaded missions that end in NAV_LAND at home. A vehicle that has no such route (or
+  whose route could not be uploaded) goes to its rally point instead: ArduCopter's RTL,
+  which climbs where it is and flies a straight line to the nearer of home and the
+  vehicle's rally points (ArduCopter/mode_rtl.cpp, AP_Rally::calc_best_rally_or_home_location)
   -- but only where that line keeps the plan's clearance from every obstacle and 2 m
   from the other vehicles (``route_check``); where it does not, the vehicle lands where
   it stopped, and its line says why;
@@ -34,6 +38,7 @@ from .departures import LINK_BACK, LINK_LOST, DepartureWatch, Event
 from .vehicle import FlightError, FlightVehicle
 
 STOPPED_M_S = 0.3
+HOME_BUDGET_FACTOR = 1.5  # the flight home is watched this many times its predicted length
 
 
 class FaultPolicy(enum.Enum):
@@ -50,7 +55,7 @@ class FaultPolicy(enum.Enum):
 class _Answer:
     """What the flight does with one vehicle: ``stage`` stop -> then -> sent."""
 
-    stage: str = "stop"
+    stage: str = "stop"  # stop -> home (its route home being started) -> sent; or -> then
     mode: str | None = None  # the mode it is sent to once stopped
     since: float = 0.0
     sent_t: float = 0.0
@@ -66,8 +71,13 @@ class Response:
                  lost_wait_s: float = 15.0, confirm_tries: int = 5,
                  t0: float | None = None,
                  route_check: Callable[[int], str | None] = lambda _j: None,
-                 landing: Callable[[int], bool] = lambda _j: False) -> None:
+                 landing: Callable[[int], bool] = lambda _j: False,
+                 homeward=None) -> None:
         self.policy = policy
+        # the collective return (flight/homeward.GoingHome), for the rally policy; None:
+        # each vehicle RTL or LAND as its line allows
+        self.homeward = homeward
+        self.home_started = False
         self.landing = landing  # vehicle -> already on its mission's final landing
         self.route_check = route_check  # vehicle -> why RTL from here is not safe, or None
         self.stop_s, self.budget_s, self.confirm_tries = stop_s, budget_s, confirm_tries
@@ -151,10 +161,12 @@ class Response:
     # -- every cycle
     def step(self, vehicles: Sequence[FlightVehicle], watch: DepartureWatch,
              now: float) -> None:
+        if self.policy is FaultPolicy.RALLY and self.homeward is not None:
+            self._home(vehicles, watch, now)
         for j, a in self.answers.items():
             v = vehicles[j]
             then = self.policy.then_mode
-            if a.stage == "stop" and then is not None:
+            if a.stage == "stop" and then is not None and not self._going_home(j):
                 slow = v.status.ground_speed_m_s < STOPPED_M_S
                 if slow or now - a.since >= self.stop_s:
                     a.stage, a.tries = "then", 0
@@ -180,6 +192,49 @@ class Response:
                         v.send_mode(then)
                     except FlightError:
                         pass  # its link: the watch reports that
+
+    def _going_home(self, j: int) -> bool:
+        """Vehicle j waits for (or is in) the collective return, not for its own RTL."""
+        return (self.policy is FaultPolicy.RALLY and self.homeward is not None
+                and (not self.home_started or self.answers[j].stage == "home"))
+
+    def _home(self, vehicles: Sequence[FlightVehicle], watch: DepartureWatch,
+              now: float) -> None:
+        """The collective return: started once every vehicle stopped has come to rest (or
+        ``stop_s`` after it was stopped); each one's outcome taken as it comes."""
+        if not self.home_started:
+            stopping = {j: a for j, a in self.answers.items() if a.stage == "stop"}
+            if not stopping or not all(
+                    vehicles[j].status.ground_speed_m_s < STOPPED_M_S
+                    or now - a.since >= self.stop_s for j, a in stopping.items()):
+                return
+            self.home_started = True
+            left = [j for j in self.left if j not in self.answers]
+            try:
+                refused = self.homeward.start(list(stopping), left, now)
+            except Exception as exc:  # noqa: BLE001 - never leave the others in the air
+                refused = {j: f"the routes home could not be planned ({exc})" for j in stopping}
+            plan = getattr(self.homeward, "plan", None)
+            if plan is not None and plan.routes:  # watched until they are down, and some
+                longest = max(r.seconds for r in plan.routes.values())
+                self.budget_s = max(self.budget_s,
+                                    now - self.first_t + HOME_BUDGET_FACTOR * longest + 10.0)
+            for j, a in stopping.items():
+                if j in refused:
+                    a.done.append(f"no route home: {refused[j]}")
+                    a.since = now - self.stop_s  # RTL or LAND now, as its line allows
+                else:
+                    a.stage = "home"
+        for j, started, line in self.homeward.results():
+            a = self.answers.get(j)
+            if a is None or a.stage != "home":
+                continue
+            a.done.append(line + f" at {self._at(now)}" if started else line)
+            if started:
+                a.stage, a.mode = "sent", "AUTO"
+                watch.expect(j, "AUTO")
+            else:
+                a.stage, a.since = "stop", now - self.stop_s  # RTL or LAND, as it allows
 
     def ended(self, vehicles: Sequence[FlightVehicle], now: float) -> bool:
         """Every vehicle the flight answers for has landed, or the budget is spent. Not

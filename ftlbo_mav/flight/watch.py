@@ -18,6 +18,7 @@ from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
 from .battery import BatteryWatch
 from .departures import DEFAULT_WATCH, DepartureWatch, Event, Seen, WatchOptions
+from .homeward import GoingHome
 from .keeper import FormationKeeper
 from .navigation import ekf_report, gps_report
 from .outcome import FlightLeftPlan, aborted
@@ -142,7 +143,8 @@ class FlightWatch:
                                          battery=battery_watch(planned))
         self.response = Response(policy, budget_s=budget_s,
                                  lost_wait_s=lost_wait_s,
-                                 route_check=self.rtl_problem, landing=self.landing)
+                                 route_check=self.rtl_problem, landing=self.landing,
+                                 homeward=GoingHome(planned, vehicles, say=say))
         self.keeper: FormationKeeper | None = None
         self.started = False
 

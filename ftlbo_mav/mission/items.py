@@ -161,6 +161,29 @@ def build_mission(
     return [MissionItem(seq=i, **fields) for i, fields in enumerate(items)]
 
 
+def build_return(*, home: tuple[float, float], path: Sequence[tuple[float, float, float]],
+                 holds_s: Sequence[float], land: tuple[float, float],
+                 speed_m_s: float | None = None) -> list[MissionItem]:
+    """The mission home of a vehicle in the air (:mod:`ftlbo_mav.flight.homeward`): 0 home,
+    1 a NAV_WAYPOINT where it hovers (``path[0]``, where AUTO is started, as ``fly``
+    starts a plan's legs), DO_CHANGE_SPEED to ``speed_m_s`` (when given), one
+    NAV_WAYPOINT per further path point (param1: ``holds_s``, whole seconds), then NAV_LAND
+    at ``land`` ``(lat_deg, lon_deg)``."""
+    if len(path) < 2 or len(holds_s) != len(path):
+        raise ValueError("a way home needs a start, a point after it and a hold for each")
+    items: list[dict] = [
+        dict(command=CMD_NAV_WAYPOINT, frame=FRAME_GLOBAL, lat_deg=home[0], lon_deg=home[1],
+             current=1)]
+    for k, ((lat, lon, alt), hold) in enumerate(zip(path, holds_s)):
+        items.append(dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt,
+                          param1=float(hold)))
+        if k == 0 and speed_m_s is not None:
+            items.append(dict(command=CMD_DO_CHANGE_SPEED, param1=1.0, param2=speed_m_s,
+                              param3=-1.0))
+    items.append(dict(command=CMD_NAV_LAND, lat_deg=land[0], lon_deg=land[1], alt_m=0.0))
+    return [MissionItem(seq=i, **fields) for i, fields in enumerate(items)]
+
+
 @dataclass(frozen=True)
 class UavMission:
     """One UAV's mission: its name (``uav1``...), offset and items."""

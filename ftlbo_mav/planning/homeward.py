@@ -54,9 +54,10 @@ MAX_WAIT_S = 60
 """The longest a vehicle waits on its layer for the others to pass (whole seconds)."""
 WAIT_STEP_S = 2
 """Waits tried: 0, this, twice this, ... up to :data:`MAX_WAIT_S`."""
-INSIDE_MARGIN_M = 0.01
+INSIDE_MARGIN_M = 0.5
 """A vehicle that stopped inside an obstacle's kept clearance (or the keep-out of the
-vehicle that left) may come no closer than where it is, less this."""
+vehicle that left) may come this much closer than where it is, no more: room for the
+first metres of its way out (a route cannot begin on the edge it must keep)."""
 
 
 @dataclass(frozen=True)
@@ -204,13 +205,15 @@ def _route(here: np.ndarray, land: np.ndarray, layer: float, world: World,
     kept = world.clearance_m
     centres = np.vstack([np.asarray(world.centres, float).reshape(-1, 2)]
                         + [np.asarray(k.centre, float)[None, :2] for k in keep_out])
-    own = np.concatenate([np.asarray(world.radii, float),
-                          [max(k.radius_m - kept, 0.0) for k in keep_out]])
+    # the distance every point of the flown path keeps from each centre; a keep-out is
+    # kept as it is (its "own" radius is what is left after the clearance, maybe < 0)
+    grown = np.concatenate([np.asarray(world.radii, float) + kept,
+                            [k.radius_m for k in keep_out]])
     # where it is now it may stay: an obstacle whose kept clearance it is inside (or the
-    # keep-out of the vehicle that left) may come no closer than that
+    # keep-out of the vehicle that left) may come INSIDE_MARGIN_M closer than that
     reach = np.hypot(*(centres - here[:2]).T) - INSIDE_MARGIN_M
-    grown = np.minimum(own + kept, np.maximum(reach, 0.0))
-    own = np.minimum(own, np.maximum(grown - kept, 0.0))
+    grown = np.where(grown > reach, np.maximum(reach, 0.0), grown)
+    own = grown - kept
     if np.any(np.hypot(*(centres - land[:2]).T) <= grown):
         return None, "its landing point is within the clearance of an obstacle"
     start, goal = np.array([*here[:2], layer]), np.array([*land[:2], layer])
@@ -248,7 +251,7 @@ def _waypoints(problem: PlanningProblem, route) -> np.ndarray:
     lengths = chains.lengths(MAX_WAYPOINTS)
     within = np.flatnonzero(lengths <= (1 + ROUTE_SLACK) * route.length)
     m = int(within[0]) + 1 if len(within) else int(np.argmin(lengths)) + 1
-    polygon, _clear = chains.polygon(m)
+    polygon, _clear = chains.polygon(m)  # not clear: the prediction below refuses it
     return polygon
 
 

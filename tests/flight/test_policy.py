@@ -123,3 +123,64 @@ def test_before_the_legs_the_others_brake_and_a_dead_link_is_said():
     r.react([Event(2, MODE, "switched to LAND", 1.0)], vs, watch, 1.0)
     assert vs[1].sent == ["BRAKE"]
     assert "could not be stopped" in r.lines(vs)[0]
+
+
+class Homeward:
+    """A stand-in for flight/homeward.GoingHome: uav2 has no way home, uav1's start is
+    reported when the test says so."""
+
+    def __init__(self) -> None:
+        self.started_with = None
+        self.pending = []
+        self.plan = None
+
+    def start(self, answered, left, now):
+        self.started_with = (sorted(answered), sorted(left), now)
+
+        class Plan:
+            routes = {0: type("R", (), {"seconds": 40.0})()}
+
+        self.plan = Plan()
+        return {1: "no way home around the obstacles"}
+
+    def results(self):
+        out, self.pending = self.pending, []
+        return out
+
+
+def test_rally_goes_home_together_once_all_have_stopped_and_falls_back_per_vehicle():
+    vs, watch = fleet(), DepartureWatch(3)
+    home = Homeward()
+    r = response(homeward=home, budget_s=50.0)
+    vs[2].status.mode = "LOITER"  # its pilot took it: kept out, never commanded
+    r.react([Event(2, MODE, "switched to LOITER", 10.0)], vs, watch, 10.0)
+    vs[0].status.ground_speed_m_s = 0.1
+    r.step(vs, watch, 10.5)  # uav2 still moving: no one goes yet, nor RTL
+    assert home.started_with is None and [v.sent for v in vs[:2]] == [["pause"], ["pause"]]
+    vs[1].status.ground_speed_m_s = 0.1
+    r.step(vs, watch, 11.0)
+    assert home.started_with == ([0, 1], [2], 11.0)
+    # uav2 has no route: RTL as its line allows, at once; uav1 waits for its start home
+    assert [v.sent for v in vs] == [["pause"], ["pause", "RTL"], []]
+    assert r.budget_s >= 11.0 - 10.0 + 1.5 * 40.0  # watched until they are down
+    home.pending = [(0, True, "flying home on a planned route (...)")]
+    r.step(vs, watch, 12.0)
+    lines = r.lines(vs)
+    assert "flying home on a planned route (...) at t+12.0 s" in lines[0]
+    assert "no route home: no way home around the obstacles; RTL at" not in lines[1]
+    assert "no route home: no way home around the obstacles" in lines[1]
+    assert vs[0].sent == ["pause"]  # AUTO on its route: no RTL asked for
+
+
+def test_a_route_home_that_could_not_be_started_falls_back_to_rtl():
+    vs, watch = fleet(), DepartureWatch(3)
+    home = Homeward()
+    r = response(homeward=home)
+    r.react([Event(2, LINK_LOST, "closed", 5.0)], vs, watch, 5.0)
+    for v in vs:
+        v.status.ground_speed_m_s = 0.0
+    r.step(vs, watch, 6.0)
+    home.pending = [(0, False, "its route home was not uploaded (refused)")]
+    r.step(vs, watch, 6.5)
+    assert vs[0].sent == ["pause", "RTL"]
+    assert "its route home was not uploaded (refused)" in r.lines(vs)[0]

@@ -145,8 +145,9 @@ def test_a_vehicle_lost_mid_leg_stops_the_others_and_the_flight_ends(plan_dir):
 
         try:
             result, took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
-            # uav1 (the others too) answered: RTL to its rally point, landed there
-            answered = watcher.wait(lambda p: p.mode in ("RTL", "LAND") or not p.armed, 10.0)
+            # uav1 (the others too) answered: home on its route (AUTO), RTL or LAND
+            answered = watcher.wait(lambda p: p.mode in ("AUTO", "RTL", "LAND")
+                                    or not p.armed, 10.0)
         finally:
             watcher.close()
     out = result.output
@@ -155,7 +156,9 @@ def test_a_vehicle_lost_mid_leg_stops_the_others_and_the_flight_ends(plan_dir):
     assert "uav2 (sysid 2): link lost" in out
     for name in ("uav1 (sysid 1)", "uav3 (sysid 3)"):
         assert f"{name}: stopped on its track (pause)" in out
-    assert "RTL at" in out or "no RTL: the straight line" in out, out
+    # home on planned routes (tests/integration/test_homeward.py), or RTL / LAND
+    assert ("flying home on a planned route" in out or "RTL at" in out
+            or "no RTL: the straight line" in out), out
     assert took < 60.0
     assert answered
     summary = _summary(plan_dir)

@@ -1,0 +1,168 @@
+"""The collective return: when a flight ends early, the vehicles ``fly`` still answers for
+fly home on routes planned at that moment (:mod:`ftlbo_mav.planning.homeward`).
+
+Flown as missions, not as GUIDED targets: each vehicle's route is uploaded and read back
+(:func:`~ftlbo_mav.link.swarm.upload_and_verify`) while it holds in BRAKE, then started in
+AUTO from where it hovers, as ``fly`` starts a plan's legs. ArduCopter flies a mission's
+waypoints as the copter model predicts them (AC_WPNav's S-curves, the DO_CHANGE_SPEED
+speed, NAV_WAYPOINT holds, NAV_LAND's descent: :mod:`ftlbo_mav.ardupilot.flight_path`,
+held to SITL), so the clearance and separation the plan keeps on the predicted flown
+paths are the ones flown; a GUIDED target has no such prediction (ModeGuided's position
+controller shapes its own path to each target, and every target would be a command on
+the link). The price: an upload of a few items per vehicle, a second or so.
+
+:class:`GoingHome` plans at once (on the watch's thread, at most about a second) and
+uploads and starts in the background (one thread per vehicle), so the watch goes on
+looking at the vehicles meanwhile; :meth:`GoingHome.results` hands each vehicle's outcome
+to the policy (:mod:`.policy`) as it comes.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import threading
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..ardupilot.navigation import vehicle_navigation
+from ..link.swarm import upload_and_verify
+from ..link.transfer import Timing
+from ..mission.items import build_return
+from ..planning.homeward import KeepOut, ReturnPlan, World, plan_return
+from ..planning.predicted import FlightModel
+from .keeper import planned_speed
+from .planned import PlannedFlight
+from .vehicle import FlightError, FlightVehicle
+
+KEEP_OUT_SPEED_M_S = 5.0
+"""How fast a vehicle that left is taken to move, at the least (its last ground speed if
+faster), for how far it can have gone since it was last heard of."""
+
+
+def return_world(planned: PlannedFlight) -> World:
+    """The plan's world for the routes home: its obstacles, the clearance with the
+    navigation budget, its area and band, ``min_separation`` and the copters' model (the
+    plan's ``[vehicle]`` and the missions' speed)."""
+    nav = vehicle_navigation(planned.vehicle or {})
+    if planned.area is not None:
+        lower, upper = planned.area
+    else:  # an old plan.json: the area the paths span
+        xy = planned.paths[..., :2].reshape(-1, 2)
+        lower, upper = xy.min(axis=0), xy.max(axis=0)
+    alts = planned.paths[..., 2]
+    band = planned.band if planned.band is not None else (float(alts.min()), float(alts.max()))
+    return World(centres=planned.centres, radii=planned.radii,
+                 clearance_m=planned.clearance_m + planned.navigation.horizontal_m,
+                 area_lower=np.asarray(lower, float), area_upper=np.asarray(upper, float),
+                 band=band, min_separation_m=planned.min_separation_m,
+                 model=FlightModel(nav=nav, speed_m_s=planned_speed(planned.missions)),
+                 pair_error_m=planned.navigation.pair_m)
+
+
+def keep_out(planned: PlannedFlight, v: FlightVehicle, now: float) -> KeepOut | None:
+    """Where vehicle ``v`` (one that left) may be: its last known position, grown by
+    ``min_separation`` and by how far it can have moved since (its last ground speed, at
+    least :data:`KEEP_OUT_SPEED_M_S`, times the age of that position); None when it was
+    never placed."""
+    s = v.status
+    if s.lat_deg is None:
+        return None
+    here = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
+    age = max(now - s.position_t, 0.0)
+    radius = (planned.min_separation_m + planned.navigation.pair_m
+              + max(s.ground_speed_m_s, KEEP_OUT_SPEED_M_S) * age)
+    return KeepOut(np.asarray(here, float)[:2], radius)
+
+
+class GoingHome:
+    """The collective return of one flight: :meth:`start` once, :meth:`results` every
+    cycle after."""
+
+    def __init__(self, planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
+                 timing: Timing | None = None,
+                 say: Callable[[str], None] = lambda _t: None) -> None:
+        self.planned, self.vehicles, self.say = planned, list(vehicles), say
+        self.timing = timing or Timing()
+        self.plan: ReturnPlan | None = None
+        self._done: queue.SimpleQueue = queue.SimpleQueue()
+        self._threads: list[threading.Thread] = []
+
+    def start(self, answered: Sequence[int], left: Sequence[int], now: float) -> dict[int, str]:
+        """Plan the way home of the ``answered`` vehicles (stopped where they are), the
+        ``left`` ones kept out, and start flying it; returns the vehicles that have no
+        way home and why (they are left to the policy's RTL-or-LAND)."""
+        planned = self.planned
+        positions: dict[int, np.ndarray] = {}
+        refused: dict[int, str] = {}
+        for j in answered:
+            s = self.vehicles[j].status
+            if s.lat_deg is None:
+                refused[j] = "its position is unknown"
+                continue
+            positions[j] = np.asarray(planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
+                                                           alt_m=s.alt_m), float)
+        outs = tuple(k for j in left
+                     if (k := keep_out(planned, self.vehicles[j], now)) is not None)
+        landings = {j: np.asarray(planned.paths[j][0][:2], float) for j in positions}
+        plan = self.plan = plan_return(positions, landings, return_world(planned),
+                                       keep_out=outs)
+        self.say(f"routes home planned in {plan.seconds:.2f} s for "
+                 f"{len(plan.routes)} vehicle(s)" + (
+                     f"; predicted separation {plan.separation_m:.1f} m"
+                     if math.isfinite(plan.separation_m) else ""))
+        refused.update(plan.refused)
+        for j in plan.routes:
+            t = threading.Thread(target=self._fly_home, args=(j,), daemon=True,
+                                 name=f"{self.vehicles[j].name} home")
+            t.start()
+            self._threads.append(t)
+        return refused
+
+    def mission(self, j: int) -> list:
+        """Vehicle j's mission home (:func:`~ftlbo_mav.mission.items.build_return`)."""
+        route = self.plan.routes[j]
+        frame = self.planned.frame
+        lat, lon, alt = frame.to_lla(route.points)
+        home = self.planned.missions[j][0]
+        land_lat, land_lon, _ = frame.to_lla(route.land)
+        return build_return(home=(home.lat_deg, home.lon_deg),
+                            path=list(zip(lat.tolist(), lon.tolist(), alt.tolist())),
+                            holds_s=[float(h) for h in route.holds_s],
+                            land=(float(land_lat), float(land_lon)),
+                            speed_m_s=planned_speed(self.planned.missions))
+
+    def _fly_home(self, j: int) -> None:
+        v, route = self.vehicles[j], self.plan.routes[j]
+        t0 = time.monotonic()
+        try:
+            items = self.mission(j)
+            v.set_mode("BRAKE")  # holds where it stopped while its mission is replaced
+            with v.link.channel(v.sysid) as channel:
+                ok, why = upload_and_verify(channel, items, timing=self.timing)
+            if not ok:
+                self._done.put((j, False, f"its route home was not uploaded ({why})"))
+                return
+            v.set_current(1)
+            v.set_mode("AUTO")
+        except FlightError as exc:
+            self._done.put((j, False, f"its route home could not be started ({exc})"))
+            return
+        wait = f", waiting {route.wait_s:.0f} s on it" if route.wait_s else ""
+        self._done.put((j, True, (
+            f"flying home on a planned route ({len(route.points) - 2} waypoint(s) at "
+            f"{route.layer_m:.1f} m{wait}; predicted clearance {route.clearance_m:.2f} m, "
+            f"{route.seconds:.0f} s to the ground; uploaded, verified and started in "
+            f"{time.monotonic() - t0:.1f} s)")))
+
+    def results(self) -> list[tuple[int, bool, str]]:
+        """The vehicles whose start home has ended since the last call: (vehicle, started,
+        what happened)."""
+        out = []
+        while True:
+            try:
+                out.append(self._done.get_nowait())
+            except queue.Empty:
+                return out

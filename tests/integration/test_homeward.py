@@ -1,0 +1,223 @@
+"""The collective return (flight/homeward.py, planning/homeward.py): when a flight ends
+early the vehicles ``fly`` still answers for fly home on routes planned at that moment and
+land at their homes, keeping the clearance and ``min_separation``, the vehicle that left
+kept out. Judged on a second link to every vehicle (SITL's SERIAL1): SIM_STATE, the
+simulator's true position, where the back end sends it.
+
+The emulator, or ArduPilot SITL when ARDUPILOT_SITL is set (docs/flight.md has the SITL
+runs).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from ftlbo_mav.ardupilot.modes import mode_name
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.flight.record import fitted_times
+
+from .fleet import BACKEND, vehicles
+from .test_departures import (
+    HOMES,
+    OPTIONS,
+    SPEEDUP,
+    SecondPort,
+    _fly_with,
+    _in_auto_for,
+    _upload,
+    example,  # noqa: F401 - the fixtures plan_dir builds on
+    plan_dir,  # noqa: F401
+)
+
+pytestmark = pytest.mark.sitl
+
+LANDED_WITHIN_M = 1.0  # issue 29: every remaining vehicle lands within 1 m of its home
+
+
+class Track(SecondPort):
+    """A vehicle's second link that records, for the whole test, where the vehicle says it
+    is (GLOBAL_POSITION_INT at 10 Hz, its arrival times refitted on the vehicle's own
+    ``time_boot_ms``: an emulator run faster than real time delivers them in bursts) and
+    its modes."""
+
+    def __init__(self, url: str, sysid: int) -> None:
+        super().__init__(url, sysid)
+        self.rows: list[tuple[float, float, float, float, float]] = []  # t, boot, lat, lon, alt
+        self.modes: list[tuple[float, str]] = []  # (t, mode) at every change
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        next_ask = 0.0
+        while not self.stop.is_set():
+            now = time.monotonic()
+            if now >= next_ask:
+                self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_SET_MESSAGE_INTERVAL,
+                                                0, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 1e5,
+                                                0, 0, 0, 0, 0)
+                next_ask = now + 5.0
+            try:
+                msg = self.conn.recv_match(blocking=True, timeout=0.05)
+            except OSError:
+                return  # its vehicle is gone
+            if msg is None or msg.get_srcSystem() != self.sysid:
+                continue
+            kind = msg.get_type()
+            if kind == "GLOBAL_POSITION_INT":
+                self.rows.append((now, msg.time_boot_ms / 1000.0, msg.lat * 1e-7,
+                                  msg.lon * 1e-7, msg.relative_alt / 1000.0))
+            elif kind == "HEARTBEAT" and msg.type != R.MAV_TYPE_GCS:
+                mode = mode_name(msg.custom_mode)
+                if mode != self.mode:
+                    self.modes.append((now, mode))
+                self.mode = mode
+                self.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
+
+    def wait(self, predicate, timeout_s: float) -> bool:
+        """As :meth:`SecondPort.wait`, on what the recording thread reads."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if predicate(self):
+                return True
+            time.sleep(0.02)
+        return False
+
+    def enu(self, frame, since: float = -np.inf) -> np.ndarray:
+        """``(T, 4)``: time (refitted), east, north, up above home, from ``since`` on."""
+        if len(self.rows) < 3:
+            return np.zeros((0, 4))
+        t, boot, lat, lon, alt = np.array(self.rows, float).T
+        _, first = np.unique(boot, return_index=True)  # a report seen twice: once
+        t, boot, lat, lon, alt = (v[first] for v in (t, boot, lat, lon, alt))
+        t = fitted_times(t, boot)
+        keep = t >= since
+        return np.column_stack([t[keep], frame.to_enu(lat_deg=lat[keep], lon_deg=lon[keep],
+                                                      alt_m=alt[keep])])
+
+    def home_started(self, frame, after: float) -> float:
+        """When it set off home after ``after``: put back in AUTO (its route home), or,
+        where its BRAKE was too short for a HEARTBEAT to show it (an emulator run fast),
+        when it had stopped (on its track) before."""
+        for (_t0, before), (t, mode) in zip(self.modes, self.modes[1:]):
+            if t > after and mode == "AUTO" and before != "AUTO":
+                return t
+        track = self.enu(frame, after)
+        speed = np.hypot(*np.diff(track[:, 1:3], axis=0).T) / np.maximum(
+            np.diff(track[:, 0]), 1e-6)
+        stopped = np.flatnonzero(speed < 0.3)
+        assert len(stopped), f"uav{self.sysid} never stopped after the fault"
+        return float(track[stopped[0], 0])
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(timeout=2.0)
+        super().close()
+
+
+def _at(track: np.ndarray, t: np.ndarray) -> np.ndarray:
+    return np.column_stack([np.interp(t, track[:, 0], track[:, k]) for k in (1, 2, 3)])
+
+
+def _judge(planned, tracks: dict[int, np.ndarray], gone: np.ndarray) -> dict:
+    """Over the flights home (``tracks``, each from where it started home): each vehicle's
+    landing distance from its home, the smallest clearance from the obstacles, the
+    smallest separation between two of them and the smallest distance to ``gone``
+    ``(3,)`` (the vehicle that left: where it was last seen)."""
+    out = {"landed_m": {}, "clearance_m": np.inf, "separation_m": np.inf, "from_gone_m": np.inf}
+    for j, tr in tracks.items():
+        home = planned.paths[j][0][:2]
+        out["landed_m"][j] = round(float(np.hypot(*(tr[-1, 1:3] - home))), 3)
+        d = np.hypot(*(tr[:, None, 1:3] - planned.centres[None]).transpose(2, 0, 1))
+        airborne = tr[:, 3] > 0.3
+        out["clearance_m"] = min(out["clearance_m"],
+                                 float((d - planned.radii)[airborne].min()))
+        out["from_gone_m"] = min(out["from_gone_m"], float(
+            np.linalg.norm(tr[airborne, 1:] - gone, axis=1).min()))
+    pairs = list(tracks.items())
+    for a, (_i, ta) in enumerate(pairs):
+        for _j, tb in pairs[a + 1:]:
+            t = np.linspace(min(ta[0, 0], tb[0, 0]), max(ta[-1, 0], tb[-1, 0]), 4000)
+            pa, pb = _at(ta, t), _at(tb, t)
+            up = (pa[:, 2] > 0.3) | (pb[:, 2] > 0.3)
+            out["separation_m"] = min(out["separation_m"], float(
+                np.linalg.norm(pa - pb, axis=1)[up].min()))
+    return {k: (round(v, 3) if isinstance(v, float) else v) for k, v in out.items()}
+
+
+def _check(result, planned, judged, returning) -> None:
+    out = result.output
+    assert result.exit_code == 1, out
+    assert "Traceback" not in out
+    for j in returning:
+        line = next(x for x in out.splitlines() if x.strip().startswith(f"uav{j + 1} ("))
+        assert "flying home on a planned route" in line, line
+        assert line.endswith("landed (disarmed)"), line
+        assert judged["landed_m"][j] <= LANDED_WITHIN_M, judged
+    assert judged["clearance_m"] >= planned.clearance_m, judged
+    assert judged["separation_m"] >= planned.min_separation_m, judged
+    assert judged["from_gone_m"] >= planned.min_separation_m, judged
+
+
+def test_a_vehicle_lost_mid_leg_the_others_fly_home_and_land_there(plan_dir):  # noqa: F811
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
+        times = {}
+
+        def fault():
+            _in_auto_for(tracks[0], 5.0)
+            times["fault"] = time.monotonic()
+            fleet.kill(1)  # uav2's autopilot dies (SITL: its process, by pid)
+            return times["fault"]
+
+        try:
+            result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
+            for j in (0, 2):
+                assert tracks[j].wait(lambda p: not p.armed, 5.0)
+            time.sleep(0.5)
+        finally:
+            for t in tracks:
+                t.close()
+    frame = planned.frame
+    gone = tracks[1].enu(frame)[-1, 1:]
+    judged = _judge(planned, {j: tracks[j].enu(frame, tracks[j].home_started(frame, times["fault"]))
+                              for j in (0, 2)}, gone)
+    print(f"[{BACKEND}] lost mid-leg, the others home: {judged}")
+    _check(result, planned, judged, (0, 2))
+
+
+def test_a_mode_taken_over_the_others_fly_home_around_it(plan_dir):  # noqa: F811
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
+        times = {}
+
+        def fault():
+            _in_auto_for(tracks[2], 5.0)
+            times["fault"] = time.monotonic()
+            tracks[2].set_mode("BRAKE")  # uav3's pilot takes it over and holds it there
+            return times["fault"]
+
+        try:
+            result, _took = _fly_with(plan_dir, fleet.urls, fault)
+            for j in (0, 1):
+                assert tracks[j].wait(lambda p: not p.armed, 5.0)
+            held = tracks[2].enu(planned.frame)[-1, 1:]
+        finally:
+            tracks[2].set_mode("LAND")
+            for t in tracks:
+                t.close()
+    frame = planned.frame
+    judged = _judge(planned, {j: tracks[j].enu(frame, tracks[j].home_started(frame, times["fault"]))
+                              for j in (0, 1)}, held)
+    print(f"[{BACKEND}] mode taken over, the others home: {judged}")
+    _check(result, planned, judged, (0, 1))
+    assert "uav3 (sysid 3): mode: switched to BRAKE" in result.output
