@@ -195,6 +195,7 @@ class _Flown:
     ones the whole flight gives (``tests/ardupilot/test_compiled.py``)."""
 
     FLIGHTS = 8  # flights kept, the newest first
+    SAMPLES = 2_000_000  # and at most this many positions in all (64 MB)
     LEGS = 20_000  # legs kept per model, then forgotten all at once
 
     def __init__(self) -> None:
@@ -236,6 +237,9 @@ class _Flown:
         kept = FlownPath(path.times.copy(), path.positions.copy(), path.reached.copy())
         self._flights.insert(0, (model, points.copy(), holds.copy(), kept, snap_i, snap_f))
         del self._flights[self.FLIGHTS:]
+        while (len(self._flights) > 1
+               and sum(len(f[3].times) for f in self._flights) > self.SAMPLES):
+            self._flights.pop()
 
 
 _FLOWN = _Flown()
