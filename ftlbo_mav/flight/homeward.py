@@ -71,7 +71,7 @@ def keep_out(planned: PlannedFlight, v: FlightVehicle, now: float) -> KeepOut | 
     if s.lat_deg is None:
         return None
     here = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
-    age = max(now - s.position_t, 0.0)
+    age = max(now - s.position_t, 0.0) * s.clock_rate  # its seconds (a simulator run fast)
     radius = (planned.min_separation_m + planned.navigation.pair_m
               + max(s.ground_speed_m_s, KEEP_OUT_SPEED_M_S) * age)
     return KeepOut(np.asarray(here, float)[:2], radius)
