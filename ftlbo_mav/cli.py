@@ -171,17 +171,25 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
                    "UAV's path inside the area", err=True)
     # the output folder is checked (a temporary one made beside it) before any planning;
     # everything is moved into it at the end, or nothing (a failure, Ctrl-C)
-    with OutputFolder(out_dir, replaces=PLAN_OUTPUTS, last="plan.json",
+    with OutputFolder(out_dir, replaces=(*PLAN_OUTPUTS, SORTIES_JSON), last="plan.json",
                       inputs=scenario_inputs(scenario)) as out:
         result = _plan_with_progress(scn, seed=seed, iterations=iterations, students=students,
                                      waypoints=waypoints, algorithm=algorithm, quiet=quiet)
-        files = plan_files(result, allow_infeasible=allow_infeasible, formats=formats,
-                           fence=not no_fence)
-        if make_plots:
+        in_sorties = _in_sorties(result)
+        # in sorties: nothing here but the sorties' folders (an earlier plan's files go)
+        files = {} if in_sorties else plan_files(result, allow_infeasible=allow_infeasible,
+                                                 formats=formats, fence=not no_fence)
+        if make_plots and not in_sorties:
             from .plots import figure_files  # matplotlib only when asked: a faster start
 
             files = {**files, **figure_files(result)}
         paths = out.write_all(files)
+    if in_sorties:
+        return _plan_sorties(scn, result, out_dir, seed=seed, iterations=iterations,
+                             students=students, waypoints=waypoints, algorithm=algorithm,
+                             allow_infeasible=allow_infeasible, formats=formats,
+                             no_fence=no_fence)
+    _remove_sorties(out_dir, 1)  # an earlier plan's, in sorties
     click.echo(format_summary(result))
     for line in format_survey(result) + format_battery(result):
         click.echo(line)
@@ -197,6 +205,73 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
         if not allow_infeasible:
             click.echo("no mission files written: the best plan is infeasible "
                        "(see plan.json; --allow-infeasible writes them anyway)", err=True)
+        sys.exit(1)
+
+
+SORTIES_JSON = r"sorties\.json"
+
+
+def _remove_sorties(out_dir, first: int) -> None:
+    """Remove ``OUT/sortie<first>`` and after: plan folders of sorties an earlier plan
+    wrote (only folders that hold a plan.json)."""
+    import shutil
+    from pathlib import Path
+
+    k = first
+    while (Path(out_dir) / f"sortie{k}" / "plan.json").is_file():
+        shutil.rmtree(Path(out_dir) / f"sortie{k}")
+        k += 1
+
+
+def _in_sorties(result) -> bool:
+    """Whether the plan is a survey that one battery does not fly (:mod:`.planning.sorties`)."""
+    if result.charges is None or result.scenario.survey is None:
+        return False
+    from .planning.sorties import battery_short
+
+    return battery_short(result) and bool(result.scenario.survey.lanes)
+
+
+def _plan_sorties(scn, whole, out_dir, *, allow_infeasible, formats, no_fence,
+                  **planner) -> None:
+    """A survey that one battery does not fly, written as sorties: ``OUT/sortie1`` ...
+    (each a plan folder: upload and fly it as it is) and ``OUT/sorties.json``
+    (:mod:`.planning.sorties`)."""
+    import json
+
+    from .mission.export import write_plan
+    from .planning.sorties import plan_sorties, sortie_note, sorties_document
+
+    b = whole.scenario.battery
+    click.echo(f"the survey does not fit one battery ({b.describe()}; the whole survey in "
+               f"one flight needs up to {max(c.total_mah for c in whole.charges):.0f} mAh): "
+               "planning it in sorties, each from home to home", err=True)
+    sorties = plan_sorties(scn, plan_scenario, whole=whole,
+                           **{k: v for k, v in planner.items() if v is not None})
+    for line in sortie_note(sorties):
+        click.echo(line)
+    infeasible = [k for k, p in enumerate(sorties.plans) if not p.feasible]
+    if infeasible and not allow_infeasible:
+        for k in infeasible:
+            for line in sorties.plans[k].violations:
+                click.echo(f"  violation (sortie {k + 1}): {line}", err=True)
+        click.echo("no mission files written: a sortie is infeasible (--allow-infeasible "
+                   "writes them anyway)", err=True)
+        sys.exit(1)
+    from pathlib import Path
+
+    out = Path(out_dir)
+    folders = [f"sortie{k + 1}" for k in range(len(sorties.plans))]
+    for folder, p in zip(folders, sorties.plans):
+        paths = write_plan(p, out / folder, allow_infeasible=allow_infeasible, formats=formats,
+                           fence=not no_fence)
+        click.echo(f"  wrote {len(paths)} files in {out / folder}")
+    _remove_sorties(out, len(folders) + 1)  # of an earlier, longer split
+    with OutputFolder(out, replaces=(*PLAN_OUTPUTS, SORTIES_JSON), last="sorties.json") as top:
+        paths = top.write_all({"sorties.json": json.dumps(
+            sorties_document(sorties, folders), indent=1) + "\n"})
+    _say_written(paths)
+    if infeasible:
         sys.exit(1)
 
 

@@ -185,6 +185,7 @@ def plan(
     progress: Progress | None = None,
     notice: Callable[[str], None] | None = None,
     on_leg: LegDone | None = None,
+    relay: bool = True,
 ) -> Plan:
     """Plan the centroid path for ``scenario``; keyword arguments override its ``[planner]``.
 
@@ -193,7 +194,9 @@ def plan(
     generator, seeded with ``seed``, serves the legs in turn. ``progress`` is called per
     iteration of each leg's optimizer, ``on_leg`` after each leg. ``notice(line)`` is
     called before optimizing a leg for which no route exists (the formation cannot pass
-    between the obstacles inside the area); the plan is still attempted.
+    between the obstacles inside the area); the plan is still attempted. ``relay=False``:
+    a survey's lanes are flown as the scenario lays them, never laid again further in
+    (a sortie of lanes laid for the whole survey: :mod:`.sorties`).
     """
     settings = scenario.planner
     overrides = {
@@ -216,7 +219,7 @@ def plan(
                           notice=notice if first else None, on_leg=on_leg if first else None)
         return fly_as_arducopter(combine(current, settings, legs))
 
-    return until_kept(scenario, len(base.radii), attempt)
+    return until_kept(scenario, len(base.radii), attempt, relay=relay)
 
 
 Attempt = Callable[[Scenario, np.ndarray, bool], Plan]
