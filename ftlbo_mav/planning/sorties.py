@@ -136,10 +136,9 @@ def cut(cost: Callable[[int, int], float], lanes: int, usable_mah: float
     fewest = [0] + [math.inf] * lanes
     since = [0] * (lanes + 1)
     for b in range(1, lanes + 1):
-        for a in range(b - 1, -1, -1):  # the last sortie: lanes a..b-1, longest last
-            if cost(a, b - 1) > usable_mah:
-                break
-            if fewest[a] + 1 <= fewest[b]:
+        for a in range(b - 1, -1, -1):  # the last sortie: lanes a..b-1
+            # (no early stop: a sortie that begins later can cost more, its way longer)
+            if fewest[a] + 1 <= fewest[b] and cost(a, b - 1) <= usable_mah:
                 fewest[b], since[b] = fewest[a] + 1, a
     out, b = [], lanes
     while b > 0:
