@@ -1,0 +1,100 @@
+"""The flight side of the collective return (flight/homeward.py): the plan's world, the
+keep-out of a vehicle that left, and the mission home as uploaded."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+
+from ftlbo_mav.flight.homeward import GoingHome, keep_out, return_world
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.mission.items import (
+    CMD_DO_CHANGE_SPEED,
+    CMD_NAV_LAND,
+    CMD_NAV_WAYPOINT,
+    build_return,
+)
+
+from ..conftest import EXAMPLE
+
+
+@pytest.fixture(scope="module")
+def planned():
+    return load_planned_flight(EXAMPLE.with_suffix(""))
+
+
+@dataclass
+class Status:
+    lat_deg: float | None = None
+    lon_deg: float | None = None
+    alt_m: float = 5.0
+    position_t: float = 0.0
+    ground_speed_m_s: float = 0.0
+    clock_rate: float = 1.0
+
+
+@dataclass
+class StandIn:
+    name: str = "uav2"
+    sysid: int = 2
+    status: Status = field(default_factory=Status)
+
+
+def test_the_world_is_the_plans(planned):
+    w = return_world(planned)
+    assert w.band == (2.0, 7.0) and w.min_separation_m == 2.0
+    assert w.clearance_m == pytest.approx(1.5)  # 1 m clearance + the rtk-float 0.5 m
+    assert w.model.speed_m_s == 5.0
+    assert np.allclose(w.area_lower, [0.0, 0.0], atol=1e-3)
+    assert w.area_upper[0] == pytest.approx(86.38, abs=0.01)
+    assert len(w.centres) == len(planned.centres) == len(w.radii)
+
+
+def test_the_keep_out_grows_with_the_age_of_the_last_position_in_the_vehicles_seconds(planned):
+    lat, lon, _ = planned.frame.to_lla(np.array([30.0, 20.0, 5.0]))
+    v = StandIn(status=Status(lat_deg=float(lat), lon_deg=float(lon), position_t=10.0))
+    k = keep_out(planned, v, 12.0)  # 2 s old, 5 m/s at the least
+    assert np.allclose(k.centre, [30.0, 20.0], atol=1e-6)
+    assert k.radius_m == pytest.approx(2.0 + planned.navigation.pair_m + 10.0)
+    v.status.ground_speed_m_s, v.status.clock_rate = 8.0, 3.0  # a simulator run 3x
+    assert keep_out(planned, v, 12.0).radius_m == pytest.approx(
+        2.0 + planned.navigation.pair_m + 8.0 * 6.0)
+    assert keep_out(planned, StandIn(), 12.0) is None  # never placed
+
+
+def test_the_mission_home_starts_where_it_hovers_and_lands_at_home():
+    items = build_return(home=(12.0, 109.0), path=[(12.1, 109.1, 6.0), (12.1, 109.1, 7.0),
+                                                   (12.2, 109.2, 7.0)],
+                         holds_s=[0, 4, 0], land=(12.3, 109.3), speed_m_s=5.0)
+    assert [it.command for it in items] == [CMD_NAV_WAYPOINT, CMD_NAV_WAYPOINT,
+                                            CMD_DO_CHANGE_SPEED, CMD_NAV_WAYPOINT,
+                                            CMD_NAV_WAYPOINT, CMD_NAV_LAND]
+    assert [it.seq for it in items] == list(range(6))
+    assert items[0].frame == 0 and items[0].current == 1  # home, as Mission Planner has it
+    assert (items[1].lat_deg, items[1].alt_m) == (12.1, 6.0)  # AUTO starts here (item 1)
+    assert items[2].param2 == 5.0
+    assert items[3].param1 == 4 and items[3].alt_m == 7.0  # its wait on its layer
+    assert (items[5].lat_deg, items[5].lon_deg, items[5].alt_m) == (12.3, 109.3, 0.0)
+    with pytest.raises(ValueError):
+        build_return(home=(0, 0), path=[(0, 0, 1)], holds_s=[0], land=(0, 0))
+
+
+def test_the_uploaded_mission_is_the_planned_route(planned):
+    home = GoingHome(planned, [StandIn() for _ in range(3)])
+    from ftlbo_mav.planning.homeward import plan_return
+
+    here = {0: np.array([19.4, 13.3, 6.0]), 2: np.array([16.4, 13.3, 3.0])}
+    home.plan = plan_return(here, {j: planned.paths[j][0][:2] for j in here},
+                            return_world(planned))
+    items = home.mission(0)
+    route = home.plan.routes[0]
+    waypoints = [it for it in items[1:] if it.command == CMD_NAV_WAYPOINT]
+    assert len(waypoints) == len(route.points)
+    enu = planned.frame.to_enu(lat_deg=[w.lat_deg for w in waypoints],
+                               lon_deg=[w.lon_deg for w in waypoints],
+                               alt_m=[w.alt_m for w in waypoints])
+    assert np.allclose(enu, route.points, atol=1e-3)
+    land = planned.frame.to_enu(lat_deg=items[-1].lat_deg, lon_deg=items[-1].lon_deg)
+    assert np.allclose(land[:2], planned.paths[0][0][:2], atol=1e-3)
