@@ -24,6 +24,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -86,14 +87,17 @@ class GoingHome:
                  say: Callable[[str], None] = lambda _t: None) -> None:
         self.planned, self.vehicles, self.say = planned, list(vehicles), say
         self.timing = timing or Timing()
-        self.plan: ReturnPlan | None = None
+        self.plan: ReturnPlan | None = None  # every route home planned so far
+        self.started_t: float | None = None  # when the first were planned
         self._done: queue.SimpleQueue = queue.SimpleQueue()
         self._threads: list[threading.Thread] = []
 
     def start(self, answered: Sequence[int], left: Sequence[int], now: float) -> dict[int, str]:
         """Plan the way home of the ``answered`` vehicles (stopped where they are), the
         ``left`` ones kept out, and start flying it; returns the vehicles that have no
-        way home and why (they are left to the policy's RTL-or-LAND)."""
+        way home and why (they are left to the policy's RTL-or-LAND). Called again for a
+        vehicle answered later (its link back), its route keeps clear of those already
+        flying home, on their clock."""
         planned = self.planned
         positions: dict[int, np.ndarray] = {}
         refused: dict[int, str] = {}
@@ -107,14 +111,24 @@ class GoingHome:
         outs = tuple(k for j in left
                      if (k := keep_out(planned, self.vehicles[j], now)) is not None)
         landings = {j: np.asarray(planned.paths[j][0][:2], float) for j in positions}
-        plan = self.plan = plan_return(positions, landings, return_world(planned),
-                                       keep_out=outs)
+        before = self.plan
+        if before is None:
+            self.started_t = now
+        plan = plan_return(positions, landings, return_world(planned), keep_out=outs,
+                           flying=tuple(before.routes.values()) if before else (),
+                           elapsed_s=now - self.started_t)
+        if before is not None:  # a vehicle answered late: its route joins the others'
+            plan = replace(plan, routes={**before.routes, **plan.routes},
+                           refused={**before.refused, **plan.refused})
+        self.plan = plan
         self.say(f"routes home planned in {plan.seconds:.2f} s for "
                  f"{len(plan.routes)} vehicle(s)" + (
                      f"; predicted separation {plan.separation_m:.1f} m"
                      if math.isfinite(plan.separation_m) else ""))
         refused.update(plan.refused)
-        for j in plan.routes:
+        for j in positions:
+            if j not in plan.routes:
+                continue
             t = threading.Thread(target=self._fly_home, args=(j,), daemon=True,
                                  name=f"{self.vehicles[j].name} home")
             t.start()

@@ -78,6 +78,7 @@ class Response:
         # each vehicle RTL or LAND as its line allows
         self.homeward = homeward
         self.home_started = False
+        self.home_tried: set[int] = set()  # the vehicles whose way home was planned
         self.landing = landing  # vehicle -> already on its mission's final landing
         self.route_check = route_check  # vehicle -> why RTL from here is not safe, or None
         self.stop_s, self.budget_s, self.confirm_tries = stop_s, budget_s, confirm_tries
@@ -196,19 +197,23 @@ class Response:
     def _going_home(self, j: int) -> bool:
         """Vehicle j waits for (or is in) the collective return, not for its own RTL."""
         return (self.policy is FaultPolicy.RALLY and self.homeward is not None
-                and (not self.home_started or self.answers[j].stage == "home"))
+                and (not self.home_started or self.answers[j].stage == "home"
+                     or j not in self.home_tried))
 
     def _home(self, vehicles: Sequence[FlightVehicle], watch: DepartureWatch,
               now: float) -> None:
         """The collective return: started once every vehicle stopped has come to rest (or
         ``stop_s`` after it was stopped); each one's outcome taken as it comes."""
-        if not self.home_started:
-            stopping = {j: a for j, a in self.answers.items() if a.stage == "stop"}
-            if not stopping or not all(
-                    vehicles[j].status.ground_speed_m_s < STOPPED_M_S
-                    or now - a.since >= self.stop_s for j, a in stopping.items()):
-                return
+        # the first answered go together once all have stopped; one answered later (its
+        # link back) once it has stopped, its route clear of those already on their way
+        stopping = {j: a for j, a in self.answers.items()
+                    if a.stage == "stop" and j not in self.home_tried}
+        ready = bool(stopping) and all(
+            vehicles[j].status.ground_speed_m_s < STOPPED_M_S or now - a.since >= self.stop_s
+            for j, a in stopping.items())
+        if ready:
             self.home_started = True
+            self.home_tried.update(stopping)
             left = [j for j in self.left if j not in self.answers]
             try:
                 refused = self.homeward.start(list(stopping), left, now)

@@ -155,15 +155,21 @@ def descent(model: FlightModel, alt_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def plan_return(positions: dict[int, np.ndarray], landings: dict[int, np.ndarray],
-                world: World, *, keep_out: tuple[KeepOut, ...] = ()) -> ReturnPlan:
+                world: World, *, keep_out: tuple[KeepOut, ...] = (),
+                flying: tuple[Route, ...] = (), elapsed_s: float = 0.0) -> ReturnPlan:
     """The routes home of the vehicles at ``positions`` (vehicle -> ``(3,)`` ENU, where
     each stopped) to ``landings`` (vehicle -> ``(2,)`` or ``(3,)``, its landing point on
     the ground), every one kept clear of the obstacles, the ``keep_out`` discs and, on one
     clock, of the others (module notes). A vehicle refused lands where it stopped: the
-    others' routes keep clear of its descent there too."""
+    others' routes keep clear of its descent there too. ``flying``: routes home planned
+    before and started ``elapsed_s`` ago (a vehicle answered late, its link back): the new
+    ones keep clear of them too, on the same clock, and take the layers they leave."""
     t0 = time.perf_counter()
     order = sorted(positions, key=lambda j: -float(positions[j][2]))  # highest first
-    heights = layers(world.band, len(order), world.min_separation_m)
+    taken = {r.layer_m for r in flying}
+    free = [h for h in layers(world.band, len(order) + len(taken), world.min_separation_m)
+            if h not in taken] or [world.band[1]]
+    heights = [free[i % len(free)] for i in range(len(order))]
     found: dict[int, Route] = {}
     refused: dict[int, str] = {}
     for j, layer in zip(order, heights):
@@ -175,7 +181,10 @@ def plan_return(positions: dict[int, np.ndarray], landings: dict[int, np.ndarray
         else:
             found[j] = route
     # on one clock: the vehicles landing where they stopped first, then each route in turn
-    scheduled = {j: _landing_here(np.asarray(positions[j], float), world) for j in refused}
+    scheduled: dict = {("flying", i): replace(r, times=r.times - elapsed_s)
+                       for i, r in enumerate(flying)}
+    scheduled.update({j: _landing_here(np.asarray(positions[j], float), world)
+                      for j in refused})
     routes: dict[int, Route] = {}
     for j, route in found.items():
         timed, why = _in_turn(route, scheduled, world)

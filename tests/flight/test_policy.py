@@ -184,3 +184,30 @@ def test_a_route_home_that_could_not_be_started_falls_back_to_rtl():
     r.step(vs, watch, 6.5)
     assert vs[0].sent == ["pause", "RTL"]
     assert "its route home was not uploaded (refused)" in r.lines(vs)[0]
+
+
+def test_a_vehicle_answered_late_goes_home_on_its_own_route_once_it_has_stopped():
+    vs, watch = fleet(), DepartureWatch(3)
+    home = Homeward()
+    calls = []
+    real = home.start
+    home.start = lambda answered, left, now: calls.append((sorted(answered), now)) or real(
+        answered, left, now)
+    r = response(homeward=home)
+    vs[1].link_up = False
+    r.react([Event(1, LINK_LOST, "closed", 5.0)], vs, watch, 5.0)
+    for v in vs:
+        v.status.ground_speed_m_s = 0.0
+    r.step(vs, watch, 6.0)
+    assert calls == [([0, 2], 6.0)]
+    vs[1].link_up = True
+    vs[1].status.ground_speed_m_s = 4.0
+    r.react([Event(1, LINK_BACK, "heard again", 9.0)], vs, watch, 9.0)
+    assert vs[1].sent == ["pause"]
+    r.step(vs, watch, 9.5)  # still moving: not yet
+    assert len(calls) == 1 and vs[1].sent == ["pause"]
+    vs[1].status.ground_speed_m_s = 0.1
+    r.step(vs, watch, 10.0)
+    assert calls[1] == ([1], 10.0)  # its own way home, clear of the others' (the planner)
+    assert "no route home" in r.lines(vs)[1]  # the stand-in refuses uav2: RTL as it allows
+    assert vs[1].sent == ["pause", "RTL"]

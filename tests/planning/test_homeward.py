@@ -5,6 +5,7 @@ refusals."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -133,3 +134,29 @@ def test_the_others_keep_clear_of_a_vehicle_landing_where_it_stopped():
     route = plan.routes[0]
     at = np.clip(np.searchsorted(route.times, t, side="right") - 1, 0, len(route.times) - 1)
     assert np.linalg.norm(route.positions[at] - down, axis=1).min() >= 2.0 - 1e-9
+
+
+def test_a_route_planned_late_keeps_clear_of_the_routes_already_flying_on_their_clock():
+    world = _world(band=(4.0, 5.0), separation=3.0)  # one layer: the clock keeps them apart
+    first = plan_return({0: np.array([80.0, 40.0, 4.5])}, {0: np.array([10.0, 20.0])}, world)
+    flying = first.routes[0]
+    for elapsed in (0.0, 6.0):
+        late = plan_return({1: np.array([80.0, 20.0, 4.0])}, {1: np.array([10.0, 40.0])},
+                           world, flying=(flying,), elapsed_s=elapsed)
+        route = late.routes[1]
+        t = np.union1d(route.times, flying.times - elapsed)
+        ahead = replace(flying, times=flying.times - elapsed)
+        assert np.linalg.norm(_at(route, t) - _at(ahead, t), axis=1).min() >= 3.0 - 1e-9
+    # the one flying for 6 s is further on its way: the late one waits less, if at all
+    early = plan_return({1: np.array([80.0, 20.0, 4.0])}, {1: np.array([10.0, 40.0])}, world,
+                        flying=(flying,), elapsed_s=0.0).routes[1]
+    assert route.wait_s <= early.wait_s
+
+
+def test_a_late_route_takes_a_layer_the_flying_ones_leave():
+    world = _world()  # layers 7, 5, 3
+    first = plan_return({0: np.array([80.0, 40.0, 6.0])}, {0: np.array([10.0, 20.0])}, world)
+    assert first.routes[0].layer_m == 7.0
+    late = plan_return({1: np.array([80.0, 20.0, 6.5])}, {1: np.array([10.0, 40.0])}, world,
+                       flying=(first.routes[0],), elapsed_s=3.0)
+    assert late.routes[1].layer_m == 5.0
