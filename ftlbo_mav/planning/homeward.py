@@ -40,10 +40,12 @@ import numpy as np
 
 from ..ardupilot.flight_path import STEP_S
 from ..gnss import true_distance
-from .geometric import shortest_route
+from .geometric import shortest_route, shortest_routes
 from .predicted import FlightModel, keep_clearance
 from .problem import PlanningProblem
+from .proximity import nearest_samples
 from .seeds import RouteChains
+from .window import leg_window
 
 ROUTE_SLACK = 0.02
 """A route's waypoints: the fewest whose clear chain is within this share of the
@@ -231,17 +233,28 @@ def _route(here: np.ndarray, land: np.ndarray, layer: float, world: World,
                               h_max=world.band[1], area_lower=np.asarray(world.area_lower),
                               area_upper=np.asarray(world.area_upper), waypoints=1,
                               weights=np.ones(3))
-    found = shortest_route(problem)
+    # among thousands of trees, the route is planned among those it can reach (the
+    # planner's leg window: exact for the shortest route)
+    window = leg_window(problem, count=1,
+                        routes=lambda p, count: shortest_routes(p, count=count))
+    if window.routes is None:
+        where, where_own, found = problem, own, shortest_route(problem)
+    else:
+        where, where_own = window.problem, own[window.kept]
+        found = window.routes[0] if window.routes else None
     if found is None:
         return None, "no way home around the obstacles"
-    waypoints = _waypoints(problem, found)
+    waypoints = _waypoints(where, found)
     path = np.vstack([here, start, waypoints, goal])
     fixed = np.zeros(len(path), bool)
     fixed[[0, 1, -1]] = True
-    kept_path = keep_clearance(replace(problem, start=here, waypoints=len(path) - 2), path,
-                               model=world.model, obstacle_radii=own, clearance_m=kept,
+    kept_path = keep_clearance(replace(where, start=here, waypoints=len(path) - 2), path,
+                               model=world.model, obstacle_radii=where_own, clearance_m=kept,
                                fixed=fixed)
-    clearance = float(kept_path.prediction.clearance.min()) if len(own) else math.inf
+    clearance = math.inf
+    if len(own):  # judged against every obstacle (a corner moved may leave the window)
+        d, _ = nearest_samples(kept_path.prediction.positions[0, :, :2], centres)
+        clearance = float((d - own).min())
     if clearance < kept - 1e-6:
         return None, (f"its predicted flown path home comes {clearance:.2f} m from an "
                       f"obstacle (clearance {kept:g} m)")
