@@ -422,13 +422,29 @@ def _clear_segments(discs: Discs, start: np.ndarray, goal: np.ndarray, lower, up
         disc, angle = _point_tangents(point, discs)
         n = len(disc)
         keep(np.full(n, key), np.zeros(n, int), disc, angle, disc, angle, point, point)
-    for di, ai, dj, aj in _clear_bitangents(discs, marked, grid, lower, upper):
+    for di, ai, dj, aj in _known_bitangents(discs, marked, grid, lower, upper):
         n = len(di)
         keep(np.zeros(n, int), np.zeros(n, int), di, ai, dj, aj, start, goal, tested=True)
     none = np.zeros(1, int)
     keep(np.array([-1]), np.array([-2]), none, np.zeros(1), none, np.zeros(1), start, goal)
     return (np.concatenate(t_disc), np.concatenate(t_angle), np.concatenate(keys_p),
             np.concatenate(keys_q), np.concatenate(ps), np.concatenate(qs))
+
+
+_LAST_BITANGENTS: list = []  # [(key, chunks)]: the last disc set's clear bitangents
+
+
+def _known_bitangents(discs: Discs, marked, grid, lower, upper) -> list:
+    """:func:`_clear_bitangents` as a list, kept for the last set of discs and rectangle:
+    the tangent graphs of one problem with other starts and goals (every copter's way home
+    among the same trees, ``planning/homeward.py``) share them."""
+    key = (discs.centres.tobytes(), discs.radii.tobytes(),
+           np.asarray(lower, float).tobytes(), np.asarray(upper, float).tobytes())
+    if _LAST_BITANGENTS and _LAST_BITANGENTS[0][0] == key:
+        return _LAST_BITANGENTS[0][1]
+    chunks = list(_clear_bitangents(discs, marked, grid, lower, upper))
+    _LAST_BITANGENTS[:] = [(key, chunks)]
+    return chunks
 
 
 def _clear_bitangents(discs: Discs, marked, grid, lower, upper):
