@@ -705,8 +705,10 @@ class _Graph:
         if len(t_point) < len(t_disc):  # made a chunk at a time: only the kept tangents
             t_point = _on_circle(discs, t_disc, t_angle)
         # Nodes: 0 start, 1 goal, then every tangent point used by a valid segment.
-        used = np.unique(np.concatenate([seg_p, seg_q]))
-        used = used[used >= 0]
+        mark = np.zeros(len(t_disc), bool)  # the keys used, sorted (np.unique: slower)
+        mark[seg_p[seg_p >= 0]] = True
+        mark[seg_q[seg_q >= 0]] = True
+        used = np.flatnonzero(mark)
         node_of = np.full(len(t_disc) + 2, -1)
         node_of[used] = 2 + np.arange(len(used))
         node_of[-1], node_of[-2] = 0, 1  # keys -1 and -2 index the end of the array
