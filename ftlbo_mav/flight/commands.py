@@ -141,6 +141,9 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
             for v in monitor.vehicles}
     if rtcm is not None:
         summary["rtcm"] = rtcm.summary()
+    battery = battery_summary(planned, monitor.record, sysids)
+    if battery:
+        summary["battery"] = battery
     files = {"flight.csv": monitor.record.to_csv(),
              "summary.json": json.dumps(summary, indent=2) + "\n"}
     if len(times):
@@ -148,6 +151,25 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
     with OutputFolder(out_dir, replaces=[r"report\.png"]) as out:  # all three, or none
         out.write_all(files)
     return summary
+
+
+def battery_summary(planned: PlannedFlight, record, sysids: list[int]) -> dict:
+    """summary.json's ``battery``: per vehicle the charge it reported first and last (per
+    cent, SYS_STATUS) and what it used; with the plan's ``[battery]``, that in mAh beside
+    the mission's predicted charge. Empty when no vehicle reported its battery."""
+    out = {}
+    plan = planned.battery
+    for n, sysid in enumerate(sysids):
+        seen = record.battery(sysid)
+        if seen is None:
+            continue
+        first, last = seen
+        entry = {"first_pct": first, "last_pct": last, "used_pct": first - last}
+        if plan is not None and n < len(plan.total_mah):
+            entry["used_mah"] = round((first - last) / 100.0 * plan.battery.capacity_mah, 1)
+            entry["predicted_mah"] = round(plan.total_mah[n], 1)
+        out[planned.names[n] if n < len(planned.names) else str(sysid)] = entry
+    return out
 
 
 def _print_summary(summary: dict, out_dir: Path) -> None:

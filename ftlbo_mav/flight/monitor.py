@@ -34,7 +34,8 @@ class Monitor:
         if s.lat_deg is None:
             return
         sample = Sample(s.position_t - self.t0, vehicle.sysid, s.lat_deg, s.lon_deg, s.alt_m,
-                        s.mode, s.armed, s.seq if s.mode == "AUTO" else -1, s.position_boot_s)
+                        s.mode, s.armed, s.seq if s.mode == "AUTO" else -1, s.position_boot_s,
+                        s.battery_pct if s.battery_pct is not None else -1)
         with self._lock:
             self.record.add(sample)
 
@@ -68,9 +69,11 @@ class Monitor:
         slot = f"slot {slots[n]:5.2f} m" if slots is not None else ""
         age = time.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
         stale = "  NO HEARTBEAT" if age > 3.0 else ""
+        battery = f"  batt {s.battery_pct:3d} %" if s.battery_pct is not None else ""
         return (f"{v.name:>5} sysid {v.sysid:<3} {s.mode:<9} "
                 f"{'ARMED' if s.armed else 'disarmed':<8} alt {s.alt_m:5.1f} m  "
-                f"item {item:<6} {slot}{navigation_short(s.gps_raw, s.ekf_raw)}{stale}")
+                f"item {item:<6} {slot}{battery}{navigation_short(s.gps_raw, s.ekf_raw)}"
+                f"{stale}")
 
     def _group_line(self, pos: np.ndarray, slots: np.ndarray) -> str:
         err = float(np.sqrt(np.mean(slots**2)))

@@ -31,6 +31,7 @@ class Sample:
     armed: bool
     seq: int
     boot_s: float = float("nan")
+    battery_pct: int = -1  # SYS_STATUS battery_remaining (-1: not reported)
 
 
 class FlightRecord:
@@ -52,7 +53,7 @@ class FlightRecord:
         for s in self.samples:
             writer.writerow(
                 [f"{s.t:.3f}", s.sysid, f"{s.lat_deg:.8f}", f"{s.lon_deg:.8f}", f"{s.alt_m:.3f}",
-                 s.mode, int(s.armed), s.seq, f"{s.boot_s:.3f}"]
+                 s.mode, int(s.armed), s.seq, f"{s.boot_s:.3f}", s.battery_pct]
             )
         return buf.getvalue()
 
@@ -63,10 +64,15 @@ class FlightRecord:
             [
                 Sample(float(r["t"]), int(r["sysid"]), float(r["lat_deg"]), float(r["lon_deg"]),
                        float(r["alt_m"]), r["mode"], r["armed"] in ("1", "True"), int(r["seq"]),
-                       float(r.get("boot_s") or "nan"))
+                       float(r.get("boot_s") or "nan"), int(r.get("battery_pct") or -1))
                 for r in rows
             ]
         )
+
+    def battery(self, sysid: int) -> tuple[int, int] | None:
+        """The first and the last charge (per cent) vehicle ``sysid`` reported, or None."""
+        pct = [s.battery_pct for s in self.of(sysid) if s.battery_pct >= 0]
+        return (pct[0], pct[-1]) if pct else None
 
     def rate_hz(self, sysid: int) -> float:
         """Mean sample rate of one vehicle."""

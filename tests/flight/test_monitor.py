@@ -88,3 +88,42 @@ def test_the_keeper_summary_of_a_large_swarm_is_one_short_line():
     few = _keeper_line(dict(list(waited.items())[:2]))
     assert few == ("uav1 waited 2x (0.1 s paused, largest lead -0.01 m); "
                    "uav2 waited 3x (0.2 s paused, largest lead -0.02 m)")
+
+
+def test_each_vehicles_battery_is_shown_recorded_and_summed_up():
+    from ftlbo_mav.flight.commands import battery_summary
+    from ftlbo_mav.flight.record import FlightRecord
+
+    planned = load_planned_flight(EXAMPLE.with_suffix(""))
+    monitor = Monitor(planned)
+    monitor.vehicles = _vehicles(planned)
+    for v, pct in zip(monitor.vehicles, (97, 12, None)):
+        v.status.battery_pct = pct
+    lines = monitor.lines()
+    assert "batt  97 %" in lines[0] and "batt  12 %" in lines[1] and "batt" not in lines[2]
+    for v in monitor.vehicles:
+        monitor(v)
+    monitor.vehicles[0].status.battery_pct = 95
+    monitor(monitor.vehicles[0])
+    record = FlightRecord.from_csv(monitor.record.to_csv())  # flight.csv, as written
+    assert record.battery(1) == (97, 95) and record.battery(3) is None
+    summary = battery_summary(planned, record, [1, 2, 3])
+    assert summary["uav1"] == {"first_pct": 97, "last_pct": 95, "used_pct": 2}
+    assert "uav3" not in summary  # it never said
+    # with the plan's [battery]: in mAh beside the mission's predicted charge
+    from ftlbo_mav.energy import Battery
+    from ftlbo_mav.flight.battery import MissionBattery
+
+    with_battery = replace(planned, battery=MissionBattery(
+        Battery(capacity_mah=5200.0, reserve_pct=25.0, hover_current_a=10.0),
+        (150.0, 140.0, 140.0), (np.zeros(1),) * 3))
+    summary = battery_summary(with_battery, record, [1, 2, 3])
+    assert summary["uav1"]["used_mah"] == 104.0 and summary["uav1"]["predicted_mah"] == 150.0
+
+
+def test_an_older_flight_csv_without_the_battery_reads():
+    from ftlbo_mav.flight.record import FlightRecord
+
+    text = "t,sysid,lat_deg,lon_deg,alt_m,mode,armed,seq,boot_s\n0.1,1,12.0,109.0,0.0,AUTO,1,3,1.0\n"
+    record = FlightRecord.from_csv(text)
+    assert record.samples[0].battery_pct == -1 and record.battery(1) is None
