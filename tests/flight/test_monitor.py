@@ -124,6 +124,7 @@ def test_each_vehicles_battery_is_shown_recorded_and_summed_up():
 def test_an_older_flight_csv_without_the_battery_reads():
     from ftlbo_mav.flight.record import FlightRecord
 
-    text = "t,sysid,lat_deg,lon_deg,alt_m,mode,armed,seq,boot_s\n0.1,1,12.0,109.0,0.0,AUTO,1,3,1.0\n"
+    text = ("t,sysid,lat_deg,lon_deg,alt_m,mode,armed,seq,boot_s\n"
+            "0.1,1,12.0,109.0,0.0,AUTO,1,3,1.0\n")
     record = FlightRecord.from_csv(text)
     assert record.samples[0].battery_pct == -1 and record.battery(1) is None
