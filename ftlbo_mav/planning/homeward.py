@@ -1,7 +1,8 @@
 """The way home when a flight ends early: every vehicle's route, planned at that moment.
 
-When a flight ends before its goal (a vehicle lost, a mode taken over, ``abort``), the
-vehicles ``fly`` still answers for are stopped where they are; from there each flies home
+When a flight ends before its goal (a vehicle lost, a mode taken over, a failsafe, a
+battery short), the vehicles ``fly`` still answers for are stopped where they are; from
+there each flies home
 on a route of its own, planned here, as an uploaded mission that ArduCopter flies as
 :mod:`..ardupilot.flight_path` predicts:
 
@@ -13,7 +14,8 @@ on a route of its own, planned here, as an uploaded mission that ArduCopter flie
   one climbs or descends through the other's layer, and the clock below says when.
 - **Its route.** The shortest way from above where it stopped to above its landing point
   around every obstacle grown by the kept clearance (:func:`.geometric.shortest_route`,
-  one vehicle, no formation), as the fewest waypoints whose legs stay clear and within
+  one vehicle, no formation; among thousands of trees within the planner's leg window,
+  :func:`.window.leg_window`), as the fewest waypoints whose legs stay clear and within
   :data:`ROUTE_SLACK` of it (:class:`.seeds.RouteChains`), then flown through the copter
   model and its corners moved until the *predicted flown* path keeps the clearance
   (:func:`.predicted.keep_clearance`, as a plan's). The vehicle that left (its last known
@@ -27,7 +29,9 @@ on a route of its own, planned here, as an uploaded mission that ArduCopter flie
   up to :data:`MAX_WAIT_S`.
 
 A vehicle for which no such route exists (no way around, nowhere to wait) is refused, with
-the reason: it lands where it stopped, as before. Pure computation, metres ENU and seconds.
+the reason (``fly`` then sends it to RTL where RTL's straight line is safe, else LAND where
+it stopped; the others keep clear of that descent). Pure computation, metres ENU and
+seconds.
 """
 
 from __future__ import annotations
