@@ -53,9 +53,10 @@ class FaultPolicy(enum.Enum):
 
 @dataclass
 class _Answer:
-    """What the flight does with one vehicle: ``stage`` stop -> then -> sent."""
+    """What the flight does with one vehicle: ``stage`` stop -> then -> sent, or, going
+    home together, stop -> home -> sent."""
 
-    stage: str = "stop"  # stop -> home (its route home being started) -> sent; or -> then
+    stage: str = "stop"
     mode: str | None = None  # the mode it is sent to once stopped
     since: float = 0.0
     sent_t: float = 0.0

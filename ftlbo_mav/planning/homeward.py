@@ -2,9 +2,8 @@
 
 When a flight ends before its goal (a vehicle lost, a mode taken over, a failsafe, a
 battery short), the vehicles ``fly`` still answers for are stopped where they are; from
-there each flies home
-on a route of its own, planned here, as an uploaded mission that ArduCopter flies as
-:mod:`..ardupilot.flight_path` predicts:
+there each flies home on a route of its own, planned here, as an uploaded mission that
+ArduCopter flies as :mod:`..ardupilot.flight_path` predicts:
 
 - **Its own height.** Every vehicle gets a layer of the altitude band, layers at least
   ``min_separation`` apart, the highest layer to the vehicle that is highest now. From
