@@ -341,14 +341,15 @@ def homeward_rows(*, deadline: float) -> list[dict]:
     def timed(planned, stops, out=()) -> tuple[float, object]:
         world = return_world(planned)
         homes = {j: planned.paths[j][0][:2] for j in stops}
-        plan_return(stops, homes, world, keep_out=out)  # warm-up: numba's start-up paid
+        roads = {j: planned.paths[j] for j in stops}  # as flight/homeward.GoingHome has it
+        plan_return(stops, homes, world, keep_out=out, roadmaps=roads)  # numba's start-up
         walls, result = [], None
         for _ in range(3):
             # as in a flight: nothing of these routes flown or judged before
             flight_path._FLOWN = flight_path._Flown()
             geometric._LAST_BITANGENTS.clear()
             t = time.perf_counter()
-            result = plan_return(stops, homes, world, keep_out=out)
+            result = plan_return(stops, homes, world, keep_out=out, roadmaps=roads)
             walls.append(time.perf_counter() - t)
         return statistics.median(walls), result
 

@@ -116,7 +116,8 @@ class GoingHome:
             self.started_t = now
         plan = plan_return(positions, landings, return_world(planned), keep_out=outs,
                            flying=tuple(before.routes.values()) if before else (),
-                           elapsed_s=now - self.started_t)
+                           elapsed_s=now - self.started_t,
+                           roadmaps={j: planned.paths[j] for j in positions})
         if before is not None:  # a vehicle answered late: its route joins the others'
             plan = replace(plan, routes={**before.routes, **plan.routes},
                            refused={**before.refused, **plan.refused})

@@ -43,7 +43,7 @@ import numpy as np
 
 from ..ardupilot.flight_path import STEP_S
 from ..gnss import true_distance
-from .geometric import shortest_route, shortest_routes
+from .geometric import Discs, segments_clear, shortest_route, shortest_routes
 from .predicted import FlightModel, keep_clearance
 from .problem import PlanningProblem
 from .proximity import nearest_samples
@@ -161,14 +161,18 @@ def descent(model: FlightModel, alt_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 def plan_return(positions: dict[int, np.ndarray], landings: dict[int, np.ndarray],
                 world: World, *, keep_out: tuple[KeepOut, ...] = (),
-                flying: tuple[Route, ...] = (), elapsed_s: float = 0.0) -> ReturnPlan:
+                flying: tuple[Route, ...] = (), elapsed_s: float = 0.0,
+                roadmaps: dict[int, np.ndarray] | None = None) -> ReturnPlan:
     """The routes home of the vehicles at ``positions`` (vehicle -> ``(3,)`` ENU, where
     each stopped) to ``landings`` (vehicle -> ``(2,)`` or ``(3,)``, its landing point on
     the ground), every one kept clear of the obstacles, the ``keep_out`` discs and, on one
     clock, of the others (module notes). A vehicle refused lands where it stopped: the
     others' routes keep clear of its descent there too. ``flying``: routes home planned
     before and started ``elapsed_s`` ago (a vehicle answered late, its link back): the new
-    ones keep clear of them too, on the same clock, and take the layers they leave."""
+    ones keep clear of them too, on the same clock, and take the layers they leave.
+    ``roadmaps``: per vehicle, points known to be clear (its planned path, ``(P, 3)``):
+    among :data:`ROADMAP_FROM` obstacles or more, its way home is sought through them
+    first (:func:`_through_roadmap`)."""
     t0 = time.perf_counter()
     order = sorted(positions, key=lambda j: -float(positions[j][2]))  # highest first
     taken = {r.layer_m for r in flying}
@@ -180,7 +184,7 @@ def plan_return(positions: dict[int, np.ndarray], landings: dict[int, np.ndarray
     for j, layer in zip(order, heights):
         land = np.append(np.asarray(landings[j], float)[:2], 0.0)
         route, why = _route(np.asarray(positions[j], float), land, float(layer), world,
-                            keep_out)
+                            keep_out, (roadmaps or {}).get(j))
         if route is None:
             refused[j] = why
         else:
@@ -214,7 +218,8 @@ def _landing_here(here: np.ndarray, world: World) -> Route:
 
 
 def _route(here: np.ndarray, land: np.ndarray, layer: float, world: World,
-           keep_out: tuple[KeepOut, ...]) -> tuple[Route | None, str]:
+           keep_out: tuple[KeepOut, ...], roadmap: np.ndarray | None = None
+           ) -> tuple[Route | None, str]:
     """One vehicle's route and its predicted flight (no wait), or None and why."""
     kept = world.clearance_m
     centres = np.vstack([np.asarray(world.centres, float).reshape(-1, 2)]
@@ -236,18 +241,23 @@ def _route(here: np.ndarray, land: np.ndarray, layer: float, world: World,
                               h_max=world.band[1], area_lower=np.asarray(world.area_lower),
                               area_upper=np.asarray(world.area_upper), waypoints=1,
                               weights=np.ones(3))
-    # among thousands of trees, the route is planned among those it can reach (the
-    # planner's leg window: exact for the shortest route)
-    window = leg_window(problem, count=1,
-                        routes=lambda p, count: shortest_routes(p, count=count))
-    if window.routes is None:
-        where, where_own, found = problem, own, shortest_route(problem)
-    else:
-        where, where_own = window.problem, own[window.kept]
-        found = window.routes[0] if window.routes else None
-    if found is None:
-        return None, "no way home around the obstacles"
-    waypoints = _waypoints(where, found)
+    waypoints = None
+    if roadmap is not None and len(centres) >= ROADMAP_FROM:
+        where, where_own = problem, own
+        waypoints = _through_roadmap(problem, roadmap)
+    if waypoints is None:
+        # the shortest route, among thousands of trees planned among those it can reach
+        # (the planner's leg window: exact for the shortest route)
+        window = leg_window(problem, count=1,
+                            routes=lambda p, count: shortest_routes(p, count=count))
+        if window.routes is None:
+            where, where_own, found = problem, own, shortest_route(problem)
+        else:
+            where, where_own = window.problem, own[window.kept]
+            found = window.routes[0] if window.routes else None
+        if found is None:
+            return None, "no way home around the obstacles"
+        waypoints = _waypoints(where, found)
     path = np.vstack([here, start, waypoints, goal])
     fixed = np.zeros(len(path), bool)
     fixed[[0, 1, -1]] = True
@@ -265,6 +275,58 @@ def _route(here: np.ndarray, land: np.ndarray, layer: float, world: World,
                   layer_m=layer, clearance_m=clearance, times=np.zeros(0),
                   positions=np.zeros((0, 3)), corners_moved=kept_path.moved)
     return _flown(route, world, kept_path.prediction), ""
+
+
+ROADMAP_FROM = 1000
+"""Obstacles from which a vehicle's way home is first sought through the points of its own
+planned path (:func:`_through_roadmap`) rather than on the tangent graph, whose
+candidates grow with the square of the obstacles (an orchard of thousands of trees)."""
+
+
+def _through_roadmap(problem: PlanningProblem, roadmap: np.ndarray) -> np.ndarray | None:
+    """Waypoints ``(m, 3)`` at the problem's altitude from its start to its goal through
+    the points of ``roadmap`` ``(P, 3)`` (the vehicle's planned path: each of its points
+    kept clear of every obstacle by the plan), every straight link between two of them
+    that enters no grown obstacle (all links tested at once, through the obstacles' grid)
+    a road, the shortest chain of roads found by Dijkstra; None when no chain joins them.
+    Not the shortest way home, a safe one found in milliseconds among thousands of
+    trees: along an orchard's aisle to its end, along the headland, home."""
+    start, goal = problem.start[:2], problem.goal[:2]
+    nodes = np.vstack([start, np.asarray(roadmap, float)[:, :2], goal])
+    n = len(nodes)
+    i, j = np.triu_indices(n, 1)
+    discs = Discs(problem.centres, problem.radii, np.arange(len(problem.radii)),
+                  np.zeros(len(problem.radii), int))
+    clear = segments_clear(nodes[i], nodes[j], discs)
+    inside = _inside_area(problem, nodes)
+    ok = clear & inside[i] & inside[j]
+    weight = np.full((n, n), np.inf)
+    length = np.hypot(*(nodes[i] - nodes[j]).T)
+    weight[i[ok], j[ok]] = weight[j[ok], i[ok]] = length[ok]
+    dist = np.full(n, np.inf)
+    prev = np.full(n, -1)
+    done = np.zeros(n, bool)
+    dist[0] = 0.0
+    while True:  # Dijkstra on the dense matrix: n is a few hundred
+        u = int(np.argmin(np.where(done, np.inf, dist)))
+        if done[u] or not np.isfinite(dist[u]) or u == n - 1:
+            break
+        done[u] = True
+        better = dist[u] + weight[u] < dist
+        dist[better], prev[better] = dist[u] + weight[u][better], u
+    if not np.isfinite(dist[-1]):
+        return None
+    chain, k = [], int(prev[-1])
+    while k > 0:
+        chain.append(k)
+        k = int(prev[k])
+    points = nodes[chain[::-1]]
+    return np.column_stack([points, np.full(len(points), problem.start[2])])
+
+
+def _inside_area(problem: PlanningProblem, xy: np.ndarray) -> np.ndarray:
+    return np.all((xy >= problem.area_lower - 1e-9) & (xy <= problem.area_upper + 1e-9),
+                  axis=1)
 
 
 def _waypoints(problem: PlanningProblem, route) -> np.ndarray:

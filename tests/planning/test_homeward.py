@@ -160,3 +160,42 @@ def test_a_late_route_takes_a_layer_the_flying_ones_leave():
     late = plan_return({1: np.array([80.0, 20.0, 6.5])}, {1: np.array([10.0, 40.0])}, world,
                        flying=(first.routes[0],), elapsed_s=3.0)
     assert late.routes[1].layer_m == 5.0
+
+
+def _orchard(rows: int = 40, per_row: int = 30):
+    """Rows of trees 7 m apart (north-south), 3 m apart along a row, 12 m headlands: an
+    orchard of rows x per_row trees; and a survey's snake through every aisle."""
+    x = 7.0 * (1 + np.arange(rows))
+    y = 12.0 + 3.0 * np.arange(per_row)
+    centres = np.array([(a, b) for a in x for b in y])
+    aisles = np.concatenate([[3.5], x + 3.5])
+    top, bottom = y[-1] + 6.0, y[0] - 6.0
+    snake = []
+    for k, a in enumerate(aisles):
+        ends = [(a, bottom), (a, top)] if k % 2 == 0 else [(a, top), (a, bottom)]
+        snake += ends
+    path = np.array([(e, n, 4.0) for e, n in snake])
+    area = (np.array([0.0, 0.0]), np.array([x[-1] + 7.0, y[-1] + 12.0]))
+    return centres, np.full(len(centres), 0.5), path, area
+
+
+def test_among_thousands_of_trees_the_way_home_runs_through_the_planned_path():
+    import time
+
+    centres, radii, path, (lo, hi) = _orchard()
+    world = World(centres=centres, radii=radii, clearance_m=1.0, area_lower=lo, area_upper=hi,
+                  band=(2.0, 7.0), min_separation_m=2.0, model=MODEL)
+    assert len(centres) >= 1000
+    here = np.array([path[41, 0], 60.0, 4.0])  # in the middle of an aisle, far from home
+    home = path[0, :2]
+    t = time.perf_counter()
+    plan = plan_return({0: here}, {0: home}, world, roadmaps={0: path})
+    seconds = time.perf_counter() - t
+    route = plan.routes[0]
+    # through points of its own planned path (an aisle's end, the headland), not round
+    # every tree: the roadmap's points, on its layer
+    inner = route.points[2:-1, :2]
+    assert len(inner) and all(np.min(np.hypot(*(path[:, :2] - p).T)) < 1e-9 for p in inner)
+    assert _clearance(route, world) >= world.clearance_m - 1e-6
+    assert np.allclose(route.positions[-1], [*home, 0.0])
+    print(f"way home among {len(centres)} trees: {seconds:.2f} s")
