@@ -236,3 +236,34 @@ def test_a_mode_taken_over_the_others_fly_home_around_it(plan_dir):  # noqa: F81
     print(f"[{BACKEND}] mode taken over, the others home: {judged}")
     _check(result, planned, judged, (0, 1))
     assert "uav3 (sysid 3): mode: switched to BRAKE" in result.output
+
+
+def test_a_vehicle_lost_in_the_take_off_the_others_come_down_at_home(plan_dir):  # noqa: F811
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
+
+        def fault():
+            assert tracks[0].wait(lambda p: p.armed, 120.0)
+            time.sleep(1.0 / SPEEDUP)  # climbing
+            fleet.kill(1)
+            tracks[1].stop.set()
+            return time.monotonic()
+
+        try:
+            result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
+            for j in (0, 2):
+                assert tracks[j].wait(lambda p: not p.armed, 5.0)
+        finally:
+            for t in tracks:
+                t.close()
+    out = result.output
+    print(f"[{BACKEND}] lost in the take-off:\n{out}")
+    assert result.exit_code == 1, out
+    assert "Traceback" not in out
+    for j in (0, 2):
+        track = tracks[j].enu(planned.frame)
+        assert float(np.hypot(*(track[-1, 1:3] - planned.paths[j][0][:2]))) <= LANDED_WITHIN_M
+        line = next(x for x in out.splitlines() if x.strip().startswith(f"uav{j + 1} ("))
+        assert line.endswith("landed (disarmed)"), line
