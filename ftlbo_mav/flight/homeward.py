@@ -38,6 +38,8 @@ from .keeper import planned_speed
 from .planned import PlannedFlight
 from .vehicle import FlightError, FlightVehicle
 
+ON_GROUND_M, AT_HOME_M = 0.5, 2.0
+"""A vehicle below this height within this distance of its home is on the ground there."""
 KEEP_OUT_SPEED_M_S = 5.0
 """How fast a vehicle that left is taken to move, at the least (its last ground speed if
 faster), for how far it can have gone since it was last heard of."""
@@ -106,8 +108,15 @@ class GoingHome:
             if s.lat_deg is None:
                 refused[j] = "its position is unknown"
                 continue
-            positions[j] = np.asarray(planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
-                                                           alt_m=s.alt_m), float)
+            here = np.asarray(planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
+                                                   alt_m=s.alt_m), float)
+            home = np.asarray(planned.paths[j][0][:2], float)
+            if here[2] < ON_GROUND_M and float(np.hypot(*(here[:2] - home))) < AT_HOME_M:
+                # stopped in its take-off before it left the ground: ArduCopter refuses
+                # AUTO there ("Auto: Missing Takeoff Cmd", ModeAuto::init), nothing to fly
+                refused[j] = "still on the ground at its home"
+                continue
+            positions[j] = here
         outs = tuple(k for j in left
                      if (k := keep_out(planned, self.vehicles[j], now)) is not None)
         landings = {j: np.asarray(planned.paths[j][0][:2], float) for j in positions}

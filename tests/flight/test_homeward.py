@@ -98,3 +98,14 @@ def test_the_uploaded_mission_is_the_planned_route(planned):
     assert np.allclose(enu, route.points, atol=1e-3)
     land = planned.frame.to_enu(lat_deg=items[-1].lat_deg, lon_deg=items[-1].lon_deg)
     assert np.allclose(land[:2], planned.paths[0][0][:2], atol=1e-3)
+
+
+def test_a_copter_still_on_the_ground_at_home_has_nothing_to_fly(planned):
+    # stopped in its take-off before liftoff: ArduCopter refuses AUTO there (Missing
+    # Takeoff Cmd, seen on SITL), so no route is planned; the policy lands it
+    lat, lon, _ = planned.frame.to_lla(np.append(planned.paths[0][0][:2], 0.1))
+    on_ground = StandIn("uav1", 1, Status(lat_deg=float(lat), lon_deg=float(lon), alt_m=0.1))
+    home = GoingHome(planned, [on_ground, StandIn(), StandIn()])
+    refused = home.start([0], [], 0.0)
+    assert refused == {0: "still on the ground at its home"}
+    assert not home.plan.routes
