@@ -92,7 +92,6 @@ class GoingHome:
         self.plan: ReturnPlan | None = None  # every route home planned so far
         self.started_t: float | None = None  # when the first were planned
         self._done: queue.SimpleQueue = queue.SimpleQueue()
-        self._threads: list[threading.Thread] = []
 
     def start(self, answered: Sequence[int], left: Sequence[int], now: float) -> dict[int, str]:
         """Plan the way home of the ``answered`` vehicles (stopped where they are), the
@@ -139,10 +138,8 @@ class GoingHome:
         for j in positions:
             if j not in plan.routes:
                 continue
-            t = threading.Thread(target=self._fly_home, args=(j,), daemon=True,
-                                 name=f"{self.vehicles[j].name} home")
-            t.start()
-            self._threads.append(t)
+            threading.Thread(target=self._fly_home, args=(j,), daemon=True,
+                             name=f"{self.vehicles[j].name} home").start()
         return refused
 
     def mission(self, j: int) -> list:

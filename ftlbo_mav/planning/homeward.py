@@ -43,8 +43,15 @@ import numpy as np
 
 from ..ardupilot.flight_path import STEP_S
 from ..gnss import true_distance
-from .geometric import Discs, segments_clear, shortest_route, shortest_routes
-from .predicted import FlightModel, keep_clearance
+from .geometric import (
+    Discs,
+    _in_rectangle,
+    centroid_rectangle,
+    segments_clear,
+    shortest_route,
+    shortest_routes,
+)
+from .predicted import FlightModel, keep_clearance, predict
 from .problem import PlanningProblem
 from .proximity import nearest_samples
 from .seeds import RouteChains
@@ -101,8 +108,7 @@ class Route:
     ``holds_s (P,)``: whole seconds held at each (its wait at point 1); ``land (3,)`` the
     landing point on the ground; ``layer_m``; ``clearance_m`` the smallest predicted
     distance of its flown path to an obstacle's surface; ``times (T,)``, ``positions
-    (T, 3)`` its predicted flight on the common clock, to standing on the ground;
-    ``corners_moved`` by :func:`.predicted.keep_clearance`."""
+    (T, 3)`` its predicted flight on the common clock, to standing on the ground."""
 
     points: np.ndarray
     holds_s: np.ndarray
@@ -111,7 +117,6 @@ class Route:
     clearance_m: float
     times: np.ndarray
     positions: np.ndarray
-    corners_moved: int = 0
 
     @property
     def wait_s(self) -> float:
@@ -273,7 +278,7 @@ def _route(here: np.ndarray, land: np.ndarray, layer: float, world: World,
                       f"obstacle (clearance {kept:g} m)")
     route = Route(points=kept_path.centroid, holds_s=kept_path.holds_s, land=land,
                   layer_m=layer, clearance_m=clearance, times=np.zeros(0),
-                  positions=np.zeros((0, 3)), corners_moved=kept_path.moved)
+                  positions=np.zeros((0, 3)))
     return _flown(route, world, kept_path.prediction), ""
 
 
@@ -298,7 +303,7 @@ def _through_roadmap(problem: PlanningProblem, roadmap: np.ndarray) -> np.ndarra
     discs = Discs(problem.centres, problem.radii, np.arange(len(problem.radii)),
                   np.zeros(len(problem.radii), int))
     clear = segments_clear(nodes[i], nodes[j], discs)
-    inside = _inside_area(problem, nodes)
+    inside = _in_rectangle(nodes, *centroid_rectangle(problem))
     ok = clear & inside[i] & inside[j]
     weight = np.full((n, n), np.inf)
     length = np.hypot(*(nodes[i] - nodes[j]).T)
@@ -324,11 +329,6 @@ def _through_roadmap(problem: PlanningProblem, roadmap: np.ndarray) -> np.ndarra
     return np.column_stack([points, np.full(len(points), problem.start[2])])
 
 
-def _inside_area(problem: PlanningProblem, xy: np.ndarray) -> np.ndarray:
-    return np.all((xy >= problem.area_lower - 1e-9) & (xy <= problem.area_upper + 1e-9),
-                  axis=1)
-
-
 def _waypoints(problem: PlanningProblem, route) -> np.ndarray:
     """The fewest waypoints ``(m, 3)`` of a clear chain within :data:`ROUTE_SLACK` of the
     route (none where the straight line is clear)."""
@@ -347,8 +347,6 @@ def _flown(route: Route, world: World, prediction=None) -> Route:
     landing point (``prediction``, or flown now with its holds), then NAV_LAND's
     descent, then standing there."""
     if prediction is None:
-        from .predicted import predict
-
         prediction = predict(route.points[None], model=world.model,
                              centres=np.zeros((0, 2)), radii=np.zeros(0),
                              holds_s=route.holds_s)

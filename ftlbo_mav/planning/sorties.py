@@ -100,7 +100,7 @@ def estimates(p: Plan) -> Callable[[int, int], float]:
     speed = p.scenario.mission.speed_m_s or nav.wp_speed
     paths = p.uav_paths
 
-    def way(n: int, a: np.ndarray, b: np.ndarray) -> float:
+    def way(a: np.ndarray, b: np.ndarray) -> float:
         metres = DETOUR * float(np.hypot(*(b[:2] - a[:2])))
         climb = abs(float(b[2] - a[2]))
         return (battery.mah(metres / speed, speed, 0.0)
@@ -112,8 +112,8 @@ def estimates(p: Plan) -> Callable[[int, int], float]:
             used = c.total_mah - c.to_end_mah  # (P,) used on arriving at each point
             home = paths[n, 0]
             lanes = float(used[ends[b, 1]] - used[ends[a, 0]])
-            total = (c.takeoff_mah + way(n, home, paths[n, ends[a, 0]]) + lanes
-                     + way(n, paths[n, ends[b, 1]], home) + c.end_mah)
+            total = (c.takeoff_mah + way(home, paths[n, ends[a, 0]]) + lanes
+                     + way(paths[n, ends[b, 1]], home) + c.end_mah)
             worst = max(worst, total)
         return worst
 
@@ -193,10 +193,6 @@ def sortie_note(sorties: Sorties) -> list[str]:
     return lines
 
 
-__all__ = ["Sorties", "SortieError", "battery_short", "cut", "estimates", "lane_scenario",
-           "plan_sorties", "sortie_note", "sorties_document"]
-
-
 def sorties_document(sorties: Sorties, folders: list[str]) -> dict:
     """``sorties.json``: the battery, the whole survey in one flight, and per sortie its
     folder, lanes (1-based), feasibility, each UAV's charge (mAh) and the longest time."""
@@ -213,3 +209,7 @@ def sorties_document(sorties: Sorties, folders: list[str]) -> dict:
             "whole": {"feasible": whole.feasible,
                       "charge_mah": [round(c.total_mah, 1) for c in whole.charges or ()]},
             "sorties": rows}
+
+
+__all__ = ["Sorties", "SortieError", "battery_short", "cut", "estimates", "lane_scenario",
+           "plan_sorties", "sortie_note", "sorties_document"]
