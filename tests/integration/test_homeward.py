@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import threading
 import time
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -127,6 +128,28 @@ class Track(SecondPort):
         super().close()
 
 
+@contextmanager
+def _tracked(folder):
+    """Three vehicles with the plan in ``folder`` uploaded and a :class:`Track` on each
+    one's second link: ``(fleet, tracks)``; the tracks closed after."""
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(folder, fleet.urls)
+        tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
+        try:
+            yield fleet, tracks
+        finally:
+            for t in tracks:
+                t.close()
+
+
+def _judge_home(planned, tracks, returning, gone, fault_t: float) -> dict:
+    """:func:`_judge` over the ``returning`` vehicles' tracks from where each set off
+    home after the fault."""
+    frame = planned.frame
+    return _judge(planned, {j: tracks[j].enu(frame, tracks[j].home_started(frame, fault_t))
+                            for j in returning}, gone)
+
+
 def _at(track: np.ndarray, t: np.ndarray) -> np.ndarray:
     return np.column_stack([np.interp(t, track[:, 0], track[:, k]) for k in (1, 2, 3)])
 
@@ -180,10 +203,8 @@ def _check(result, planned, judged, returning) -> None:
 
 def test_a_vehicle_lost_mid_leg_the_others_fly_home_and_land_there(plan_dir):  # noqa: F811
     planned = load_planned_flight(plan_dir)
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
-        _upload(plan_dir, fleet.urls)
-        tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
-        times = {}
+    times = {}
+    with _tracked(plan_dir) as (fleet, tracks):
 
         def fault():
             _in_auto_for(tracks[0], 5.0)
@@ -192,28 +213,20 @@ def test_a_vehicle_lost_mid_leg_the_others_fly_home_and_land_there(plan_dir):  #
             tracks[1].stop.set()  # its second link is gone with it
             return times["fault"]
 
-        try:
-            result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
-            for j in (0, 2):
-                assert tracks[j].wait(lambda p: not p.armed, 5.0)
-            time.sleep(0.5)
-        finally:
-            for t in tracks:
-                t.close()
-    frame = planned.frame
-    gone = tracks[1].enu(frame)[-1, 1:]
-    judged = _judge(planned, {j: tracks[j].enu(frame, tracks[j].home_started(frame, times["fault"]))
-                              for j in (0, 2)}, gone)
+        result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
+        for j in (0, 2):
+            assert tracks[j].wait(lambda p: not p.armed, 5.0)
+        time.sleep(0.5)
+    gone = tracks[1].enu(planned.frame)[-1, 1:]
+    judged = _judge_home(planned, tracks, (0, 2), gone, times["fault"])
     print(f"[{BACKEND}] lost mid-leg, the others home: {judged}")
     _check(result, planned, judged, (0, 2))
 
 
 def test_a_mode_taken_over_the_others_fly_home_around_it(plan_dir):  # noqa: F811
     planned = load_planned_flight(plan_dir)
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
-        _upload(plan_dir, fleet.urls)
-        tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
-        times = {}
+    times = {}
+    with _tracked(plan_dir) as (fleet, tracks):
 
         def fault():
             _in_auto_for(tracks[2], 5.0)
@@ -228,11 +241,7 @@ def test_a_mode_taken_over_the_others_fly_home_around_it(plan_dir):  # noqa: F81
             held = tracks[2].enu(planned.frame)[-1, 1:]
         finally:
             tracks[2].set_mode("LAND")
-            for t in tracks:
-                t.close()
-    frame = planned.frame
-    judged = _judge(planned, {j: tracks[j].enu(frame, tracks[j].home_started(frame, times["fault"]))
-                              for j in (0, 1)}, held)
+    judged = _judge_home(planned, tracks, (0, 1), held, times["fault"])
     print(f"[{BACKEND}] mode taken over, the others home: {judged}")
     _check(result, planned, judged, (0, 1))
     assert "uav3 (sysid 3): mode: switched to BRAKE" in result.output
@@ -240,9 +249,7 @@ def test_a_mode_taken_over_the_others_fly_home_around_it(plan_dir):  # noqa: F81
 
 def test_a_vehicle_lost_in_the_take_off_the_others_come_down_at_home(plan_dir):  # noqa: F811
     planned = load_planned_flight(plan_dir)
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
-        _upload(plan_dir, fleet.urls)
-        tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
+    with _tracked(plan_dir) as (fleet, tracks):
 
         def fault():
             assert tracks[0].wait(lambda p: p.armed, 120.0)
@@ -251,13 +258,9 @@ def test_a_vehicle_lost_in_the_take_off_the_others_come_down_at_home(plan_dir): 
             tracks[1].stop.set()
             return time.monotonic()
 
-        try:
-            result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
-            for j in (0, 2):
-                assert tracks[j].wait(lambda p: not p.armed, 5.0)
-        finally:
-            for t in tracks:
-                t.close()
+        result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
+        for j in (0, 2):
+            assert tracks[j].wait(lambda p: not p.armed, 5.0)
     out = result.output
     print(f"[{BACKEND}] lost in the take-off:\n{out}")
     assert result.exit_code == 1, out
