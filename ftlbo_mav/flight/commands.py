@@ -29,7 +29,9 @@ from .keeper import KeeperOptions
 from .monitor import LiveView, Monitor
 from .planned import PlannedFlight, load_planned_flight
 from .policy import FaultPolicy
+from .progress import flown, progress_document
 from .report import render_report_png, summarize
+from .resume import PROGRESS_FILE, plan_rest
 from .vehicle import FlightAborted, FlightError
 from .watch import battery_watch, describe, landing_points, observe, watch_from_outside
 
@@ -118,8 +120,11 @@ _rtcm_option = click.option(
 
 def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                         sysids: list[int], *, keeper=None, outcome: list[str] | None = None,
-                        events: list[str] | None = None, rtcm=None) -> dict:
-    """flight.csv, summary.json and report.png in ``out_dir``; returns the summary.
+                        events: list[str] | None = None, rtcm=None,
+                        progress: bool = False) -> dict:
+    """flight.csv, summary.json and report.png in ``out_dir`` (photos.csv when a vehicle
+    reported photos; with ``progress``, ``fly``'s progress.json: how far each UAV got
+    along its plan, what ``fly --resume`` carries on from); returns the summary.
     ``events``: the departures seen, one line each; ``outcome``: per vehicle, what
     happened and what was done when the flight left its plan."""
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)
@@ -144,11 +149,22 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
     battery = battery_summary(planned, monitor.record, sysids)
     if battery:
         summary["battery"] = battery
-    files = {"flight.csv": monitor.record.to_csv(),
-             "summary.json": json.dumps(summary, indent=2) + "\n"}
+    files = {"flight.csv": monitor.record.to_csv()}
+    if monitor.record.photos:
+        files["photos.csv"] = monitor.record.photos_csv()
+        summary["photos"] = {planned.names[n]: len(monitor.record.photos_of(s))
+                             for n, s in enumerate(sysids) if n < planned.count}
+    if progress:
+        flown_now = flown(planned, monitor.record, sysids)
+        summary["progress"] = {"last_point": planned.paths.shape[1] - 1,
+                               "uavs": {p.name: round(p.point, 2) for p in flown_now}}
+        files[PROGRESS_FILE] = json.dumps(progress_document(planned, flown_now),
+                                          indent=1) + "\n"
+    files["summary.json"] = json.dumps(summary, indent=2) + "\n"
     if len(times):
         files["report.png"] = render_report_png(planned, times, positions, seqs, summary)
-    with OutputFolder(out_dir, replaces=[r"report\.png"]) as out:  # all three, or none
+    with OutputFolder(out_dir, replaces=[r"report\.png", r"photos\.csv", r"progress\.json"]
+                      ) as out:  # all, or none
         out.write_all(files)
     return summary
 
@@ -195,6 +211,13 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
     if rtcm:
         click.echo(f"RTCM corrections: {rtcm['frames']} frames, {rtcm['bytes']} bytes "
                    f"({rtcm['bytes_per_s']:.0f} bytes/s), {rtcm['dropped']} dropped")
+    progress = summary.get("progress")
+    if progress and min(progress["uavs"].values(), default=0) < progress["last_point"]:
+        click.echo("got along the plan to path points " + ", ".join(
+            f"{n} {p:.2f}" for n, p in progress["uavs"].items())
+            + f" of {progress['last_point']}: to carry on from there, `ftlbo-mav fly "
+            f"{out_dir.parent} --resume`" + ("" if out_dir.name == "flight" else
+                                            f" --progress {out_dir / PROGRESS_FILE}"))
     click.echo(f"flight log, summary and report in {out_dir}/")
 
 
@@ -252,24 +275,44 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
               help="Fly a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x (the "
                    "firmware the planner's flight model follows), saying what is then not "
                    "promised. Without it pre-flight refuses it.")
+@click.option("--resume", is_flag=True,
+              help="Carry on after a flight of PLAN_DIR that ended early: plan the rest from "
+                   "the first point not yet flown (lanes and photos neither skipped nor "
+                   "taken twice) into PLAN_DIR/resume, upload it, verified, and fly it "
+                   "(log in PLAN_DIR/resume/flight).")
+@click.option("--progress", "progress_file", type=click.Path(dir_okay=False, path_type=Path),
+              help="With --resume: the progress.json of the flight to carry on from "
+                   "(default PLAN_DIR/flight/progress.json, the last flight's).")
 @timing_options
 @_rtcm_option
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
                 on_departure, lost_wait, use_keeper, arm_budget, preflight_timeout, flight_timeout,
-                any_firmware, timeout, retries, ready_timeout, discover_timeout, signing_key,
-                rtcm_source):
+                any_firmware, resume, progress_file, timeout, retries, ready_timeout,
+                discover_timeout, signing_key, rtcm_source):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
     armed unless every vehicle passes the pre-flight checks. Ctrl-C sends every vehicle
     to RTL (or --abort-mode LAND); so does `ftlbo-mav abort` from another terminal,
     through the control endpoint on 127.0.0.1:--control-port.
+
+    Every flight writes how far each UAV got along its plan (progress.json beside the
+    log); after an early end (a vehicle lost, a battery, an abort), --resume carries on
+    from there with a fresh battery.
     """
     planned = load_planned_flight(plan_dir)
     names, sysids, urls = _fleet_args(planned, sysid_text, connect)
     _check_rtcm(rtcm_source)
     key = load_key(signing_key) if signing_key else None
+    if progress_file is not None and not resume:
+        raise BadInput("--progress names the flight to resume: give it with --resume")
+    if resume:
+        planned = _resume(planned, progress_file or plan_dir / "flight" / PROGRESS_FILE,
+                          sysids, urls, any_firmware=any_firmware, signing_key=key,
+                          timing=_timing(timeout, retries, ready_timeout),
+                          discover_timeout_s=discover_timeout)
+        plan_dir = planned.folder
     monitor = Monitor(planned)
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode,
@@ -280,7 +323,8 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     out_dir = log_dir or plan_dir / "flight"
     check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
-               on_position=monitor) as fleet, _forwarding(forward, fleet), \
+               on_position=monitor, on_photo=monitor.photo) as fleet, \
+            _forwarding(forward, fleet), \
             _control(control_port, fleet), _rtcm(rtcm_source, fleet) as rtcm:
         monitor.vehicles = fleet.vehicles
         if rtcm is not None:
@@ -290,7 +334,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
 
         def report(**extra) -> dict:
             return write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper,
-                                       events=events, rtcm=rtcm, **extra)
+                                       events=events, rtcm=rtcm, progress=True, **extra)
 
         try:
             fly(planned, fleet.vehicles, options=options,
@@ -320,6 +364,39 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     summary = report()
     click.echo("all vehicles finished their missions")
     _print_summary(summary, out_dir)
+
+
+def _resume(planned: PlannedFlight, progress_file: Path, sysids: list[int], urls, *,
+            any_firmware: bool, signing_key, timing, discover_timeout_s: float
+            ) -> PlannedFlight:
+    """``fly --resume`` before the flight: the rest planned and written
+    (:func:`~ftlbo_mav.flight.resume.plan_rest`), uploaded to every vehicle and verified;
+    the rest's plan folder as the flight to fly. Exits 0 when nothing is left to fly, 1
+    when a vehicle did not take its mission."""
+    from ..link.commands import upload_folder
+    from ..planning.resume import NothingToResume
+
+    click.echo(f"resuming from {progress_file}: planning the rest", err=True)
+    try:
+        rest = plan_rest(planned, progress_file)
+    except NothingToResume as exc:
+        click.echo(str(exc))
+        sys.exit(0)
+    flown_to = ", ".join(f"{n} {p:.2f}" for n, p in zip(planned.names, rest.progress))
+    click.echo(f"the flight before got to path points {flown_to} of "
+               f"{planned.paths.shape[1] - 1}; resuming at {rest.at.describe(rest.plan)}")
+    click.echo(f"the rest planned in {rest.folder} ({rest.plan.waypoint_count} points, "
+               f"{rest.plan.seconds:.2f} s); uploading it")
+    results = upload_folder(rest.folder, sysids, urls, any_firmware=any_firmware,
+                            timing=timing, discover_timeout_s=discover_timeout_s,
+                            signing_key=signing_key)
+    for r in results:
+        click.echo(f"{r.name} -> sysid {r.sysid}: "
+                   + (r.message if r.verified else f"FAILED: {r.message}"))
+    if not all(r.verified for r in results):
+        click.echo("not flown: every vehicle must hold the rest of the plan", err=True)
+        sys.exit(1)
+    return load_planned_flight(rest.folder)
 
 
 @click.command()

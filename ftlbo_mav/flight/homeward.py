@@ -31,7 +31,7 @@ import numpy as np
 from ..ardupilot.navigation import vehicle_navigation
 from ..link.swarm import upload_and_verify
 from ..link.transfer import Timing
-from ..mission.items import build_return
+from ..mission.items import CMD_DO_SET_CAM_TRIGG_DIST, build_return
 from ..planning.homeward import KeepOut, ReturnPlan, World, plan_return
 from ..planning.predicted import FlightModel
 from .keeper import planned_speed
@@ -153,7 +153,9 @@ class GoingHome:
                             path=list(zip(lat.tolist(), lon.tolist(), alt.tolist())),
                             holds_s=[float(h) for h in route.holds_s],
                             land=(float(land_lat), float(land_lon)),
-                            speed_m_s=planned_speed(self.planned.missions))
+                            speed_m_s=planned_speed(self.planned.missions),
+                            camera_off=any(it.command == CMD_DO_SET_CAM_TRIGG_DIST
+                                           for it in self.planned.missions[j]))
 
     def _fly_home(self, j: int) -> None:
         v, route = self.vehicles[j], self.plan.routes[j]

@@ -19,7 +19,12 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..geo import LocalFrame
-from ..mission.items import CMD_DO_CHANGE_SPEED, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT
+from ..mission.items import (
+    CMD_DO_CHANGE_SPEED,
+    CMD_DO_SET_CAM_TRIGG_DIST,
+    CMD_NAV_TAKEOFF,
+    CMD_NAV_WAYPOINT,
+)
 from .fleet import concurrently
 from .outcome import abort, aborted
 from .planned import PlannedFlight
@@ -42,9 +47,12 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
     while the vehicles climb (the departure watch: it raises when one leaves the plan).
     """
     targets = [takeoff_item(m)[1] for m in planned.missions]
+    cameras = [any(it.command == CMD_DO_SET_CAM_TRIGG_DIST for it in m) for m in planned.missions]
 
     def launch(pair) -> None:
         v, alt = pair
+        if cameras[vehicles.index(v)]:
+            camera_off(v, say)
         # ArduCopter refuses GUIDED, then arming, until its EKF has a position estimate
         # (SITL: about 18 s after the pre-arm checks pass): both wait within the budget
         deadline = time.monotonic() + options.arm_budget_s
@@ -78,6 +86,22 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
                               f" s (at {pending[0].status.alt_m:.1f} m); all vehicles landing")
         poll()
         pending[0].wait_for(hovering(targets[vehicles.index(pending[0])]), 0.1)
+
+
+def camera_off(v: FlightVehicle, say: Callable[[str], None]) -> None:
+    """Distance triggering off (MAV_CMD_DO_SET_CAM_TRIGG_DIST 0) before a survey copter
+    takes off: ArduCopter keeps a trigger distance until it is changed, armed or not
+    (AP_Camera_Backend::update has no arming check), so a copter whose last flight ended
+    in a lane (its pilot's RTL, a failsafe) would take photos from its take-off on to its
+    first lane. Its missions turn the trigger on at each lane. A refusal is said, not
+    fatal: a copter without a camera has no photos to take."""
+    try:
+        result = v.command(R.MAV_CMD_DO_SET_CAM_TRIGG_DIST, 0.0, 0.0, 0.0, step="camera off")
+    except FlightError as exc:
+        result = str(exc)
+    if result != R.MAV_RESULT_ACCEPTED:
+        say(f"{v.name} (sysid {v.sysid}): its camera's distance trigger could not be turned "
+            f"off before take-off ({result}): it may take photos before its first lane")
 
 
 def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,

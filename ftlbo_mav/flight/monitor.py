@@ -16,7 +16,7 @@ import numpy as np
 from .metrics import min_clearance, min_separation, slot_errors
 from .navigation import navigation_short
 from .planned import PlannedFlight
-from .record import FlightRecord, Sample
+from .record import FlightRecord, Photo, Sample
 
 
 class Monitor:
@@ -38,6 +38,13 @@ class Monitor:
                         s.battery_pct if s.battery_pct is not None else -1)
         with self._lock:
             self.record.add(sample)
+
+    def photo(self, vehicle, msg, arrival: float) -> None:
+        """A CAMERA_FEEDBACK of ``vehicle`` (its ``on_photo`` hook), recorded."""
+        photo = Photo(arrival - self.t0, vehicle.sysid, msg.lat * 1e-7, msg.lng * 1e-7,
+                      float(msg.alt_rel), int(msg.img_idx))
+        with self._lock:
+            self.record.add_photo(photo)
 
     def positions(self) -> np.ndarray | None:
         """Latest positions ``(N, 3)`` metres ENU in the plan's frame (None if unknown)."""

@@ -34,14 +34,52 @@ class Sample:
     battery_pct: int = -1  # SYS_STATUS battery_remaining (-1: not reported)
 
 
-class FlightRecord:
-    """Samples in arrival order, with per-vehicle access and a common time grid."""
+@dataclass(frozen=True)
+class Photo:
+    """One photo a vehicle said it took (CAMERA_FEEDBACK): ``t`` seconds since the
+    recording started, when it arrived; where (``alt_m`` above home) and its image index."""
 
-    def __init__(self, samples: list[Sample] | None = None) -> None:
+    t: float
+    sysid: int
+    lat_deg: float
+    lon_deg: float
+    alt_m: float
+    image: int
+
+
+class FlightRecord:
+    """Samples in arrival order, with per-vehicle access and a common time grid; the
+    photos the vehicles reported beside them."""
+
+    def __init__(self, samples: list[Sample] | None = None,
+                 photos: list[Photo] | None = None) -> None:
         self.samples: list[Sample] = list(samples or [])
+        self.photos: list[Photo] = list(photos or [])
 
     def add(self, sample: Sample) -> None:
         self.samples.append(sample)
+
+    def add_photo(self, photo: Photo) -> None:
+        self.photos.append(photo)
+
+    def photos_of(self, sysid: int) -> list[Photo]:
+        return [p for p in self.photos if p.sysid == sysid]
+
+    def photos_csv(self) -> str:
+        """``photos.csv``: one row per photo, in arrival order."""
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow([f.name for f in fields(Photo)])
+        for p in self.photos:
+            writer.writerow([f"{p.t:.3f}", p.sysid, f"{p.lat_deg:.8f}", f"{p.lon_deg:.8f}",
+                             f"{p.alt_m:.3f}", p.image])
+        return buf.getvalue()
+
+    @staticmethod
+    def photos_from_csv(text: str) -> list[Photo]:
+        return [Photo(float(r["t"]), int(r["sysid"]), float(r["lat_deg"]), float(r["lon_deg"]),
+                      float(r["alt_m"]), int(r["image"]))
+                for r in csv.DictReader(io.StringIO(text))]
 
     def of(self, sysid: int) -> list[Sample]:
         return [s for s in self.samples if s.sysid == sysid]
@@ -140,4 +178,4 @@ def fitted_times(t: np.ndarray, boot: np.ndarray) -> np.ndarray:
     return a + b * boot
 
 
-__all__ = ["FlightRecord", "Sample", "fitted_times", "sample_times"]
+__all__ = ["FlightRecord", "Photo", "Sample", "fitted_times", "sample_times"]

@@ -96,6 +96,7 @@ class Status:
     # current drawn (A)
     battery_pct: int | None = None
     battery_current_a: float = 0.0
+    photos: int = 0  # CAMERA_FEEDBACK messages received
     # what the vehicle says it is: HEARTBEAT type and autopilot, AUTOPILOT_VERSION's
     # flight_sw_version (asked for at pre-flight; ardupilot/firmware.py judges them)
     vehicle_type: int | None = None
@@ -110,16 +111,20 @@ class Status:
 
 class FlightVehicle:
     """``name`` (uav1...) at ``sysid`` on ``link``; ``on_position(vehicle)`` is called from
-    the reader thread after every position report (the recorder hooks in there)."""
+    the reader thread after every position report (the recorder hooks in there), and
+    ``on_photo(vehicle, msg, arrival)`` after every CAMERA_FEEDBACK (``arrival``:
+    ``time.monotonic()``)."""
 
     def __init__(self, name: str, sysid: int, link, *,
                  on_position: Callable[[FlightVehicle], None] | None = None,
+                 on_photo: Callable[[FlightVehicle, object, float], None] | None = None,
                  command_timeout_s: float = 1.5, command_retries: int = 5,
                  position_hz: float = 10.0) -> None:
         self.name, self.sysid, self.link = name, sysid, link
         # found by its HEARTBEAT (Fleet's discovery) just now: heard from at creation
         self.status = Status(heard_t=time.monotonic())
         self.on_position = on_position
+        self.on_photo = on_photo
         self.command_timeout_s = command_timeout_s
         self.command_retries = command_retries
         self._changed = threading.Condition()
@@ -150,7 +155,7 @@ class FlightVehicle:
 
     def _update(self, msg) -> None:
         kind, s, now = msg.get_type(), self.status, time.monotonic()
-        position = False
+        position, photo = False, None
         with self._changed:
             s.heard_t = now
             if kind == "HEARTBEAT":
@@ -197,6 +202,9 @@ class FlightVehicle:
                     s.mode = self._requested_mode
             elif kind == "PARAM_VALUE":
                 s.params[msg.param_id] = msg.param_value
+            elif kind == "CAMERA_FEEDBACK":
+                s.photos += 1
+                photo = msg
             elif kind == "STATUSTEXT":
                 s.text_log.append((now, msg.severity, msg.text))
                 del s.text_log[:-50]
@@ -206,6 +214,8 @@ class FlightVehicle:
             self._changed.notify_all()
         if position and self.on_position is not None:
             self.on_position(self)
+        if photo is not None and self.on_photo is not None:
+            self.on_photo(self, photo, now)
 
     def wait_for(self, predicate: Callable[[Status], bool], timeout_s: float) -> bool:
         """Wait until ``predicate(status)`` holds, at most ``timeout_s``."""

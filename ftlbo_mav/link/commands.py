@@ -193,10 +193,35 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_para
     exactly what its files say.
     """
     sysids = parse_sysids(sysid_text)
+    key = load_key(signing_key) if signing_key else None
+    results = upload_folder(mission_dir, sysids, _urls(connect) or default_urls_for(sysids),
+                            capacity=capacity, no_fence=no_fence,
+                            no_vehicle_params=no_vehicle_params, any_firmware=any_firmware,
+                            timing=_timing(timeout, retries, ready_timeout),
+                            discover_timeout_s=discover_timeout, signing_key=key,
+                            sysid_text=sysid_text)
+    for r in results:
+        status = r.message if r.verified else f"FAILED: {r.message}"
+        click.echo(f"{r.name} -> sysid {r.sysid}: {status}")
+    ok = sum(r.verified for r in results)
+    click.echo(f"{ok}/{len(results)} vehicles verified")
+    if ok != len(results):
+        sys.exit(1)
+
+
+def upload_folder(mission_dir: Path, sysids: list[int], urls: list[str], *,
+                  capacity: int | None = None, no_fence: bool = False,
+                  no_vehicle_params: bool = False, any_firmware: bool = False,
+                  timing: Timing, discover_timeout_s: float, signing_key: bytes | None,
+                  sysid_text: str = "") -> list:
+    """What ``upload`` does, for ``fly --resume`` too: every file of ``mission_dir`` read
+    and checked before any vehicle is contacted (:class:`BadInput`), notes and progress on
+    stderr, then every vehicle uploaded and verified at once (:func:`upload_swarm`).
+    Returns the results in vehicle order."""
     files = mission_files(mission_dir)
     if len(files) != len(sysids):
         raise BadInput(f"{mission_dir} holds {len(files)} missions (uav1..uav{len(files)}) but "
-                       f"--sysid {sysid_text} names {len(sysids)} vehicles")
+                       f"--sysid {sysid_text or len(sysids)} names {len(sysids)} vehicles")
     try:  # every file is read before any vehicle is touched
         missions = [tuple(read_waypoints(f)) for f in files]
         fences = [None if no_fence else read_fence_set(mission_dir, f.stem) for f in files]
@@ -208,8 +233,6 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_para
             if len(m) > capacity:
                 raise BadInput(f"{f}: {f.name} has {len(m)} items, more than --capacity "
                                f"{capacity}; no vehicle was contacted")
-    key = load_key(signing_key) if signing_key else None
-    urls = _urls(connect) or default_urls_for(sysids)
     assignments = [Assignment(f.stem, s, m, fence, params)
                    for f, s, m, fence in zip(files, sysids, missions, fences)]
     if not no_fence and all(fence is None for fence in fences):
@@ -220,19 +243,11 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_para
             click.echo(f"note: {a.name}: {line} (ArduCopter keeps only this; the "
                        "read-back is verified against it)", err=True)
     board = ProgressBoard([(a.name, a.sysid) for a in assignments])
-    results = upload_swarm(assignments, urls, signing_key=key,
-                           timing=_timing(timeout, retries, ready_timeout),
-                           discover_timeout_s=discover_timeout, on_progress=board,
-                           any_firmware=any_firmware,
-                           on_warning=lambda name, sysid, text: click.echo(
-                               f"warning: {name} (sysid {sysid}): {text}", err=True))
-    for r in results:
-        status = r.message if r.verified else f"FAILED: {r.message}"
-        click.echo(f"{r.name} -> sysid {r.sysid}: {status}")
-    ok = sum(r.verified for r in results)
-    click.echo(f"{ok}/{len(results)} vehicles verified")
-    if ok != len(results):
-        sys.exit(1)
+    return upload_swarm(assignments, urls, signing_key=signing_key, timing=timing,
+                        discover_timeout_s=discover_timeout_s, on_progress=board,
+                        any_firmware=any_firmware,
+                        on_warning=lambda name, sysid, text: click.echo(
+                            f"warning: {name} (sysid {sysid}): {text}", err=True))
 
 
 @click.command()

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..ardupilot.navigation import vehicle_params
+from ..ardupilot.navigation import vehicle_navigation, vehicle_params
+from ..energy import battery_from_document
 from ..errors import MissionFileError
 from ..gnss import budget_from_document
 from ..inputs import read_user_text
@@ -28,12 +29,13 @@ from ..scenario import (
     Camera,
     Cylinder,
     GeoPoint,
+    MissionSettings,
     PlannerSettings,
     Scenario,
     Survey,
     ViaPoint,
 )
-from ..scenario.model import MAX_ALTITUDE_M, MAX_OFFSET_M, MAX_RADIUS_M
+from ..scenario.model import MAX_ALTITUDE_M, MAX_OFFSET_M, MAX_RADIUS_M, MIN_SEPARATION_M
 from .fence import UavFence, plan_fences
 from .files import OutputFolder, digest, read_mission_text
 from .geodetic import GeodeticPlan, geodetic_view
@@ -66,7 +68,11 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
     camera = ()
     if survey is not None and survey.trigger_distance_m is not None:
         camera = tuple((a, b, survey.trigger_distance_m) for a, b in lane_points(plan))
+    taken = survey.first_photo_taken if survey is not None else ()
     for n, lla in enumerate(view.uav_paths):
+        lanes = camera
+        if camera and n < len(taken) and taken[n]:  # resumed where its photo was taken
+            lanes = ((*camera[0], False), *camera[1:])
         items = build_mission(
             home=(float(lla[0, 0]), float(lla[0, 1])),
             takeoff_alt_m=float(lla[0, 2]),
@@ -74,7 +80,7 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
             end_action=settings.end_action,
             speed_m_s=settings.speed_m_s,
             holds_s=None if plan.holds_s is None else [float(h) for h in plan.holds_s],
-            camera=camera,
+            camera=lanes,
         )
         offset = tuple(float(v) for v in plan.problem.offsets[n])
         missions.append(UavMission(f"uav{n + 1}", offset, tuple(items)))
@@ -82,16 +88,9 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
 
 
 def lane_points(plan: Plan) -> list[tuple[int, int]]:
-    """Each survey lane's entry and exit as indices into the plan's paths (the lanes'
-    ends are the last via points, two a lane; a leg of ``m`` waypoints adds ``m + 1``
-    points after its start)."""
-    survey = plan.scenario.survey
-    if survey is None or not survey.lanes:
-        return []
-    starts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs])  # route point -> index
-    first = len(plan.scenario.via) - 2 * len(survey.lanes) + 1  # route index of lane 1's entry
-    return [(int(starts[first + 2 * k]), int(starts[first + 2 * k + 1]))
-            for k in range(len(survey.lanes))]
+    """Each survey lane's entry and exit as indices into the plan's paths
+    (:meth:`~ftlbo_mav.planning.planner.Plan.lane_points`)."""
+    return plan.lane_points()
 
 
 def _finite(value: float) -> float | None:
@@ -166,6 +165,7 @@ def plan_document(
         "clearance": plan.scenario.clearance_m,
         "navigation": _navigation_document(plan),
         "corner_allowance": plan.scenario.mission.corner_allowance_m,
+        "mission": {"end_action": sc.mission.end_action, "speed": sc.mission.speed_m_s},
         "vehicle": vehicle_params(sc.vehicle),
         "predicted": _predicted_document(plan),
         **({} if sc.battery is None else {"battery": sc.battery.document()}),
@@ -193,6 +193,8 @@ def plan_document(
             # further inside than the margin, for the copters' predicted swings (planner)
             "lanes_inset": round(plan.lanes_inset_m, 3),
             "camera": camera_document(plan, photos),
+            **({"first_photo_taken": list(survey.first_photo_taken)}
+               if survey.first_photo_taken else {}),
         },
         "legs": [_leg_document(leg, int(f)) for leg, f in zip(plan.legs, firsts)],
         "centroid": _points(view.centroid),
@@ -429,7 +431,8 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
                 lane_spacing_m=None if lane_spacing is None else float(lane_spacing),
                 camera=None if camera is None else _camera_from_document(camera),
                 trigger_distance_m=None if camera is None else float(
-                    camera["trigger_distance"]))
+                    camera["trigger_distance"]),
+                first_photo_taken=tuple(bool(v) for v in survey.get("first_photo_taken", ())))
         scenario = Scenario(
             corner_a=GeoPoint(*map(float, area["corner_a"])),
             corner_b=GeoPoint(*map(float, area["corner_b"])),
@@ -448,6 +451,12 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
             via=via,
             survey=survey,
             navigation=budget_from_document(doc.get("navigation")),
+            # what the plan was made with, so that it can be planned again (fly --resume)
+            mission=_mission_settings(doc),
+            min_separation_m=float(doc.get("min_separation", MIN_SEPARATION_M)),
+            vehicle=vehicle_navigation({str(k): float(v)
+                                        for k, v in (doc.get("vehicle") or {}).items()}),
+            battery=battery_from_document(doc.get("battery")),
         )
         waypoints = doc["waypoints"]
         settings = PlannerSettings(
@@ -522,6 +531,16 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
         holds_s=_holds(doc, len(centroid_enu), source),
         lanes_inset_m=lanes_inset,
     )
+
+
+def _mission_settings(doc: dict) -> MissionSettings:
+    """plan.json's ``mission`` and ``corner_allowance`` (a file written before ``mission``
+    was recorded reads as the defaults: its mission files say the rest)."""
+    mission = doc.get("mission") or {}
+    speed = mission.get("speed")
+    return MissionSettings(end_action=str(mission.get("end_action", "land")),
+                           speed_m_s=None if speed is None else float(speed),
+                           corner_allowance_m=float(doc.get("corner_allowance", 0.0)))
 
 
 def _holds(doc: dict, points: int, source: str) -> np.ndarray | None:

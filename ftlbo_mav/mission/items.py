@@ -104,7 +104,7 @@ def build_mission(
     end_action: str = "land",
     speed_m_s: float | None = None,
     holds_s: Sequence[float] | None = None,
-    camera: Sequence[tuple[int, int, float]] = (),
+    camera: Sequence[tuple] = (),
 ) -> list[MissionItem]:
     """The mission of one UAV.
 
@@ -118,7 +118,10 @@ def build_mission(
     NAV_LAND at the goal, RTL, or NAV_LOITER_UNLIM at the goal for ``end_action`` "land",
     "rtl" or "loiter". ``holds_s``: per path point the whole seconds the copter holds
     there (NAV_WAYPOINT param1: ArduCopter stops at such a waypoint instead of rounding
-    its corner; the planner's corner stops); default none.
+    its corner; the planner's corner stops); default none. ``camera``: per survey lane
+    ``(entry, exit, distance[, at_once])`` path point indices and the trigger distance:
+    DO_SET_CAM_TRIGG_DIST on after the entry (a photo at once unless ``at_once`` is
+    False: a lane resumed where its photo was taken), off after the exit.
     """
     if len(path) < 2:
         raise ValueError("a path needs at least a start and a goal")
@@ -133,11 +136,13 @@ def build_mission(
     if len(holds) != len(path):
         raise ValueError(f"holds_s has {len(holds)} values for {len(path)} path points")
     after: dict[int, list[dict]] = {}
-    for entry, exit_, distance in camera:
+    for entry, exit_, distance, *at_once in camera:
         if not 0 < entry < exit_ < len(path):
             raise ValueError(f"a lane from path point {entry} to {exit_} is not in the path")
+        first = not at_once or bool(at_once[0])
         after.setdefault(entry, []).append(dict(
-            command=CMD_DO_SET_CAM_TRIGG_DIST, param1=float(distance), param3=1.0))
+            command=CMD_DO_SET_CAM_TRIGG_DIST, param1=float(distance),
+            param3=1.0 if first else 0.0))
         after.setdefault(exit_, []).append(dict(command=CMD_DO_SET_CAM_TRIGG_DIST))
     for k, ((lat, lon, alt), hold) in enumerate(zip(path, holds)):
         items.append(dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt,
@@ -161,12 +166,24 @@ def build_mission(
     return [MissionItem(seq=i, **fields) for i, fields in enumerate(items)]
 
 
+def mission_settings(items: Sequence[MissionItem]) -> tuple[str, float | None]:
+    """``(end_action, speed_m_s)`` of a mission :func:`build_mission` wrote: "land", "rtl"
+    or "loiter" from its last item, the speed of its first DO_CHANGE_SPEED (None: none)."""
+    ends = {CMD_NAV_LAND: "land", CMD_NAV_RETURN_TO_LAUNCH: "rtl",
+            CMD_NAV_LOITER_UNLIM: "loiter"}
+    speed = next((float(it.param2) for it in items if it.command == CMD_DO_CHANGE_SPEED), None)
+    return ends.get(items[-1].command, "land") if items else "land", speed
+
+
 def build_return(*, home: tuple[float, float], path: Sequence[tuple[float, float, float]],
                  holds_s: Sequence[float], land: tuple[float, float],
-                 speed_m_s: float | None = None) -> list[MissionItem]:
+                 speed_m_s: float | None = None, camera_off: bool = False
+                 ) -> list[MissionItem]:
     """The mission home of a vehicle in the air (:mod:`ftlbo_mav.flight.homeward`): 0 home,
     1 a NAV_WAYPOINT where it hovers (``path[0]``, where AUTO is started, as ``fly``
-    starts a plan's legs), DO_CHANGE_SPEED to ``speed_m_s`` (when given), one
+    starts a plan's legs), with ``camera_off`` DO_SET_CAM_TRIGG_DIST 0 (a copter stopped
+    in a survey lane takes no photos on its way home: they would be nobody's, and a
+    resumed survey counts the photos taken), DO_CHANGE_SPEED to ``speed_m_s`` (when given), one
     NAV_WAYPOINT per further path point (param1: ``holds_s``, whole seconds), then NAV_LAND
     at ``land`` ``(lat_deg, lon_deg)``."""
     if len(path) < 2 or len(holds_s) != len(path):
@@ -177,6 +194,8 @@ def build_return(*, home: tuple[float, float], path: Sequence[tuple[float, float
     for k, ((lat, lon, alt), hold) in enumerate(zip(path, holds_s)):
         items.append(dict(command=CMD_NAV_WAYPOINT, lat_deg=lat, lon_deg=lon, alt_m=alt,
                           param1=float(hold)))
+        if k == 0 and camera_off:
+            items.append(dict(command=CMD_DO_SET_CAM_TRIGG_DIST))
         if k == 0 and speed_m_s is not None:
             items.append(dict(command=CMD_DO_CHANGE_SPEED, param1=1.0, param2=speed_m_s,
                               param3=-1.0))

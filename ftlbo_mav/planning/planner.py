@@ -159,6 +159,18 @@ class Plan:
             return None
         return float(self.cost.length / self.lower_bound_length)
 
+    def lane_points(self) -> list[tuple[int, int]]:
+        """Each survey lane's entry and exit as indices into the paths (the lanes' ends
+        are the last via points, two a lane; a leg of ``m`` waypoints adds ``m + 1``
+        points after its start); empty without lanes."""
+        survey = self.scenario.survey
+        if survey is None or not survey.lanes:
+            return []
+        starts = np.cumsum([0] + [leg.waypoints + 1 for leg in self.legs])  # route -> index
+        first = len(self.scenario.via) - 2 * len(survey.lanes) + 1  # lane 1's entry (route)
+        return [(int(starts[first + 2 * k]), int(starts[first + 2 * k + 1]))
+                for k in range(len(survey.lanes))]
+
     @property
     def waypoint_count(self) -> int:
         """Points between start and goal: every leg's waypoints and the via points."""

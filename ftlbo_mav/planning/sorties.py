@@ -83,20 +83,11 @@ def lane_scenario(whole: Scenario, first: int, last: int, *, last_sortie: bool) 
                    survey=replace(survey, lanes=lanes[first:last + 1]))
 
 
-def _lane_points(p: Plan) -> np.ndarray:
-    """``(L, 2)``: each lane's entry and exit as indices into ``p``'s path."""
-    survey = p.scenario.survey
-    firsts = np.cumsum([0] + [leg.waypoints + 1 for leg in p.legs])  # route points
-    own = len(p.scenario.via) - 2 * len(survey.lanes)
-    entry = firsts[1 + own + 2 * np.arange(len(survey.lanes))]
-    return np.column_stack([entry, firsts[2 + own + 2 * np.arange(len(survey.lanes))]])
-
-
 def estimates(p: Plan) -> Callable[[int, int], float]:
     """``cost(a, b)``: the estimated charge (mAh, the most any UAV uses) of a sortie of
     lanes ``a..b`` of the whole survey's plan ``p`` (module notes)."""
     battery, nav = p.scenario.battery, p.scenario.vehicle
-    ends = _lane_points(p)
+    ends = np.array(p.lane_points()).reshape(-1, 2)
     speed = p.scenario.mission.speed_m_s or nav.wp_speed
     paths = p.uav_paths
 

@@ -101,6 +101,10 @@ class Survey:
     lane_spacing_m: float | None = None
     camera: Camera | None = None
     trigger_distance_m: float | None = None
+    first_photo_taken: tuple[bool, ...] = ()
+    """Per UAV, for a survey resumed in the middle of its first lane (``fly --resume``):
+    the photo at that lane's entry was taken in the flight before, so its trigger is
+    turned on there without a photo at once. Empty: every lane begins with a photo."""
 
 
 @dataclass(frozen=True)

@@ -358,6 +358,12 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             if p[1] > 0:  # GCS_MAVLINK handle_MAV_CMD_DO_CHANGE_SPEED -> set_speed_xy
                 self.change_speed(float(p[1]))
                 result = R.MAV_RESULT_ACCEPTED
+        elif cmd == R.MAV_CMD_DO_SET_CAM_TRIGG_DIST:
+            # GCS_Common.cpp handle_command_camera -> AP_Camera::handle_command: the
+            # primary camera's trigger distance (none without a camera), a photo at once
+            # when param3 is 1, accepted either way
+            self._camera_trigger_distance(float(p[0]), 1.0 if p[2] == 1.0 else 0.0)
+            result = R.MAV_RESULT_ACCEPTED
         else:
             result = R.MAV_RESULT_UNSUPPORTED
         return result, self._take_pending()

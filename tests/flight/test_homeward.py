@@ -14,6 +14,7 @@ from ftlbo_mav.mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_NAV_LAND,
     CMD_NAV_WAYPOINT,
+    CMD_DO_SET_CAM_TRIGG_DIST,
     build_return,
 )
 
@@ -79,6 +80,13 @@ def test_the_mission_home_starts_where_it_hovers_and_lands_at_home():
     assert (items[5].lat_deg, items[5].lon_deg, items[5].alt_m) == (12.3, 109.3, 0.0)
     with pytest.raises(ValueError):
         build_return(home=(0, 0), path=[(0, 0, 1)], holds_s=[0], land=(0, 0))
+    # a survey copter turns its camera off where it starts home, before its speed
+    surveying = build_return(home=(12.0, 109.0), path=[(12.1, 109.1, 6.0), (12.2, 109.2, 7.0)],
+                             holds_s=[0, 0], land=(12.3, 109.3), speed_m_s=5.0, camera_off=True)
+    assert [it.command for it in surveying][:4] == [CMD_NAV_WAYPOINT, CMD_NAV_WAYPOINT,
+                                                    CMD_DO_SET_CAM_TRIGG_DIST,
+                                                    CMD_DO_CHANGE_SPEED]
+    assert surveying[2].param1 == 0.0
 
 
 def test_the_uploaded_mission_is_the_planned_route(planned):
