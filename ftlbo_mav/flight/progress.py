@@ -10,7 +10,11 @@ current item only goes forward while it flies the plan: an earlier one is anothe
 mission, a way home started quicker than a report came), each report placed on the leg
 it was flying (MISSION_CURRENT's item) by its projection on that leg, and the furthest
 counted. The
-photos a UAV reported (CAMERA_FEEDBACK) in that time are the ones it took on the plan.
+photos a UAV reported (CAMERA_FEEDBACK) before the report that showed it off the plan
+came are the ones it took on the plan (one link keeps a vehicle's messages in order; a
+photo taken in the second or so before its HEARTBEAT told of a new mode was taken where
+it braked on its track, and :mod:`ftlbo_mav.planning.resume` counts only photos on a
+lane's line).
 
 ``fly`` writes this as ``progress.json`` beside the flight log; ``fly --resume`` plans
 the rest of the survey from it (:mod:`ftlbo_mav.planning.resume`).
@@ -31,10 +35,6 @@ from ..mission.items import (
 )
 from .planned import PlannedFlight
 from .record import FlightRecord
-
-PHOTO_DELAY_S = 0.5
-"""A CAMERA_FEEDBACK arriving this long after the last report on the plan still counts:
-the photo was taken before (the link's delay, the report interval)."""
 
 _ENDS = (CMD_NAV_LAND, CMD_NAV_RETURN_TO_LAUNCH, CMD_NAV_LOITER_UNLIM)
 
@@ -82,20 +82,22 @@ def flown(planned: PlannedFlight, record: FlightRecord, sysids: list[int]) -> li
         path = planned.paths[n]
         legs = targets(planned.missions[n], len(path))
         samples = record.of(sysid)
-        point, until, last = 0.0, None, 0
+        point, until, last, left = 0.0, None, 0, float("inf")
         if samples:
             enu = planned.frame.to_enu(lat_deg=[s.lat_deg for s in samples],
                                        lon_deg=[s.lon_deg for s in samples])[:, :2]
             for s, here in zip(samples, enu):
                 if s.mode != "AUTO":
                     if until is not None:
-                        break  # it left the plan's mission: what came after is not the plan
+                        left = s.t  # it left the plan's mission: what came after is not
+                        break
                     continue
                 target = legs.get(s.seq)
                 if target is None:
                     continue
-                if target < last:
-                    break  # an item before the one it flew: another mission (the way home)
+                if target < last:  # an item before the one it flew: another mission
+                    left = s.t
+                    break
                 last, until = target, s.t
                 if target >= len(path):
                     point = float(len(path) - 1)
@@ -105,7 +107,7 @@ def flown(planned: PlannedFlight, record: FlightRecord, sysids: list[int]) -> li
         photos = None
         taken = record.photos_of(sysid)
         if taken:
-            kept = [p for p in taken if until is not None and p.t <= until + PHOTO_DELAY_S]
+            kept = [p for p in taken if until is not None and p.t < left]
             photos = (planned.frame.to_enu(lat_deg=[p.lat_deg for p in kept],
                                            lon_deg=[p.lon_deg for p in kept],
                                            alt_m=[p.alt_m for p in kept]).reshape(-1, 3)
@@ -164,5 +166,5 @@ def progress_from_document(planned: PlannedFlight, doc: dict) -> list[UavProgres
     return out
 
 
-__all__ = ["PHOTO_DELAY_S", "UavProgress", "flown", "progress_document",
+__all__ = ["UavProgress", "flown", "progress_document",
            "progress_from_document", "targets"]

@@ -2,18 +2,21 @@
 
 The flight before wrote ``progress.json`` (:mod:`.progress`) beside its log; from it and
 the plan folder the rest is planned (:mod:`ftlbo_mav.planning.resume`) and written as
-``PLAN/resume/``, a plan folder like any other: ``fly --resume`` uploads it, verified,
-and flies it; ``fly PLAN/resume --resume`` carries on after that one.
+``PLAN/resume/``, a plan folder like any other (with ``resumed.json``: what it carries
+on from): ``fly --resume`` uploads it, verified, and flies it; ``fly PLAN/resume
+--resume`` carries on after that one.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import BadInput, MissionFileError
-from ..mission.export import plan_from_document, read_plan_json, write_plan
+from ..mission.export import PLAN_OUTPUTS, plan_files, plan_from_document, read_plan_json
+from ..mission.files import OutputFolder
 from ..mission.items import mission_settings
 from ..planning.planner import Plan
 from ..planning.planner import plan as plan_scenario
@@ -23,6 +26,7 @@ from .progress import progress_from_document
 
 RESUME_FOLDER = "resume"
 PROGRESS_FILE = "progress.json"
+RESUMED_FILE = "resumed.json"
 
 
 class ResumeError(BadInput):
@@ -66,8 +70,27 @@ def plan_rest(planned: PlannedFlight, progress_file: Path) -> Resumed:
         raise ResumeError("the rest of the plan from " + at.describe(plan) + " is infeasible: "
                           + "; ".join(rest.violations))
     folder = planned.folder / RESUME_FOLDER
-    write_plan(rest, folder, fence=any(f is not None for f in planned.fences))
+    files = plan_files(rest, fence=any(f is not None for f in planned.fences))
+    files[RESUMED_FILE] = json.dumps(resumed_document(progress_file, progress, at),
+                                     indent=1) + "\n"
+    with OutputFolder(folder, replaces=(*PLAN_OUTPUTS, re.escape(RESUMED_FILE)),
+                      last="plan.json") as out:
+        out.write_all(files)
     return Resumed(folder, at, rest, tuple(p.point for p in progress))
 
 
-__all__ = ["PROGRESS_FILE", "RESUME_FOLDER", "ResumeError", "Resumed", "plan_rest"]
+def resumed_document(progress_file: Path, progress, at: ResumePoint) -> dict:
+    """``resumed.json`` in the rest's folder: the flight it carries on from (its
+    progress.json and each UAV's point), where it resumes, the photos each UAV took in
+    the resumed lane, whether its photo at the resume point was taken, and how many of
+    its photos the rest takes again."""
+    return {"progress": str(progress_file),
+            "flown_to": {p.name: round(p.point, 4) for p in progress},
+            "point": round(float(at.point), 4),
+            "lane": None if at.lane is None else at.lane + 1,
+            "photos_in_lane": list(at.photos), "photo_taken": list(at.photo_taken),
+            "again": list(at.again) or [0] * len(progress)}
+
+
+__all__ = ["PROGRESS_FILE", "RESUMED_FILE", "RESUME_FOLDER", "ResumeError", "Resumed",
+           "plan_rest", "resumed_document"]

@@ -11,7 +11,8 @@ it resumes where the UAV that got least far stopped:
   lane resumes at the earliest of them, so that no UAV leaves a gap. A UAV whose photo
   there is already taken (it got one photo further) turns its trigger on without a
   photo at once (DO_SET_CAM_TRIGG_DIST param3 0): no photo is taken twice. Photos are
-  those the camera reported (CAMERA_FEEDBACK); for a UAV that reported none, where
+  those the camera reported (CAMERA_FEEDBACK) on a lane's line; for a UAV that
+  reported none, where
   ArduCopter takes them by distance (:mod:`ftlbo_mav.ardupilot.camera`) up to its point.
 
 A UAV that got more than a photo further than the one the formation resumes from (one
@@ -37,6 +38,9 @@ from ..errors import BadInput
 from ..scenario import GeoPoint, Scenario, ViaPoint
 from .planner import Plan
 
+ON_LANE_M = 2.5
+"""A photo further than this from every lane's line is no lane's (the copter turning
+into a lane, GPS error and the tracking error take it a metre or so off the line)."""
 SAME_POINT_M = 0.05
 """A resume point this near a route point (a via point, a lane's end) is that point."""
 
@@ -117,7 +121,8 @@ def resume_point(plan: Plan, points: Sequence[float],
     lanes = plan.lane_points()
     distance = plan.scenario.survey.trigger_distance_m if lanes else None
     # each photo as (lane, metres along it) per UAV (None: its camera reported none)
-    placed = [None if p is None else [_place(plan, n, lanes, q[:2]) for q in p]
+    placed = [None if p is None else [x for x in (_place(plan, n, lanes, q[:2]) for q in p)
+                                      if x is not None]
               for n, p in enumerate(photos)]
     k = int(math.floor(least))
     lane = next((j for j, (a, b) in enumerate(lanes) if a <= k < b), None)
@@ -144,12 +149,13 @@ def resume_point(plan: Plan, points: Sequence[float],
                        tuple(counts), _again(placed, lane, at + distance / 2))
 
 
-def _place(plan: Plan, n: int, lanes, p: np.ndarray) -> tuple[int, float]:
+def _place(plan: Plan, n: int, lanes, p: np.ndarray) -> tuple[int, float] | None:
     """``(lane, metres along it)`` of UAV ``n``'s photo at ``p``: the lane whose line
-    passes nearest."""
+    passes nearest; None when that is further than :data:`ON_LANE_M` (not a lane's
+    photo: one taken on the way home with the trigger still on)."""
     found = [_project(plan.uav_paths[n, a:b + 1, :2], p) for a, b in lanes]
     j = int(np.argmin([off for _arc, off in found]))
-    return j, found[j][0]
+    return (j, found[j][0]) if found[j][1] <= ON_LANE_M else None
 
 
 def _again(placed, lane: int, beyond_m: float) -> tuple[int, ...]:

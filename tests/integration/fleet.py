@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import os
 import socket
+import tempfile
 from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -50,10 +51,12 @@ def free_udp_port() -> int:
 
 @contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
-             shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0):
+             shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0,
+             params: dict[str, float] | None = None):
     """``count`` vehicles, system ids 1..count, ready for uploads; ``homes`` (default a
     row at SITL's default location) and ``speedup`` (the emulator's time scale, SITL's
-    --speedup) for flights."""
+    --speedup) for flights; ``params``: parameters every vehicle boots with (SITL: a
+    defaults file after its own; CAM1_TYPE, for one, is read at boot)."""
     homes = default_homes(count) if homes is None else homes
     emulator_only = faults is not None or options is not None or signing_key or shared_link
     if BACKEND == "sitl":
@@ -61,15 +64,24 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
             pytest.skip("needs the emulator's fault injection")
         from sitl import SitlSwarm
 
-        with SitlSwarm(binary=SITL_BINARY, homes=homes, speedup=speedup) as swarm:
-            serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
-            yield Fleet(urls=swarm.urls, serial1_urls=serial1,
-                        kill=lambda i: swarm.processes[i].kill())
+        extra = tempfile.NamedTemporaryFile("w", suffix=".parm", delete=False)
+        with extra:
+            extra.write("".join(f"{k} {v:g}\n" for k, v in (params or {}).items()))
+        try:
+            with SitlSwarm(binary=SITL_BINARY, homes=homes, speedup=speedup,
+                           defaults=[extra.name] if params else ()) as swarm:
+                serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
+                yield Fleet(urls=swarm.urls, serial1_urls=serial1,
+                            kill=lambda i: swarm.processes[i].kill())
+        finally:
+            os.unlink(extra.name)
         return
     udp_out = ("127.0.0.1", free_udp_port()) if shared_link else None
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
                    signing_key=signing_key, seed=seed) as sim:
+        if params:
+            sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
         yield Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
                     serial1_urls=sim.serial1_urls, kill=sim.kill)
