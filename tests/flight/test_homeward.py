@@ -12,9 +12,9 @@ from ftlbo_mav.flight.homeward import GoingHome, keep_out, return_world
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.mission.items import (
     CMD_DO_CHANGE_SPEED,
+    CMD_DO_SET_CAM_TRIGG_DIST,
     CMD_NAV_LAND,
     CMD_NAV_WAYPOINT,
-    CMD_DO_SET_CAM_TRIGG_DIST,
     build_return,
 )
 
