@@ -441,15 +441,16 @@ def format_leg(index: int, count: int, leg) -> str:
     head = f"leg {index + 1}/{count} {leg.start_name} -> {leg.goal_name}: "
     noun = "waypoint" if leg.waypoints == 1 else "waypoints"
     if leg.tried:
+        target = leg.target if leg.target is not None else AUTO_TARGET
         within = leg.feasible and leg.length_ratio is not None and (
-            leg.length_ratio <= 1 + AUTO_TARGET)
+            leg.length_ratio <= 1 + target)
         if leg.lower_bound_length is None:
             count_text = f"{leg.waypoints} {noun} (auto: no route to measure against)"
         elif within:
             count_text = f"{leg.waypoints} {noun} (auto)"
         else:
             count_text = (f"{leg.waypoints} {noun} (auto: no plan within "
-                          f"{AUTO_TARGET:.1%} of the bound with "
+                          f"{target:.1%} of the bound with "
                           f"{', '.join(map(str, leg.tried))} waypoints; kept the nearest)")
     else:
         count_text = f"{leg.waypoints} {noun}"

@@ -80,6 +80,11 @@ class Leg:
     lower_bound_length: float | None = None
     tried: tuple[int, ...] = ()
     searched: PlanningProblem | None = None
+    target: float | None = None
+    """With ``"auto"``: the target it was planned to (relative, over the bound)."""
+    tight_count: int | None = None
+    """With ``"auto"``: the count :data:`AUTO_TARGET` starts from (:func:`plan` skips the
+    plan with it when every leg has it and is within it already: the same plan)."""
 
     @property
     def waypoints(self) -> int:
@@ -250,6 +255,8 @@ def plan(
     # shorter path a slower flight, or corners cut into the clearance moved out
     loose = until_kept(scenario, len(base.radii), attempt_with(AUTO_LOOSE_TARGET, True),
                        relay=relay)
+    if all(_tight_already(leg) for leg in loose.legs):
+        return loose  # planned with AUTO_TARGET, every leg would be the same
     tight = until_kept(scenario, len(base.radii), attempt_with(AUTO_TARGET, False),
                        relay=relay)
     return replace(tight if _better(tight, loose) else loose,
@@ -583,6 +590,8 @@ def plan_leg(
     bound = lower_bound(where, routes[0]) if routes else None
     chains = [RouteChains(where, r) for r in routes] if auto else None
     choice = _auto_count(chains[0], bound, target) if auto and routes else None
+    tight = (choice if target == AUTO_TARGET else _auto_count(chains[0], bound, AUTO_TARGET)
+             ) if auto and routes else None
     route_seconds = time.perf_counter() - t_routes
     if not routes and notice is not None:
         notice(NO_ROUTE)
@@ -605,10 +614,20 @@ def plan_leg(
                                   and kept.cost.length <= (1 + target) * bound):
         feasible = [t for t in tries if t.feasible]
         kept = min(feasible, key=lambda t: t.cost.length) if feasible else kept
-    return replace(kept, start_name=names[0], goal_name=names[1],
+    return replace(kept, start_name=names[0], goal_name=names[1], tight_count=tight,
+                   target=target,
                    tried=tuple(t.waypoints for t in tries),
                    evaluations=sum(t.evaluations for t in tries),
                    seconds=route_seconds + sum(t.seconds for t in tries))
+
+
+def _tight_already(leg: Leg) -> bool:
+    """Whether ``leg``, planned with :data:`AUTO_LOOSE_TARGET`, is what :data:`AUTO_TARGET`
+    plans: the same first count, and its plan within that target already."""
+    bound = leg.lower_bound_length
+    return (bound is None or not leg.tried
+            or (leg.tried[0] == leg.tight_count and leg.waypoints == leg.tight_count
+                and leg.feasible and leg.cost.length <= (1 + AUTO_TARGET) * bound))
 
 
 def _auto_count(chains: RouteChains, bound: float, target: float = AUTO_TARGET) -> int | None:

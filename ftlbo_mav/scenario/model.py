@@ -24,8 +24,9 @@ ALGORITHMS = ("ftlbo-seeded", "ftlbo", "tlbo", "ga", "theta-pso")
 the paper's FTLBO; ``ftlbo-seeded`` is FTLBO from geometric seed routes (docs/planning.md)."""
 END_ACTIONS = ("land", "rtl", "loiter")
 AUTO = "auto"
-"""``waypoints = "auto"``: per leg, the fewest waypoints whose plan is within
-:data:`ftlbo_mav.planning.planner.AUTO_TARGET` of the leg's lower bound."""
+"""``waypoints = "auto"``: per leg, the fewest waypoints whose plan is within a target of
+the leg's lower bound; planned with :data:`ftlbo_mav.planning.planner.AUTO_LOOSE_TARGET`
+and :data:`~ftlbo_mav.planning.planner.AUTO_TARGET`, the plan flown better kept."""
 
 # The ranges a scenario's numbers (and the command line's overrides of them) must be in:
 # finite, physically meaningful, and representable where they go (altitudes and speeds
