@@ -213,6 +213,44 @@ def bitangent_verdicts(begin, end, centres, radii, marked, lower, upper, starts,
     return ok
 
 
+@njit(cache=True, parallel=True)
+def candidate_verdicts(i, j, kind, centres, radii, marked, lower, upper, starts, items, lo0,
+                       lo1, cell, nx, ny, tol):
+    """``ok (K,)``: :func:`bitangent_verdicts`' tests for the bitangents ``kind[k]`` of the
+    pairs ``(i[k], j[k])`` alone (the ones clear among the same discs a little smaller:
+    :func:`.geometric._known_bitangents`)."""
+    bins = marked.shape[1]
+    two_pi = 2.0 * math.pi
+    width = two_pi / bins
+    tol0 = tol * (1 + abs(upper[0] - lower[0]))
+    tol1 = tol * (1 + abs(upper[1] - lower[1]))
+    K = len(i)
+    ok = np.zeros(K, np.bool_)
+    for k in prange(K):
+        a, b = i[k], j[k]
+        xa, ya, ra = centres[a, 0], centres[a, 1], radii[a]
+        xb, yb, rb = centres[b, 0], centres[b, 1], radii[b]
+        phi, outer, inner, alpha_outer, alpha_inner = _pair_tangents(xa, ya, ra, xb, yb, rb,
+                                                                     tol)
+        if not (outer if kind[k] < 2 else inner):
+            continue
+        ai, aj = _kind_angles(phi, alpha_outer, alpha_inner, kind[k])
+        if marked[a, int(math.floor((ai % two_pi) / width)) % bins]:
+            continue
+        if marked[b, int(math.floor((aj % two_pi) / width)) % bins]:
+            continue
+        px, py = xa + ra * math.cos(ai), ya + ra * math.sin(ai)
+        qx, qy = xb + rb * math.cos(aj), yb + rb * math.sin(aj)
+        if not (lower[0] - tol0 <= px <= upper[0] + tol0
+                and lower[1] - tol1 <= py <= upper[1] + tol1
+                and lower[0] - tol0 <= qx <= upper[0] + tol0
+                and lower[1] - tol1 <= qy <= upper[1] + tol1):
+            continue
+        ok[k] = _walk_clear(px, py, qx, qy, centres, radii, starts, items, lo0, lo1, cell,
+                            nx, ny, tol)
+    return ok
+
+
 @njit(cache=True)
 def bitangent_angles(i, j, kind, centres, radii, tol):
     """``angle_i``, ``angle_j`` ``(K,)``: the tangent angles of bitangent ``kind[k]`` of

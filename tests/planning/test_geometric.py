@@ -334,6 +334,37 @@ def test_the_graph_made_a_chunk_at_a_time_is_the_same_graph(monkeypatch, seed):
     np.testing.assert_allclose(chunked[0].nodes, whole[0].nodes, atol=1e-9)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_seed_margins_graph_from_the_discs_own_bitangents_is_the_same(monkeypatch, seed):
+    """The discs grown by the seed routes' margin test only the bitangents clear among the
+    discs themselves (geometric._known_bitangents): the same clear bitangents as testing
+    every pair among the grown discs, on random fields of 150 trees."""
+    from ftlbo_mav.planning import geometric as G
+    from ftlbo_mav.planning.seeds import seed_margin
+
+    problem = triangle_among_trees(seed, trees=150)
+    monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 1)
+    lower, upper = G.centroid_rectangle(problem)
+    own = G.formation_discs(problem)
+    grown = G.formation_discs(problem, margin=seed_margin(problem))
+
+    def clear(discs) -> set:
+        chunks = G._known_bitangents(discs, G._buried_bins(discs), G._grid(discs), lower,
+                                     upper)
+        return {(int(a), int(b), int(k)) for i, _ai, j, _aj, kind in chunks
+                for a, b, k in zip(i, j, kind)}
+
+    G._LAST_BITANGENTS.clear()
+    exact = clear(grown)  # every pair tested
+    G._LAST_BITANGENTS.clear()
+    clear(own)
+    reused = clear(grown)  # only the own discs' clear ones tested again
+    assert reused == exact and len(exact) > 1000
+    # (the growth can merge blobs and keep another set of rim discs: then all are tested)
+    if np.array_equal(own.centres, grown.centres):
+        assert G._LAST_BITANGENTS[0][0][1] == own.radii.tobytes()  # tested again, not kept
+
+
 @pytest.mark.parametrize("penalty", [0.0, 5.0])
 def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
     from ftlbo_mav.planning import geometric as G
