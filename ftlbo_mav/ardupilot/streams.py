@@ -51,11 +51,42 @@ READINESS: Mapping[int, float] = {
 }
 
 
-def flight_streams(position_hz: float) -> dict[int, float]:
+MAX_SLOWDOWN_MS = 2000
+"""GCS_MAVLINK::handle_radio_status grows the slowdown no further once it reaches this."""
+
+
+def radio_slowdown(slowdown_ms: int, txbuf: int) -> int:
+    """ArduPilot's software flow control: a link's ``stream_slowdown_ms`` after a
+    RADIO_STATUS whose ``txbuf`` (the radio's free buffer, per cent) is given
+    (GCS_MAVLINK::handle_radio_status, libraries/GCS_MAVLink/GCS_Common.cpp): below 20 %
+    60 ms more, below 50 % 20 ms more (while under 2 s); above 95 % 40 ms less (while over
+    200 ms), above 90 % 20 ms less."""
+    if txbuf < 20 and slowdown_ms < MAX_SLOWDOWN_MS:
+        return slowdown_ms + 60
+    if txbuf < 50 and slowdown_ms < MAX_SLOWDOWN_MS:
+        return slowdown_ms + 20
+    if txbuf > 95 and slowdown_ms > 200:
+        return slowdown_ms - 40
+    if txbuf > 90 and slowdown_ms != 0:
+        return slowdown_ms - 20 if slowdown_ms > 20 else 0
+    return slowdown_ms
+
+
+def reschedule_interval_s(interval_s: float, slowdown_ms: int) -> float:
+    """A stream message's next interval on a slowed link: its interval plus the slowdown,
+    at most 60 s (GCS_MAVLINK::get_reschedule_interval_ms, GCS_Common.cpp; the x4 while
+    parameters or mission items are being sent is not modelled)."""
+    return min(interval_s + slowdown_ms / 1000.0, 60.0)
+
+
+def flight_streams(position_hz: float, status_hz: float = 2.0) -> dict[int, float]:
     """A flight's needs: readiness, the position at ``position_hz``, the current item and
-    the EKF's health (the navigation budget is watched on GPS_RAW_INT and it)."""
-    return {**READINESS, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: position_hz,
-            R.MAVLINK_MSG_ID_MISSION_CURRENT: 2.0, R.MAVLINK_MSG_ID_EKF_STATUS_REPORT: 2.0}
+    the EKF's health (the navigation budget is watched on GPS_RAW_INT and it), these at
+    ``status_hz`` (a slow shared radio: less, :mod:`ftlbo_mav.link.budget`)."""
+    return {R.MAVLINK_MSG_ID_SYS_STATUS: status_hz, R.MAVLINK_MSG_ID_GPS_RAW_INT: status_hz,
+            R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: position_hz,
+            R.MAVLINK_MSG_ID_MISSION_CURRENT: status_hz,
+            R.MAVLINK_MSG_ID_EKF_STATUS_REPORT: status_hz}
 
 
 def message_name(msgid: int) -> str:

@@ -121,7 +121,8 @@ _rtcm_option = click.option(
 def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                         sysids: list[int], *, keeper=None, outcome: list[str] | None = None,
                         events: list[str] | None = None, rtcm=None,
-                        progress: bool = False) -> dict:
+                        progress: bool = False, budget=None,
+                        told: tuple[float, str] | None = None) -> dict:
     """flight.csv, summary.json and report.png in ``out_dir`` (photos.csv when a vehicle
     reported photos; with ``progress``, ``fly``'s progress.json: how far each UAV got
     along its plan, what ``fly --resume`` carries on from); returns the summary.
@@ -149,6 +150,8 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
     battery = battery_summary(planned, monitor.record, sysids)
     if battery:
         summary["battery"] = battery
+    summary["link"] = link_summary(monitor, sysids, planned.names, budget=budget,
+                                   told=told)
     files = {"flight.csv": monitor.record.to_csv()}
     if monitor.record.photos:
         files["photos.csv"] = monitor.record.photos_csv()
@@ -167,6 +170,41 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                       ) as out:  # all, or none
         out.write_all(files)
     return summary
+
+
+def link_summary(monitor: Monitor, sysids: list[int], names, *, budget=None,
+                 told: tuple[float, str] | None = None) -> dict:
+    """summary.json's ``link``: the link ``fly`` was told of (``--link``), what the flight
+    asked of it (:mod:`ftlbo_mav.link.budget`) and what it used: bytes a second from each
+    vehicle over the flight (flight.csv's ``link_bytes``), sent by this station, in all and
+    as a share of the link; the ground radio's last RADIO_STATUS."""
+    record = monitor.record
+    down = {names[n] if n < len(names) else str(s): record.link_bytes_per_s(s)
+            for n, s in enumerate(sysids)}
+    links = {id(v.link): v.link for v in monitor.vehicles if hasattr(v, "link")}.values()
+    span = max((s.t for s in record.samples), default=0.0) - min(
+        (s.t for s in record.samples), default=0.0)
+    up = (sum(getattr(k, "bytes_out", 0) for k in links) / span) if span > 0 else None
+    used = (sum(v for v in down.values() if v is not None) + (up or 0.0)
+            if any(v is not None for v in down.values()) else None)
+    out = {"told": None if told is None else {"name": told[1], "bytes_per_s": told[0]},
+           "asked": None if budget is None else {
+               "position_hz": budget.position_hz, "status_hz": budget.status_hz,
+               "down_bytes_per_s_each": round(budget.down, 1),
+               "up_bytes_per_s_each": round(budget.up, 1), "total": round(budget.total, 1)},
+           "measured": {"down_bytes_per_s": {k: None if v is None else round(v, 1)
+                                             for k, v in down.items()},
+                        "up_bytes_per_s": None if up is None else round(up, 1),
+                        "total": None if used is None else round(used, 1),
+                        "share_of_link": (round(used / told[0], 3)
+                                          if used is not None and told else None)}}
+    radio = next((k.radio_status for k in links
+                  if getattr(k, "radio_status", None) is not None), None)
+    if radio is not None:
+        out["radio"] = {"txbuf": radio.txbuf, "rssi": radio.rssi, "remrssi": radio.remrssi,
+                        "rxerrors": radio.rxerrors, "slowdown_ms": max(
+                            getattr(k, "slowdown_ms", 0) for k in links)}
+    return out
 
 
 def battery_summary(planned: PlannedFlight, record, sysids: list[int]) -> dict:
@@ -207,6 +245,14 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
         click.echo("formation keeper: " + (_keeper_line(waited) if waited
                                            else "no vehicle needed to wait") + (
             f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else ""))
+    link = summary.get("link") or {}
+    measured = link.get("measured") or {}
+    if measured.get("total") is not None:
+        share = measured.get("share_of_link")
+        click.echo(f"link used: {measured['total']:,.0f} B/s both ways"
+                   + (f", {100 * share:.0f} % of {link['told']['name']}" if share else "")
+                   + (f"; radio txbuf {link['radio']['txbuf']} %, {link['radio']['rxerrors']} "
+                      f"errors" if link.get("radio") else ""))
     rtcm = summary.get("rtcm")
     if rtcm:
         click.echo(f"RTCM corrections: {rtcm['frames']} frames, {rtcm['bytes']} bytes "
@@ -275,6 +321,11 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
               help="Fly a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x (the "
                    "firmware the planner's flight model follows), saying what is then not "
                    "promised. Without it pre-flight refuses it.")
+@click.option("--link", "link_text", default=None,
+              help="The link every copter shares: bytes a second for both ways together "
+                   "(6000) or a radio (sik-64, sik-128, sik-250, wifi). Says what the flight "
+                   "asks of it, chooses the stream rates that fit, refuses a swarm that "
+                   "cannot (docs/link.md).")
 @click.option("--resume", is_flag=True,
               help="Carry on after a flight of PLAN_DIR that ended early: plan the rest from "
                    "the first point not yet flown (lanes and photos neither skipped nor "
@@ -288,8 +339,8 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
                 on_departure, lost_wait, use_keeper, arm_budget, preflight_timeout, flight_timeout,
-                any_firmware, resume, progress_file, timeout, retries, ready_timeout,
-                discover_timeout, signing_key, rtcm_source):
+                any_firmware, link_text, resume, progress_file, timeout, retries,
+                ready_timeout, discover_timeout, signing_key, rtcm_source):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
@@ -307,6 +358,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     key = load_key(signing_key) if signing_key else None
     if progress_file is not None and not resume:
         raise BadInput("--progress names the flight to resume: give it with --resume")
+    told, budget = _link_budget(link_text, len(sysids), signed=key is not None)
     if resume:
         planned = _resume(planned, progress_file or plan_dir / "flight" / PROGRESS_FILE,
                           sysids, urls, any_firmware=any_firmware, signing_key=key,
@@ -322,8 +374,12 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
     check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end
+    monitor.link_bytes_per_s = told[0] if told else None
+    click.echo(f"link: {budget.describe(told[0] if told else None)}"
+               + (f" ({told[1]})" if told else ""), err=True)
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
-               on_position=monitor, on_photo=monitor.photo) as fleet, \
+               on_position=monitor, on_photo=monitor.photo, position_hz=budget.position_hz,
+               status_hz=budget.status_hz) as fleet, \
             _forwarding(forward, fleet), \
             _control(control_port, fleet), _rtcm(rtcm_source, fleet) as rtcm:
         monitor.vehicles = fleet.vehicles
@@ -334,7 +390,8 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
 
         def report(**extra) -> dict:
             return write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper,
-                                       events=events, rtcm=rtcm, progress=True, **extra)
+                                       events=events, rtcm=rtcm, progress=True,
+                                       budget=budget, told=told, **extra)
 
         try:
             fly(planned, fleet.vehicles, options=options,
@@ -364,6 +421,18 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     summary = report()
     click.echo("all vehicles finished their missions")
     _print_summary(summary, out_dir)
+
+
+def _link_budget(text: str | None, copters: int, *, signed: bool, wanted_hz: float = 10.0):
+    """``(told, budget)`` of ``--link``: the link (bytes a second, name) or None, and the
+    flight's budget at the rates that fit it (:func:`~ftlbo_mav.link.budget.choose`;
+    without ``--link``, the default rates); :class:`BadInput` when the swarm cannot fit."""
+    from ..link.budget import choose, flight_budget, parse_link
+
+    if text is None:
+        return None, flight_budget(copters, wanted_hz, signed=signed)
+    told = parse_link(text)
+    return told, choose(copters, told[0], wanted_hz=wanted_hz, signed=signed)
 
 
 def _resume(planned: PlannedFlight, progress_file: Path, sysids: list[int], urls, *,
@@ -416,10 +485,13 @@ def _resume(planned: PlannedFlight, progress_file: Path, sysids: list[int], urls
               show_default=True, help="Seconds to wait for each vehicle's HEARTBEAT.")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="MAVLink 2 signing key file (64 hex digits, or a passphrase).")
+@click.option("--link", "link_text", default=None,
+              help="The link every copter shares (bytes a second, or sik-64, sik-128, "
+                   "sik-250, wifi): says what watching asks of it and lowers --rate to fit.")
 @_rtcm_option
 @user_errors
 def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, discover_timeout,
-            signing_key, rtcm_source):
+            signing_key, link_text, rtcm_source):
     """Live view of the vehicles; with PLAN_DIR also formation error, separation and
     clearance, and a flight log and report at the end."""
     planned = load_planned_flight(plan_dir) if plan_dir else None
@@ -427,10 +499,17 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
     _check_rtcm(rtcm_source)
     key = load_key(signing_key) if signing_key else None
     watch = Monitor(planned)
+    told, budget = _link_budget(link_text, len(sysids), signed=key is not None,
+                                wanted_hz=rate)
+    if told is not None:
+        watch.link_bytes_per_s = told[0]
+        click.echo(f"link: {budget.describe(told[0])} ({told[1]})", err=True)
     if planned is not None:
         check_writable(log_dir or plan_dir / "monitor")
     with Fleet(names, sysids, urls, signing_key=key, discover_timeout_s=discover_timeout,
-               on_position=watch, position_hz=rate) as fleet, _forwarding(forward, fleet), \
+               on_position=watch, on_photo=watch.photo,
+               position_hz=budget.position_hz if told else rate,
+               status_hz=budget.status_hz) as fleet, _forwarding(forward, fleet), \
             _rtcm(rtcm_source, fleet) as rtcm:
         watch.vehicles = fleet.vehicles
         if rtcm is not None:
@@ -469,7 +548,8 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
     if planned is not None:
         out_dir = log_dir or plan_dir / "monitor"
         _print_summary(write_flight_report(planned, watch, out_dir, sysids, events=events,
-                                           rtcm=rtcm), out_dir)
+                                           rtcm=rtcm, budget=budget if told else None,
+                                           told=told), out_dir)
     if departed:
         sys.exit(1)
 

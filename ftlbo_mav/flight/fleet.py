@@ -19,9 +19,9 @@ class Fleet:
     def __init__(self, names: Sequence[str], sysids: Sequence[int], urls: Sequence[str], *,
                  signing_key: bytes | None = None, discover_timeout_s: float = 5.0,
                  on_position: Callable | None = None, on_photo: Callable | None = None,
-                 position_hz: float = 10.0) -> None:
+                 position_hz: float = 10.0, status_hz: float = 2.0) -> None:
         self.names, self.sysids, self.urls = list(names), list(sysids), list(urls)
-        self.position_hz = position_hz
+        self.position_hz, self.status_hz = position_hz, status_hz
         self.signing_key, self.discover_timeout_s = signing_key, discover_timeout_s
         self.on_position, self.on_photo = on_position, on_photo
         self.links: list = []
@@ -36,7 +36,8 @@ class Fleet:
                 raise LinkError("; ".join(describe_missing(s, self.links, self.discover_timeout_s)
                                           for s in missing))
             self.vehicles = [FlightVehicle(n, s, found[s], on_position=self.on_position,
-                                           on_photo=self.on_photo, position_hz=self.position_hz)
+                                           on_photo=self.on_photo, position_hz=self.position_hz,
+                                           status_hz=self.status_hz)
                              for n, s in zip(self.names, self.sysids)]
         except BaseException:
             self.__exit__()

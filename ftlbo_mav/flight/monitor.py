@@ -28,6 +28,8 @@ class Monitor:
         self.t0 = time.monotonic()
         self._lock = threading.Lock()
         self.vehicles: list = []
+        self.link_bytes_per_s: float | None = None  # the link fly was told of (--link)
+        self._link_seen: list[tuple[float, int]] = []
 
     def __call__(self, vehicle) -> None:
         s = vehicle.status
@@ -35,7 +37,9 @@ class Monitor:
             return
         sample = Sample(s.position_t - self.t0, vehicle.sysid, s.lat_deg, s.lon_deg, s.alt_m,
                         s.mode, s.armed, s.seq if s.mode == "AUTO" else -1, s.position_boot_s,
-                        s.battery_pct if s.battery_pct is not None else -1)
+                        s.battery_pct if s.battery_pct is not None else -1,
+                        getattr(getattr(vehicle, "link", None), "bytes_in", {}).get(
+                            vehicle.sysid, -1))
         with self._lock:
             self.record.add(sample)
 
@@ -87,7 +91,32 @@ class Monitor:
         sep = float(min_separation(pos))
         clear = float(min_clearance(pos, self.planned.centres, self.planned.radii))
         return (f"formation error {err:.2f} m RMS   smallest separation {sep:.2f} m   "
-                f"smallest clearance {clear:.2f} m")
+                f"smallest clearance {clear:.2f} m{self._link_text()}")
+
+    def _link_text(self) -> str:
+        """The links' use now (bytes a second both ways, of ``link_bytes_per_s`` when
+        known) and the ground radio's RADIO_STATUS, when one reports."""
+        links = {id(k): k for k in (getattr(v, "link", None) for v in self.vehicles)
+                 if hasattr(k, "bytes_in")}.values()
+        if not links:
+            return ""
+        now = time.monotonic()
+        total = sum(sum(k.bytes_in.values()) + k.bytes_out for k in links)
+        self._link_seen.append((now, total))
+        while len(self._link_seen) > 2 and now - self._link_seen[0][0] > 5.0:
+            self._link_seen.pop(0)
+        (t0, b0), (t1, b1) = self._link_seen[0], self._link_seen[-1]
+        text = ""
+        if t1 - t0 >= 1.0:
+            rate = (b1 - b0) / (t1 - t0)
+            text = f"   link {rate:,.0f} B/s"
+            if self.link_bytes_per_s:
+                text += f" ({100 * rate / self.link_bytes_per_s:.0f} %)"
+        radio = [k.radio_status for k in links if k.radio_status is not None]
+        if radio:
+            r = radio[0]
+            text += f"   radio txbuf {r.txbuf} % rssi {r.rssi}/{r.remrssi}"
+        return text
 
     def _summary(self, pos, slots, max_lines: int) -> list[str]:
         """At most ``max_lines`` lines for a swarm too large for a line each."""

@@ -32,6 +32,7 @@ class Sample:
     seq: int
     boot_s: float = float("nan")
     battery_pct: int = -1  # SYS_STATUS battery_remaining (-1: not reported)
+    link_bytes: int = -1  # bytes received from the vehicle so far on its link (-1: unknown)
 
 
 @dataclass(frozen=True)
@@ -91,7 +92,8 @@ class FlightRecord:
         for s in self.samples:
             writer.writerow(
                 [f"{s.t:.3f}", s.sysid, f"{s.lat_deg:.8f}", f"{s.lon_deg:.8f}", f"{s.alt_m:.3f}",
-                 s.mode, int(s.armed), s.seq, f"{s.boot_s:.3f}", s.battery_pct]
+                 s.mode, int(s.armed), s.seq, f"{s.boot_s:.3f}", s.battery_pct,
+                 s.link_bytes]
             )
         return buf.getvalue()
 
@@ -102,7 +104,8 @@ class FlightRecord:
             [
                 Sample(float(r["t"]), int(r["sysid"]), float(r["lat_deg"]), float(r["lon_deg"]),
                        float(r["alt_m"]), r["mode"], r["armed"] in ("1", "True"), int(r["seq"]),
-                       float(r.get("boot_s") or "nan"), int(r.get("battery_pct") or -1))
+                       float(r.get("boot_s") or "nan"), int(r.get("battery_pct") or -1),
+                       int(r.get("link_bytes") or -1))
                 for r in rows
             ]
         )
@@ -111,6 +114,14 @@ class FlightRecord:
         """The first and the last charge (per cent) vehicle ``sysid`` reported, or None."""
         pct = [s.battery_pct for s in self.of(sysid) if s.battery_pct >= 0]
         return (pct[0], pct[-1]) if pct else None
+
+    def link_bytes_per_s(self, sysid: int) -> float | None:
+        """Bytes a second received from vehicle ``sysid`` over the record (None: not
+        counted)."""
+        rows = [(s.t, s.link_bytes) for s in self.of(sysid) if s.link_bytes >= 0]
+        if len(rows) < 2 or rows[-1][0] <= rows[0][0]:
+            return None
+        return (rows[-1][1] - rows[0][1]) / (rows[-1][0] - rows[0][0])
 
     def rate_hz(self, sysid: int) -> float:
         """Mean sample rate of one vehicle."""

@@ -119,7 +119,7 @@ class FlightVehicle:
                  on_position: Callable[[FlightVehicle], None] | None = None,
                  on_photo: Callable[[FlightVehicle, object, float], None] | None = None,
                  command_timeout_s: float = 1.5, command_retries: int = 5,
-                 position_hz: float = 10.0) -> None:
+                 position_hz: float = 10.0, status_hz: float = 2.0) -> None:
         self.name, self.sysid, self.link = name, sysid, link
         # found by its HEARTBEAT (Fleet's discovery) just now: heard from at creation
         self.status = Status(heard_t=time.monotonic())
@@ -139,7 +139,7 @@ class FlightVehicle:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._pump, name=f"{name} status", daemon=True)
         self._thread.start()
-        self.request_streams(position_hz)
+        self.request_streams(position_hz, status_hz)
 
     def close(self) -> None:
         self._stop.set()
@@ -272,10 +272,11 @@ class FlightVehicle:
                 return self.status.firmware_version
         return None
 
-    def request_streams(self, position_hz: float) -> None:
+    def request_streams(self, position_hz: float, status_hz: float = 2.0) -> None:
         """Ask for everything a flight reads (GLOBAL_POSITION_INT at ``position_hz``,
-        SYS_STATUS, GPS_RAW_INT, MISSION_CURRENT); the link re-asks until they arrive."""
-        self.link.want(self.sysid, flight_streams(position_hz))
+        SYS_STATUS, GPS_RAW_INT, MISSION_CURRENT, EKF_STATUS_REPORT at ``status_hz``);
+        the link re-asks until they arrive."""
+        self.link.want(self.sysid, flight_streams(position_hz, status_hz))
 
     def abort_to(self, mode: str) -> None:
         """Mark the flight aborted and ask for ``mode`` at once; confirm with set_mode."""

@@ -23,7 +23,7 @@ from typing import Self
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
-from ..ardupilot.streams import READINESS, StreamRequests
+from ..ardupilot.streams import READINESS, StreamRequests, radio_slowdown
 from ..errors import BadInput, FtlboError
 
 GCS_SYSID = 255
@@ -222,6 +222,16 @@ class Link:
         # per system id: the telemetry asked for on this link (ardupilot/streams.py)
         self.streams: dict[int, StreamRequests] = {}
         self._streams_lock = threading.Lock()
+        # what went over the link: bytes received per system id, bytes sent; the last
+        # RADIO_STATUS of the ground's telemetry radio (system id 51, a SiK radio) and
+        # ArduPilot's flow control applied to what this station sends on its own (its
+        # HEARTBEAT, the stream requests): slower while the radio's buffer fills
+        # (ardupilot/streams.py radio_slowdown)
+        self.bytes_in: dict[int, int] = {}
+        self.bytes_out = 0
+        self.radio_status = None
+        self.radio_status_t = 0.0
+        self.slowdown_ms = 0
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
         self._thread.start()
@@ -268,6 +278,7 @@ class Link:
                 self._conn.mav.send(msg)
             except (OSError, ValueError) as exc:
                 raise LinkDown(f"{self.url}: link down ({exc})") from None
+            self.bytes_out += len(msg.get_msgbuf())
 
     def write_raw(self, data: bytes) -> None:
         """Send an already packed MAVLink frame unchanged (a relayed ground station's)."""
@@ -317,7 +328,7 @@ class Link:
                 subs.remove(q)
 
     def _run(self) -> None:
-        next_beat = 0.0
+        next_beat = next_ask = 0.0
         while not self._stop.is_set():
             if self.closed_by_peer:
                 if not self.reconnect or self._stop.wait(self.reconnect_every_s):
@@ -326,14 +337,16 @@ class Link:
                 continue
             now = time.monotonic()
             if now >= next_beat:
-                next_beat = now + 1.0
+                next_beat = now + 1.0 + self.slowdown_ms / 1000.0
                 try:
                     self.send(mavlink2.MAVLink_heartbeat_message(
                         mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0,
                         mavlink2.MAV_STATE_ACTIVE, 3))
                 except LinkError:
                     pass
-            self._ask_streams(now)
+            if now >= next_ask:
+                next_ask = now + self.slowdown_ms / 1000.0
+                self._ask_streams(now)
             try:
                 self._conn.select(0.05)
                 while (msg := self._conn.recv_msg()) is not None:
@@ -369,6 +382,11 @@ class Link:
         for tap in self.taps:
             tap(msg)
         src = msg.get_srcSystem()
+        self.bytes_in[src] = self.bytes_in.get(src, 0) + len(msg.get_msgbuf())
+        if kind == "RADIO_STATUS":
+            self.radio_status, self.radio_status_t = msg, time.monotonic()
+            self.slowdown_ms = radio_slowdown(self.slowdown_ms, int(msg.txbuf))
+            return
         req = self.streams.get(src)
         if req is not None:
             with self._streams_lock:

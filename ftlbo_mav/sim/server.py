@@ -23,6 +23,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from .faults import Faults, FaultyPipe
 from .physics import varied
+from .radio import DOWN, UP, RadioOptions, SharedRadio
 from .vehicle import Vehicle, VehicleOptions
 from .wind import Gusts, Wind
 
@@ -31,6 +32,9 @@ MAX_TIME_SCALE = 100.0
 """The fastest the vehicles' clock may run: every tick steps each vehicle's flight in
 20 ms steps (sim/autopilot.py), so 100x is 100 steps per vehicle and tick; far faster
 and a tick never ends, and nothing (not even SIGTERM) is handled."""
+RADIO_SYSID, RADIO_COMPID = 51, 68
+"""What a SiK radio's own RADIO_STATUS comes from ('3', 'D')."""
+RADIO_STATUS_S = 1.0
 # replies to a request, which a muted vehicle (Faults.mute) does not send
 _ANSWERS = frozenset({"MISSION_REQUEST", "MISSION_ACK", "MISSION_COUNT", "MISSION_ITEM",
                       "MISSION_ITEM_INT", "COMMAND_ACK"})
@@ -153,21 +157,79 @@ class VehicleRunner:
 
 
 class _SharedUdp(asyncio.DatagramProtocol):
-    """One UDP socket for every vehicle, sending to ``target``; what comes back goes to all."""
+    """One UDP socket for every vehicle, sending to ``target``; what comes back goes to all.
 
-    def __init__(self, runners: Sequence[VehicleRunner], target: tuple[str, int]):
+    With a ``radio`` (:class:`~ftlbo_mav.sim.radio.SharedRadio`) every frame each way
+    goes through its air time, buffers, latency and losses; each radio reports
+    RADIO_STATUS once a second to its own end, as SiK radios do (system id 51 '3',
+    component 68 'D'): the ground's to the ground station, each copter's to its
+    autopilot, whose streams slow down by ArduPilot's flow control."""
+
+    def __init__(self, runners: Sequence[VehicleRunner], target: tuple[str, int], *,
+                 radio: SharedRadio | None = None, clock: Callable[[], float] | None = None,
+                 scale: float = 1.0):
         self.runners = runners
         self.target = target
+        self.radio, self.clock, self.scale = radio, clock, scale
         self.atts: list[tuple[VehicleRunner, _Attachment]] = []
+        self.transport = None
+        self._next_status = 0.0
+        self._status = mavlink2.MAVLink(None, srcSystem=RADIO_SYSID, srcComponent=RADIO_COMPID)
 
     def connection_made(self, transport) -> None:
+        self.transport = transport
         for r in self.runners:
-            self.atts.append((r, r.attach(lambda d, t=transport: t.sendto(d, self.target),
+            self.atts.append((r, r.attach(lambda d, s=r.vehicle.sysid: self._down(d, s),
                                           link="UDP")))
 
+    def _after(self, arrival: float | None, fn, *args) -> None:
+        """``fn(*args)`` when a frame sent now arrives (the vehicles' clock), if it does."""
+        if arrival is None:
+            return
+        loop = asyncio.get_running_loop()
+        loop.call_later(max(0.0, (arrival - self.clock()) / self.scale), fn, *args)
+
+    def _down(self, data: bytes, sysid: int) -> None:
+        if self.radio is None:
+            self.transport.sendto(data, self.target)
+            return
+        self._after(self.radio.send(DOWN, len(data), self.clock(), sysid), self._deliver, data)
+
+    def _deliver(self, data: bytes) -> None:
+        if not self.transport.is_closing():
+            self.transport.sendto(data, self.target)
+
     def datagram_received(self, data: bytes, addr) -> None:
+        if self.radio is None:
+            self._feed(data)
+        else:
+            self._after(self.radio.send(UP, len(data), self.clock()), self._feed, data)
+
+    def _feed(self, data: bytes) -> None:
         for r, att in self.atts:
             r.feed(att, data)
+
+    def tick(self) -> None:
+        """Each radio's RADIO_STATUS, once a second."""
+        if self.radio is None or self.transport is None:
+            return
+        now = self.clock()
+        if now < self._next_status:
+            return
+        self._next_status = now + RADIO_STATUS_S
+        self._deliver(self._radio_status(self.radio.txbuf_pct(UP, now)))
+        for r, att in self.atts:
+            status = self._radio_status(self.radio.txbuf_pct(DOWN, now, r.vehicle.sysid))
+            r.feed(att, status)
+
+    def _radio_status(self, txbuf: int) -> bytes:
+        c = self.radio.counts
+        msg = mavlink2.MAVLink_radio_status_message(
+            rssi=200, remrssi=200, txbuf=txbuf, noise=40, remnoise=40,
+            rxerrors=min(c.lost[UP] + c.lost[DOWN], 65535), fixed=0)
+        buf = bytes(msg.pack(self._status))
+        self._status.seq = (self._status.seq + 1) % 256
+        return buf
 
     def error_received(self, exc) -> None:  # nobody listening yet: ICMP port unreachable
         pass
@@ -191,7 +253,9 @@ class Simulator:
     SIM_WIND_SPD/DIR/TURB, each vehicle meeting its own gusts (drawn from ``seed``). Use
     ``with Simulator(...) as sim:`` (background thread) or
     :meth:`run` (foreground, until interrupted). ``urls`` gives the client connection
-    strings; ``udp_url`` the shared link's, when ``udp_out`` is set.
+    strings; ``udp_url`` the shared link's, when ``udp_out`` is set. ``radio``: the shared
+    link is one telemetry radio (:mod:`.radio`: air time, buffers, latency, losses);
+    ``radio.counts`` says what went over it.
     """
 
     def __init__(self, *, homes: Sequence[tuple[float, float, float]], base_port: int = 5760,
@@ -199,8 +263,13 @@ class Simulator:
                  faults: Faults | Sequence[Faults] | None = None,
                  options: VehicleOptions | Sequence[VehicleOptions] | None = None,
                  signing_key: bytes | None = None, seed: int = 0, first_sysid: int = 1,
-                 time_scale: float = 1.0, vary: bool = False, wind=None):
+                 time_scale: float = 1.0, vary: bool = False, wind=None,
+                 radio: RadioOptions | None = None):
         n = len(homes)
+        if radio is not None and udp_out is None:
+            raise ValueError("a radio is the shared link's: give udp_out too")
+        self.radio_options = radio
+        self.radio: SharedRadio | None = None
         if not 0 < time_scale <= MAX_TIME_SCALE:
             raise ValueError(f"time_scale must be within (0, {MAX_TIME_SCALE:g}], "
                              f"got {time_scale}")
@@ -275,14 +344,21 @@ class Simulator:
                     server = await self._listen(i, link, port)
                     servers.append(server)
                     ports.append(server.sockets[0].getsockname()[1])
-            udp = None
+            udp = shared = None
             if self.udp_out:
-                udp, _ = await loop.create_datagram_endpoint(
-                    lambda: _SharedUdp(self.runners, self.udp_out), local_addr=(self.host, 0))
+                if self.radio_options is not None:
+                    self.radio = SharedRadio(self.radio_options,
+                                             np.random.default_rng([self.seed, 0x52]))
+                shared = _SharedUdp(self.runners, self.udp_out, radio=self.radio, clock=clock,
+                                    scale=scale)
+                udp, _ = await loop.create_datagram_endpoint(lambda: shared,
+                                                             local_addr=(self.host, 0))
             ready()
             while not self._stopping.is_set():
                 for r in self.runners:
                     r.tick()
+                if shared is not None:
+                    shared.tick()
                 try:
                     await asyncio.wait_for(self._stopping.wait(), TICK_S)
                 except TimeoutError:

@@ -40,7 +40,7 @@ from ..ardupilot.firmware import (
 )
 from ..ardupilot.modes import CopterMode, heartbeat_base_mode
 from ..ardupilot.navigation import PARAM_COUNT
-from ..ardupilot.streams import data_stream_messages
+from ..ardupilot.streams import data_stream_messages, radio_slowdown, reschedule_interval_s
 from ..link.rtcm import Reassembler
 from ..mission.items import MissionItem
 from .autopilot import Autopilot, AutopilotOptions
@@ -120,6 +120,7 @@ class LinkState:
     home_sent: bool = False
     home_at: tuple[float, float] = (0.0, 0.0)  # the home (east, north) last sent
     outbox: list = field(default_factory=list)
+    slowdown_ms: int = 0  # stream_slowdown_ms: its radio's flow control (RADIO_STATUS)
 
 
 class Vehicle:
@@ -201,10 +202,13 @@ class Vehicle:
         if msg.get_type() == "BAD_DATA":
             return []
         st = self.link(link, now)
+        kind = msg.get_type()
+        if kind == "RADIO_STATUS":  # its radio: no GCS, whoever it is addressed to
+            st.slowdown_ms = radio_slowdown(st.slowdown_ms, int(msg.txbuf))
+            return []
         st.active = True  # GCS_MAVLINK::packetReceived: the link is a GCS
         if not self.is_for_me(msg):
             return []
-        kind = msg.get_type()
         self._sync_mission()
         news = self._announce(self.autopilot.advance(now), link)
         self._stand_still(now)
@@ -282,7 +286,8 @@ class Vehicle:
                 msgs.append(self.home_messages(now)[0])
             for msgid, period in st.periods.items():
                 if now >= st.due[msgid]:
-                    st.due[msgid] = max(st.due[msgid] + period, now - period)
+                    st.due[msgid] = max(st.due[msgid] + reschedule_interval_s(
+                        period, st.slowdown_ms), now - period)
                     m = self.message(msgid, now)
                     if m is not None:
                         msgs.append(m)
