@@ -177,13 +177,15 @@ def link_summary(monitor: Monitor, sysids: list[int], names, *, budget=None,
     """summary.json's ``link``: the link ``fly`` was told of (``--link``), what the flight
     asked of it (:mod:`ftlbo_mav.link.budget`) and what it used: bytes a second from each
     vehicle over the flight (flight.csv's ``link_bytes``), sent by this station, in all and
-    as a share of the link; the ground radio's last RADIO_STATUS."""
+    as a share of the link (per second of the vehicles' clock: an emulator run faster
+    than real time is measured as it flies); the ground radio's last RADIO_STATUS."""
     record = monitor.record
     down = {names[n] if n < len(names) else str(s): record.link_bytes_per_s(s)
             for n, s in enumerate(sysids)}
     links = {id(v.link): v.link for v in monitor.vehicles if hasattr(v, "link")}.values()
     span = max((s.t for s in record.samples), default=0.0) - min(
         (s.t for s in record.samples), default=0.0)
+    span *= record.clock_rate()  # in the vehicles' seconds, as the streams are
     up = (sum(getattr(k, "bytes_out", 0) for k in links) / span) if span > 0 else None
     used = (sum(v for v in down.values() if v is not None) + (up or 0.0)
             if any(v is not None for v in down.values()) else None)

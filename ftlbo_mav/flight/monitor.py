@@ -108,7 +108,8 @@ class Monitor:
         (t0, b0), (t1, b1) = self._link_seen[0], self._link_seen[-1]
         text = ""
         if t1 - t0 >= 1.0:
-            rate = (b1 - b0) / (t1 - t0)
+            clock = self.vehicles[0].status.clock_rate if self.vehicles else 1.0
+            rate = (b1 - b0) / (t1 - t0) / max(clock, 1e-9)  # per second of their clock
             text = f"   link {rate:,.0f} B/s"
             if self.link_bytes_per_s:
                 text += f" ({100 * rate / self.link_bytes_per_s:.0f} %)"

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -116,12 +117,23 @@ class FlightRecord:
         return (pct[0], pct[-1]) if pct else None
 
     def link_bytes_per_s(self, sysid: int) -> float | None:
-        """Bytes a second received from vehicle ``sysid`` over the record (None: not
-        counted)."""
-        rows = [(s.t, s.link_bytes) for s in self.of(sysid) if s.link_bytes >= 0]
+        """Bytes a second received from vehicle ``sysid`` over the record, per second of
+        the vehicle's own clock (an emulator run faster than real time sends as much in
+        its second as a copter does; None: not counted)."""
+        rows = [(s.boot_s if math.isfinite(s.boot_s) else s.t, s.link_bytes)
+                for s in self.of(sysid) if s.link_bytes >= 0]
         if len(rows) < 2 or rows[-1][0] <= rows[0][0]:
             return None
         return (rows[-1][1] - rows[0][1]) / (rows[-1][0] - rows[0][0])
+
+    def clock_rate(self) -> float:
+        """The vehicles' seconds per second of the record (1 but for a simulator run
+        faster than real time), from the first vehicle's time stamps."""
+        for sysid in sorted({s.sysid for s in self.samples}):
+            rows = [(s.t, s.boot_s) for s in self.of(sysid) if math.isfinite(s.boot_s)]
+            if len(rows) >= 2 and rows[-1][0] > rows[0][0] and rows[-1][1] > rows[0][1]:
+                return (rows[-1][1] - rows[0][1]) / (rows[-1][0] - rows[0][0])
+        return 1.0
 
     def rate_hz(self, sysid: int) -> float:
         """Mean sample rate of one vehicle."""

@@ -84,10 +84,15 @@ def resolve_udp_out(host: str, port: int) -> tuple[str, int]:
               show_default=True,
               help="Run the vehicles' clock this many times faster than real time (at most "
                    f"{MAX_TIME_SCALE:g}: the emulator steps every 20 ms of its time).")
+@click.option("--radio", "radio_text", default=None, metavar="SPEC",
+              help="The --udp-out link is one telemetry radio for every vehicle: good (6000 "
+                   "B/s both ways, 60+-40 ms, 3 %% lost, 2 KiB buffers), rough (120+-80 ms, "
+                   "10 %% lost in bursts, 1 s outage every 15 s), and/or key=value pairs: "
+                   "bytes, latency, jitter, loss, burst, buffer, overhead, outage, every.")
 @user_errors
 def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
         latency_ms, boot_delay, capacity, silent, mute, signing_key, seed, arm_delay, speed,
-        boot_scale, vary, time_scale):
+        boot_scale, vary, time_scale, radio_text):
     """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
     from ..ardupilot.commands import RECORDED_BOOT
     from ..scenario import load_scenario
@@ -100,6 +105,16 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
 
     if udp_out is not None:
         udp_out = resolve_udp_out(*udp_out)
+    radio = None
+    if radio_text is not None:
+        from .radio import parse_radio
+
+        if udp_out is None:
+            raise BadInput("--radio is the shared link's: give --udp-out HOST:PORT too")
+        try:
+            radio = parse_radio(radio_text)
+        except ValueError as exc:
+            raise BadInput(f"--radio {radio_text!r}: {exc}") from None
     if scenario:
         homes = scenario_homes(load_scenario(scenario))
         if count is not None and count != len(homes):
@@ -127,14 +142,17 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
     simulator = Simulator(homes=homes, base_port=base_port,
                           udp_out=udp_out, faults=faults,
                           options=options, signing_key=key, seed=seed, time_scale=time_scale,
-                          vary=vary)
+                          vary=vary, radio=radio)
 
     def ready() -> None:
         for i, (url, home) in enumerate(zip(simulator.urls, homes)):
             click.echo(f"vehicle sysid {i + 1}: {url}  home {home[0]:.7f}, {home[1]:.7f}, "
                        f"{home[2]:.1f} m")
         if simulator.udp_url:
-            click.echo(f"all vehicles also on UDP: connect with {simulator.udp_url}")
+            click.echo(f"all vehicles also on UDP: connect with {simulator.udp_url}"
+                       + (f" (one radio: {radio.bytes_per_s:,.0f} B/s, {1000 * radio.latency_s:.0f}"
+                          f" +- {1000 * radio.jitter_s:.0f} ms, {100 * radio.loss:.0f} % lost)"
+                          if radio else ""))
         click.echo("emulating; Ctrl-C to stop")
 
     try:

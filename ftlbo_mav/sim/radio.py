@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -159,4 +159,36 @@ class SharedRadio:
         return self._bad
 
 
-__all__ = ["DOWN", "ROUGH_DAY", "UP", "RadioCounts", "RadioOptions", "SharedRadio"]
+_KEYS = {"bytes": "bytes_per_s", "latency": "latency_s", "jitter": "jitter_s", "loss": "loss",
+         "burst": "burst", "buffer": "buffer_bytes", "overhead": "frame_overhead",
+         "outage": "outage_s", "every": "outage_every_s"}
+
+
+def parse_radio(text: str) -> RadioOptions:
+    """``sim --radio``: ``good`` (:class:`RadioOptions`' defaults), ``rough``
+    (:data:`ROUGH_DAY`), optionally followed by ``,key=value`` pairs that change it
+    (``bytes``, ``latency``, ``jitter`` seconds, ``loss``, ``burst`` frames, ``buffer``
+    bytes, ``overhead`` bytes a frame, ``outage`` and ``every`` seconds), or the pairs
+    alone on the good day. ValueError naming what is wrong."""
+    parts = [p.strip() for p in text.split(",") if p.strip()]
+    base = RadioOptions()
+    if parts and "=" not in parts[0]:
+        name = parts.pop(0).lower()
+        if name not in ("good", "rough"):
+            raise ValueError(f"{name!r}: good, rough, or key=value pairs")
+        base = ROUGH_DAY if name == "rough" else base
+    changes = {}
+    for part in parts:
+        key, _, value = part.partition("=")
+        if key.strip() not in _KEYS or not value:
+            raise ValueError(f"{part!r}: one of {', '.join(_KEYS)} = a number")
+        field = _KEYS[key.strip()]
+        try:
+            changes[field] = int(value) if field in ("buffer_bytes", "frame_overhead") \
+                else float(value)
+        except ValueError:
+            raise ValueError(f"{part!r}: not a number") from None
+    return replace(base, **changes)
+
+
+__all__ = ["DOWN", "ROUGH_DAY", "UP", "parse_radio", "RadioCounts", "RadioOptions", "SharedRadio"]

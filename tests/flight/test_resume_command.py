@@ -84,3 +84,14 @@ def test_the_rest_is_a_plan_folder_that_says_what_it_carries_on_from(survey):
     assert doc["mission"] == {"end_action": "land", "speed": 5.0}  # from the missions
     with pytest.raises(NothingToResume):
         plan_rest(planned, _progress(survey, [26.0] * 3)[1])
+
+
+def test_a_swarm_the_link_cannot_carry_is_refused_before_any_vehicle(survey):
+    result = CliRunner().invoke(main, ["fly", str(survey), "--sysid", "1..3", "--link", "500",
+                                       "--connect", NOWHERE, "--discover-timeout", "0.2"])
+    assert result.exit_code == 2
+    assert "the link cannot carry this swarm" in result.output
+    assert "at most 1 copter(s) fit" in result.output
+    bad = CliRunner().invoke(main, ["fly", str(survey), "--sysid", "1..3", "--link", "fast",
+                                    "--connect", NOWHERE])
+    assert bad.exit_code == 2 and "sik-64" in bad.output

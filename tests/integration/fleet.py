@@ -52,13 +52,15 @@ def free_udp_port() -> int:
 @contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
              shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0,
-             params: dict[str, float] | None = None):
+             params: dict[str, float] | None = None, radio=None):
     """``count`` vehicles, system ids 1..count, ready for uploads; ``homes`` (default a
     row at SITL's default location) and ``speedup`` (the emulator's time scale, SITL's
     --speedup) for flights; ``params``: parameters every vehicle boots with (SITL: a
-    defaults file after its own; CAM1_TYPE, for one, is read at boot)."""
+    defaults file after its own; CAM1_TYPE, for one, is read at boot); ``radio``: the
+    shared link is one telemetry radio (:mod:`ftlbo_mav.sim.radio`; emulator only)."""
     homes = default_homes(count) if homes is None else homes
-    emulator_only = faults is not None or options is not None or signing_key or shared_link
+    emulator_only = (faults is not None or options is not None or signing_key or shared_link
+                     or radio is not None)
     if BACKEND == "sitl":
         if emulator_only:
             pytest.skip("needs the emulator's fault injection")
@@ -76,11 +78,11 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
         finally:
             os.unlink(extra.name)
         return
-    udp_out = ("127.0.0.1", free_udp_port()) if shared_link else None
+    udp_out = ("127.0.0.1", free_udp_port()) if shared_link or radio is not None else None
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
-                   signing_key=signing_key, seed=seed) as sim:
+                   signing_key=signing_key, seed=seed, radio=radio) as sim:
         if params:
             sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
         yield Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,

@@ -1,0 +1,49 @@
+"""The example through one telemetry radio for the whole swarm (issue 28): the emulator's
+shared link as a radio (sim/radio.py: 6,000 B/s for both ways, 60 +- 40 ms, 3 % of
+frames lost, 2 KiB buffers), ``upload`` and ``fly --link sik-64`` over it. The emulator
+only: ArduPilot SITL has no radio (a router such as MAVProxy gives one link to several
+SITL copters; docs/link.md)."""
+
+from __future__ import annotations
+
+import json
+import time
+
+import pytest
+from click.testing import CliRunner
+
+from ftlbo_mav.cli import main
+from ftlbo_mav.sim.radio import RadioOptions
+
+from .fleet import vehicles
+from .test_departures import HOMES, example, plan_dir  # noqa: F401 - fixtures
+
+pytestmark = pytest.mark.sitl
+
+SPEEDUP = 12.0  # (the keeper measures in real time: off, as in the other fast flights)
+
+
+def test_the_example_uploads_and_flies_through_one_shared_radio(plan_dir):  # noqa: F811
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, radio=RadioOptions()) as fleet:
+        t0 = time.monotonic()
+        up = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                       "--connect", fleet.udp_url])
+        upload_s = (time.monotonic() - t0) * SPEEDUP  # in the radio's (the vehicles') time
+        assert up.exit_code == 0, up.output
+        flown = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                          "--control-port", "0", "--no-keeper", "--link", "sik-64",
+                                          "--connect", fleet.udp_url])
+        counts = fleet.sim.radio.counts
+    print(f"upload {upload_s:.1f} s (radio time); fly exit {flown.exit_code}:\n{flown.output}")
+    print(f"radio: {counts}")
+    assert flown.exit_code == 0, flown.output
+    assert "link: 3 copter(s) at 10 Hz positions" in flown.output
+    summary = json.loads((plan_dir / "flight" / "summary.json").read_text())
+    link = summary["link"]
+    assert link["told"] == {"name": "sik-64", "bytes_per_s": 6000.0}
+    assert link["asked"]["position_hz"] == 10.0
+    # what went over the radio is what the flight asked for, within the radio's losses
+    assert 0.2 < link["measured"]["share_of_link"] < 0.7
+    assert link["radio"]["txbuf"] > 50  # the ground radio's RADIO_STATUS was read
+    assert counts.lost["down"] > 0 and counts.full["down"] == 0
+    assert not summary["departures"]  # 3 % of frames lost: no link taken for lost
