@@ -51,6 +51,11 @@ READINESS: Mapping[int, float] = {
 }
 
 
+PARAM_REQUEST_QUEUE = 20
+"""PARAM_REQUEST_READs ArduPilot holds before it answers them, for all its links together
+(``GCS_MAVLINK::param_requests``, libraries/GCS_MAVLink/GCS_Param.cpp): one more is
+dropped (handle_param_request_read: no space)."""
+
 MAX_SLOWDOWN_MS = 2000
 """GCS_MAVLINK::handle_radio_status grows the slowdown no further once it reaches this."""
 

@@ -12,13 +12,14 @@ parameters a plan predicted its flown path with (:func:`set_vehicle_params`,
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..ardupilot.fence import FENCE_PARAM_DEFAULTS, param_equal
 from ..ardupilot.navigation import DEFAULTS as NAV_DEFAULTS
 from ..ardupilot.navigation import vehicle_param_differences
+from ..ardupilot.streams import PARAM_REQUEST_QUEUE
 from ..errors import FtlboError
 from .transfer import Timing
 
@@ -38,33 +39,72 @@ def _param_name(msg) -> str:
     return name.rstrip("\x00")
 
 
-def _exchange(channel, send, name: str, timing: Timing) -> float | None:
-    """Send (and resend) until a PARAM_VALUE for ``name`` arrives; its value or None."""
+PARAM_WINDOW = PARAM_REQUEST_QUEUE // 2
+"""Parameter requests outstanding at once: half of what ArduPilot queues, so that another
+station's requests still fit."""
+
+
+def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Timing
+              ) -> dict[str, float | None]:
+    """Send every request (up to :data:`PARAM_WINDOW` unanswered at once, a new one as
+    each answer comes) and resend the unanswered ones when no answer came for a while:
+    ``timing.timeout_s``, or once the link's round trip is known (``channel.srtt``, from
+    the mission transfers before) four round trips (at least ``timing.min_resend_s``), as
+    the mission protocol resends; a name not answered within ``timing.budget_s`` of its
+    first request is None.
+
+    One round trip for a window of parameters, not one for each: through a shared
+    telemetry radio (60 ms each way) 18 parameters took 18 round trips and a lost one
+    1.5 s; now a round trip or two (docs/link.md)."""
     clock = getattr(channel, "clock", time.monotonic)
-    for _ in range(timing.retries + 1):
-        channel.send(send())
-        deadline = clock() + timing.timeout_s
-        while (left := deadline - clock()) > 0:
-            msg = channel.recv(left)
-            if msg is not None and msg.get_type() == "PARAM_VALUE" and _param_name(msg) == name:
-                return float(msg.param_value)
-    return None
+    srtt = getattr(channel, "srtt", None)
+    resend_s = (min(timing.timeout_s, max(timing.min_resend_s, 4.0 * srtt))
+                if timing.adaptive and srtt else timing.timeout_s)
+    got: dict[str, float | None] = dict.fromkeys(requests)
+    waiting = list(requests)  # not sent yet
+    out: dict[str, float] = {}  # sent, unanswered: name -> when first sent
+    deadline = clock() + resend_s
+    while waiting or out:
+        while waiting and len(out) < PARAM_WINDOW:
+            name = waiting.pop(0)
+            channel.send(requests[name]())
+            out[name] = clock()
+        left = deadline - clock()
+        if left <= 0:
+            now = clock()
+            for n in [n for n, first in out.items() if now - first >= timing.budget_s]:
+                del out[n]  # never answered
+            for n in out:
+                channel.send(requests[n]())
+            deadline = now + resend_s
+            continue
+        msg = channel.recv(left)
+        if msg is not None and msg.get_type() == "PARAM_VALUE":
+            name = _param_name(msg)
+            if name in out:
+                del out[name]
+                got[name] = float(msg.param_value)
+                deadline = clock() + resend_s  # progress
+    return got
 
 
 def read_params(channel, names: Iterable[str], *, timing: Timing) -> dict[str, float | None]:
     """PARAM_REQUEST_READ by name for each; None for one never answered."""
-    return {name: _exchange(channel, lambda n=name: R.MAVLink_param_request_read_message(
-        channel.sysid, 1, n.encode(), -1), name, timing) for name in names}
+    return _exchange(channel, {name: (lambda n=name: R.MAVLink_param_request_read_message(
+        channel.sysid, 1, n.encode(), -1)) for name in names}, timing)
 
 
 def set_params(channel, params: Mapping[str, float], *, timing: Timing) -> None:
     """PARAM_SET each, then read each back; :class:`ParamError` for the first that is
     not answered or not kept."""
-    for name, value in params.items():
+    def setter(name: str, value: float):
         kind = _TYPES[name].type if name in _TYPES else R.MAV_PARAM_TYPE_REAL32
-        got = _exchange(channel, lambda n=name, v=value, k=kind: R.MAVLink_param_set_message(
-            channel.sysid, 1, n.encode(), float(v), k), name, timing)
-        if got is None:
+        return lambda: R.MAVLink_param_set_message(channel.sysid, 1, name.encode(),
+                                                   float(value), kind)
+
+    answered = _exchange(channel, {n: setter(n, v) for n, v in params.items()}, timing)
+    for name in params:
+        if answered[name] is None:
             raise ParamError(channel.sysid, name, f"no PARAM_VALUE answered PARAM_SET within "
                              f"{timing.budget_s:g} s (does this vehicle have it?)")
     back = read_params(channel, params, timing=timing)

@@ -190,23 +190,49 @@ def test_every_mission_result_has_a_sentence(code):
     assert R.enums["MAV_MISSION_RESULT"][code].name in text and len(text) > 25
 
 
+def _item(seq):
+    return R.MAVLink_mission_item_int_message(
+        255, 190, seq, 3, 16, 0, 1, 0, 0, 0, 0, 122332099, 1091145051, 5.0, 0)
+
+
 def test_download_ignores_duplicates_and_stale_acks_and_acks_at_the_end():
     dl = Download(sysid=1, compid=1, own=(255, 190), timing=Timing(), progress=None)
     (first,) = dl.start(0.0)
     assert first.get_type() == "MISSION_REQUEST_LIST"
-    (req0,) = dl.on_message(R.MAVLink_mission_count_message(255, 190, 2, 0), 0.01)
-    assert req0.get_type() == "MISSION_REQUEST_INT" and req0.seq == 0
-    def item(seq):
-        return R.MAVLink_mission_item_int_message(
-            255, 190, seq, 3, 16, 0, 1, 0, 0, 0, 0, 122332099, 1091145051, 5.0, 0)
-    (_req1,) = dl.on_message(item(0), 0.02)
-    assert dl.on_message(item(0), 0.03) == []  # duplicate
+    reqs = dl.on_message(R.MAVLink_mission_count_message(255, 190, 2, 0), 0.01)
+    # the window: every item asked for at once (ArduPilot answers each on its own)
+    assert [(r.get_type(), r.seq) for r in reqs] == [("MISSION_REQUEST_INT", 0),
+                                                     ("MISSION_REQUEST_INT", 1)]
+    assert dl.on_message(_item(0), 0.02) == []  # nothing more to ask
+    assert dl.on_message(_item(0), 0.03) == []  # duplicate
     assert dl.on_message(ack(R.MAV_MISSION_ERROR), 0.035) == []  # stale, from an upload
     assert dl.on_message(R.MAVLink_mission_count_message(255, 190, 2, 0), 0.04) == []
-    (done,) = dl.on_message(item(1), 0.05)
+    (done,) = dl.on_message(_item(1), 0.05)
     assert done.get_type() == "MISSION_ACK" and done.type == R.MAV_MISSION_ACCEPTED
     assert dl.finished and [i.seq for i in dl.items] == [0, 1]
     assert dl.items[1].lat_deg == pytest.approx(12.2332099)
+
+
+def test_download_asks_a_window_at_a_time_and_again_for_what_was_lost():
+    from ftlbo_mav.link.mission_protocol import READ_WINDOW
+
+    count = READ_WINDOW + 3
+    dl = Download(sysid=1, compid=1, own=(255, 190), timing=Timing(), progress=None)
+    dl.start(0.0)
+    reqs = dl.on_message(R.MAVLink_mission_count_message(255, 190, count, 0), 0.1)
+    assert [r.seq for r in reqs] == list(range(READ_WINDOW))
+    # answers out of order, one lost (seq 2): each answer lets one more be asked
+    more = []
+    for seq in (1, 0, 3):
+        more += dl.on_message(_item(seq), 0.2)
+    assert [r.seq for r in more] == [READ_WINDOW, READ_WINDOW + 1, READ_WINDOW + 2]
+    for seq in range(4, count):
+        dl.on_message(_item(seq), 0.25)
+    assert not dl.finished and [i.seq for i in dl.items] == [0, 1]
+    again = dl.on_timeout(dl.deadline)
+    assert [r.seq for r in again] == [2]  # only the one not answered
+    (done,) = dl.on_message(_item(2), dl.deadline + 0.1)
+    assert done.type == R.MAV_MISSION_ACCEPTED and len(dl.items) == count
 
 
 # ----------------------------------------------------------------- against the emulator
