@@ -10,6 +10,7 @@ is compared in that form. The fence parameters are set and read back by
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 from ..mission.fence_files import FenceSet
 from .codec import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, mission_differences
@@ -58,27 +59,47 @@ def _labelled(progress: Progress | None, label: str) -> Progress | None:
 
 
 def upload_fence_set(channel, fence_set: FenceSet, *, timing: Timing,
-                     progress: Progress | None = None) -> tuple[bool, str]:
+                     progress: Progress | None = None,
+                     more_channels: Callable[[], object] | None = None) -> tuple[bool, str]:
     """Upload the fence and the rally points, read both back, set and read back the
     parameters (fence first, FENCE_ENABLE last: the fence is on board before it is on).
-    ``(True, what)`` or ``(False, why)``; a part that failed is cleared (and said so)."""
-    for label, kind in PARTS:
+    ``(True, what)`` or ``(False, why)``; a part that failed is cleared (and said so).
+    ``more_channels()``: another channel to the same vehicle, for the rally points to go
+    at the same time as the fence (ArduPilot keeps a protocol per mission type)."""
+    def part(ch, label: str, kind: int) -> str | None:
         items = fence_set.fence if kind == MISSION_TYPE_FENCE else fence_set.rally
         try:
             if items:
-                upload_mission(channel, items, timing=timing, mission_type=kind,
+                upload_mission(ch, items, timing=timing, mission_type=kind,
                                progress=_labelled(progress, label))
             else:
-                clear_mission(channel, timing=timing, mission_type=kind)
-            back = download_mission(channel, timing=timing, mission_type=kind,
+                clear_mission(ch, timing=timing, mission_type=kind)
+            back = download_mission(ch, timing=timing, mission_type=kind,
                                     progress=_labelled(progress, label))
         except MissionTransferError as exc:
-            return False, f"{label} {exc.step} failed: {exc.problem}" + _cleared(
-                channel, timing, label, kind)
+            return f"{label} {exc.step} failed: {exc.problem}" + _cleared(ch, timing, label,
+                                                                          kind)
         diff = mission_differences(items, back, mission_type=kind)
         if diff:
-            return False, f"{label} read-back differs: {'; '.join(diff[:3])}" + _cleared(
-                channel, timing, label, kind)
+            return f"{label} read-back differs: {'; '.join(diff[:3])}" + _cleared(
+                ch, timing, label, kind)
+        return None
+
+    (fence_label, fence_kind), (rally_label, rally_kind) = PARTS
+    if more_channels is None:
+        problems = [part(channel, fence_label, fence_kind)]
+        problems.append(part(channel, rally_label, rally_kind) if problems[0] is None else None)
+    else:
+        def rally() -> str | None:
+            with more_channels() as ch:
+                return part(ch, rally_label, rally_kind)
+
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            later = pool.submit(rally)
+            problems = [part(channel, fence_label, fence_kind), later.result()]
+    failed = [p for p in problems if p is not None]
+    if failed:
+        return False, "; ".join(failed)
     if progress is not None:
         progress("parameters", 0, len(fence_set.params))
     try:

@@ -39,9 +39,10 @@ def _param_name(msg) -> str:
     return name.rstrip("\x00")
 
 
-PARAM_WINDOW = PARAM_REQUEST_QUEUE // 2
-"""Parameter requests outstanding at once: half of what ArduPilot queues, so that another
-station's requests still fit."""
+PARAM_WINDOW = PARAM_REQUEST_QUEUE // 2 - 2
+"""Parameter requests outstanding at once on one exchange: under half of what ArduPilot
+queues, so that two at once (``upload``: the fence's and the [vehicle] parameters) and
+another station's requests still fit."""
 
 
 def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Timing

@@ -213,26 +213,51 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
 
             link = found[a.sysid]
             own_timing = timing_for(link.heartbeats[a.sysid], timing)
-            with link.channel(a.sysid) as channel:
-                ok, msg = upload_and_verify(channel, a.items, progress=progress,
-                                            timing=own_timing)
-                if ok and a.fence is not None:
-                    try:
-                        fence_ok, fence_msg = upload_fence_set(channel, a.fence,
-                                                               timing=own_timing,
-                                                               progress=progress)
-                    except OSError as exc:  # the link broke after the mission verified
-                        fence_ok, fence_msg = False, (
-                            f"the link failed ({exc.strerror or exc}) during the fence: check "
-                            f"it with `ftlbo-mav download --sysid {a.sysid}` before flying")
-                    ok = fence_ok
-                    msg = (f"{msg[:-1]}; {fence_msg})" if fence_ok
-                           else f"mission {msg}, but {fence_msg}")
-                if ok and a.params:
-                    progress("parameters", 0, len(a.params))
-                    ok, params_msg = _set_vehicle_params(channel, a, own_timing)
-                    msg = (f"{msg[:-1]}; {params_msg})" if ok
-                           else f"mission {msg}, but {params_msg}")
+
+            # the mission, the fence with its rally points and parameters, and the
+            # [vehicle] parameters at once, each on a channel of its own (every channel
+            # sees the vehicle's messages; each transfer takes those of its mission type,
+            # each parameter exchange its names): ArduPilot keeps a protocol per mission
+            # type (MissionItemProtocol) and answers parameters by name, so none waits
+            # for another's round trips (through a shared radio, 60 ms each way: docs/link.md)
+            def mission() -> tuple[bool, str]:
+                with link.channel(a.sysid) as channel:
+                    return upload_and_verify(channel, a.items, progress=progress,
+                                             timing=own_timing)
+
+            def fence() -> tuple[bool, str] | None:
+                if a.fence is None:
+                    return None
+                try:
+                    with link.channel(a.sysid) as channel:
+                        return upload_fence_set(channel, a.fence, timing=own_timing,
+                                                progress=progress,
+                                                more_channels=lambda: link.channel(a.sysid))
+                except OSError as exc:  # the link broke
+                    return False, (f"the link failed ({exc.strerror or exc}) during the fence: "
+                                   f"check it with `ftlbo-mav download --sysid {a.sysid}` "
+                                   "before flying")
+
+            def params() -> tuple[bool, str] | None:
+                if not a.params:
+                    return None
+                progress("parameters", 0, len(a.params))
+                with link.channel(a.sysid) as channel:
+                    return _set_vehicle_params(channel, a, own_timing)
+
+            with ThreadPoolExecutor(max_workers=3) as parts:
+                futures = [parts.submit(f) for f in (mission, fence, params)]
+            (ok, msg), fenced, paramed = (f.result() for f in futures)
+            for part in (fenced, paramed):
+                if part is None:
+                    continue
+                part_ok, part_msg = part
+                if ok and part_ok:
+                    msg = f"{msg[:-1]}; {part_msg})"
+                elif ok:
+                    ok, msg = False, f"mission {msg}, but {part_msg}"
+                elif not part_ok:
+                    msg = f"{msg}; and {part_msg}"
             if not ok and link.closed_by_peer and "closed by the other end" not in msg:
                 msg += f" ({link.url} was closed by the other end)"
             emit(ProgressEvent(a.name, a.sysid, "verified" if ok else "failed",
