@@ -430,6 +430,15 @@ class Channel:
     def send(self, msg) -> None:
         self.link.send(msg)
 
+    @property
+    def sharing(self) -> int:
+        """How many vehicles share this channel's link (heard on it; at least 1): a
+        shared radio's buffer is theirs together, so what one vehicle's exchange keeps
+        outstanding at once is divided among them (:mod:`.params`, read-backs). Divided by
+        fewer (every 3 vehicles one share), 10 copters overflowed an emulated 2 KiB radio
+        buffer at 3,000 B/s and their uploads failed (docs/link.md)."""
+        return max(1, len(self.link.heartbeats))
+
     def recv(self, timeout_s: float):
         """The next message for us from this vehicle, or ``None`` after ``timeout_s``."""
         deadline = time.monotonic() + max(0.0, timeout_s)

@@ -196,8 +196,10 @@ class Upload(_Transfer):
 
 
 READ_WINDOW = 8
-"""MISSION_REQUEST_INTs outstanding at once in a read-back. ArduPilot answers each on its
-own (MissionItemProtocol::handle_mission_request_int keeps no state while sending), so a
+"""MISSION_REQUEST_INTs outstanding at once in a read-back, divided among the vehicles
+that share the link (a shared radio's buffer is theirs together: 10 copters asking 8
+each overflowed a 2 KiB buffer). ArduPilot answers each on its own
+(MissionItemProtocol::handle_mission_request_int keeps no state while sending), so a
 read-back asks for a window of items at once: one round trip for the window, not one an
 item (through a shared radio, 60 ms each way, 8 items took 1.7 s)."""
 
@@ -210,6 +212,8 @@ class Download(_Transfer):
 
     def __init__(self, **kw):
         super().__init__(**kw)
+        # a window of its own: READ_WINDOW shared among the vehicles on the link
+        self.window = max(1, READ_WINDOW // self.sharing)
         self.count: int | None = None
         self.got: dict[int, MissionItem] = {}
         self.asked: dict[int, float] = {}  # seq -> when last asked, for those not answered
@@ -241,7 +245,7 @@ class Download(_Transfer):
                                                            self.mission_type)]
         out = []
         for seq in range(self.count):
-            if len(self.asked) >= READ_WINDOW:
+            if len(self.asked) >= self.window:
                 break
             if seq not in self.got and seq not in self.asked:
                 out.append(self._request(seq, now))
@@ -346,6 +350,7 @@ class Clear(_Transfer):
 def _kw(channel, timing: Timing | None, progress: Progress | None, compid: int,
         mission_type: int = MISSION_TYPE_MISSION) -> dict:
     return {"sysid": channel.sysid, "compid": compid,
+            "sharing": getattr(channel, "sharing", 1),
             "own": (channel.own_sysid, channel.own_compid), "timing": timing or Timing(),
             "progress": progress, "srtt": getattr(channel, "srtt", None),
             "mission_type": mission_type}

@@ -47,8 +47,9 @@ another station's requests still fit."""
 
 def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Timing
               ) -> dict[str, float | None]:
-    """Send every request (up to :data:`PARAM_WINDOW` unanswered at once, a new one as
-    each answer comes) and resend the unanswered ones when no answer came for a while:
+    """Send every request (up to :data:`PARAM_WINDOW` unanswered at once, divided by the
+    channel's ``sharing``, a new one as each answer comes) and resend the unanswered ones
+    when no answer came for a while:
     ``timing.timeout_s``, or once the link's round trip is known (``channel.srtt``, from
     the mission transfers before) four round trips (at least ``timing.min_resend_s``), as
     the mission protocol resends; a name not answered within ``timing.budget_s`` of its
@@ -58,6 +59,7 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     telemetry radio (60 ms each way) 18 parameters took 18 round trips and a lost one
     1.5 s; now a round trip or two (docs/link.md)."""
     clock = getattr(channel, "clock", time.monotonic)
+    window = max(1, PARAM_WINDOW // getattr(channel, "sharing", 1))
     srtt = getattr(channel, "srtt", None)
     resend_s = (min(timing.timeout_s, max(timing.min_resend_s, 4.0 * srtt))
                 if timing.adaptive and srtt else timing.timeout_s)
@@ -66,7 +68,7 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     out: dict[str, float] = {}  # sent, unanswered: name -> when first sent
     deadline = clock() + resend_s
     while waiting or out:
-        while waiting and len(out) < PARAM_WINDOW:
+        while waiting and len(out) < window:
             name = waiting.pop(0)
             channel.send(requests[name]())
             out[name] = clock()

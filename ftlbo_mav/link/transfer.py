@@ -107,8 +107,9 @@ class _Transfer:
 
     def __init__(self, *, sysid: int, compid: int, own: tuple[int, int], timing: Timing,
                  progress: Progress | None, srtt: float | None = None,
-                 mission_type: int = MISSION_TYPE_MISSION):
+                 mission_type: int = MISSION_TYPE_MISSION, sharing: int = 1):
         self.sysid, self.compid = sysid, compid
+        self.sharing = sharing  # vehicles on the link (Channel.sharing)
         self.mission_type = mission_type  # MAV_MISSION_TYPE: mission, fence or rally
         self.own_sysid, self.own_compid = own
         self.timing = timing
