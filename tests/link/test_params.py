@@ -4,6 +4,7 @@ time): read and compared, set where they differ and read back."""
 from __future__ import annotations
 
 import pytest
+from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ftlbo_mav.ardupilot.navigation import Navigation, vehicle_params
 from ftlbo_mav.link.mission_protocol import Timing
@@ -55,3 +56,32 @@ def test_a_parameter_the_vehicle_does_not_have_is_a_param_error_and_nothing_is_s
     with pytest.raises(ParamError, match="NO_SUCH_PARAM: not answered"):
         set_vehicle_params(ch, {**PLANNED, "NO_SUCH_PARAM": 1.0}, timing=TIMING)
     assert ch.vehicle.autopilot.get_param("WPNAV_ACCEL") == (500.0, 9)
+
+
+def test_parameters_are_asked_a_window_at_a_time_not_one_round_trip_each():
+    """18 parameters over a link of 0.1 s each way: asked a window at a time, so a few
+    round trips, not 18 (virtual time)."""
+    from ftlbo_mav.link.params import PARAM_WINDOW
+
+    ch = channel(faults=Faults(latency_s=0.1))
+    t0 = ch.clock()
+    assert read_vehicle_params(ch, PLANNED, timing=TIMING) == []
+    round_trips = (ch.clock() - t0) / 0.2
+    assert len(PLANNED) == 18 and round_trips <= 2 * -(-len(PLANNED) // PARAM_WINDOW) + 1
+
+
+def test_a_shared_link_divides_the_window_among_its_vehicles():
+    from ftlbo_mav.link.params import PARAM_WINDOW, _exchange
+
+    class Shared(LoopbackChannel):
+        sharing = 4  # four vehicles heard on the link
+
+    ch = Shared(Vehicle(sysid=2, home=(*HOME, 0.0)), faults=Faults(latency_s=0.1))
+    sent = []
+    send = ch.send
+    ch.send = lambda msg: (sent.append((ch.clock(), msg)), send(msg))[1]
+    got = _exchange(ch, {n: (lambda n=n: R.MAVLink_param_request_read_message(
+        2, 1, n.encode(), -1)) for n in PLANNED}, TIMING)
+    assert all(v is not None for v in got.values())
+    at_start = [t for t, _m in sent if t == sent[0][0]]
+    assert len(at_start) == PARAM_WINDOW // 4  # then one more as each answer comes
