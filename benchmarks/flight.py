@@ -21,12 +21,15 @@ separation and clearance and the landing error per strategy and writes
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import shutil
+import socket
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,6 +45,7 @@ from ftlbo_mav.flight.fly import (
 )
 from ftlbo_mav.flight.keeper import KeeperOptions
 from ftlbo_mav.flight.monitor import Monitor
+from ftlbo_mav.flight.outcome import FlightLeftPlan
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.report import summarize
 from ftlbo_mav.link.swarm import Assignment, upload_swarm
@@ -76,7 +80,8 @@ def set_params(urls, settings) -> None:
         sysid, _, assignment = text.partition(":")
         name, _, value = assignment.partition("=")
         sysid, value = int(sysid), float(value)
-        with Fleet([f"uav{sysid}"], [sysid], [urls[sysid - 1]], position_hz=1.0) as fleet:
+        url = urls[min(sysid, len(urls)) - 1]  # one url: a shared link to every vehicle
+        with Fleet([f"uav{sysid}"], [sysid], [url], position_hz=1.0) as fleet:
             v = fleet.vehicles[0]
             for _ in range(5):
                 v.send(R.MAVLink_param_set_message(sysid, 1, name.encode(), value,
@@ -116,7 +121,7 @@ def wind_params(wind, n: int) -> list[str]:
 def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None) -> dict:
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
-    keeper = None
+    keeper, left = None, None
     sysids = list(range(1, planned.count + 1))
     with Fleet(planned.names, sysids, urls, on_position=monitor) as fleet:
         monitor.vehicles = fleet.vehicles  # Fleet asks each vehicle for 10 Hz positions
@@ -134,10 +139,14 @@ def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None) -> d
             keeper = make_keeper(planned, options.keeper)
             if keep is not None:
                 keeper.trace = []
-            fly(planned, fleet.vehicles, options=options, timing=Timing(),
-                say=lambda _t: None, tick=lambda: None, keeper=keeper)
+            try:
+                fly(planned, fleet.vehicles, options=options, timing=Timing(),
+                    say=lambda _t: None, tick=lambda: None, keeper=keeper)
+            except FlightLeftPlan as exc:  # measured all the same, and said
+                left = str(exc)
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)
     summary = summarize(planned, times, positions, seqs)
+    summary["left_plan"] = left
     summary["_samples"] = monitor.record.samples  # for --record, not in the JSON summary
     if keep is not None:
         keep.mkdir(parents=True, exist_ok=True)
@@ -170,13 +179,16 @@ class UploadFailed(Exception):
 
 def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None,
               speedup: float = 1.0, seed: int = 0, vary: bool = False,
-              params=(), wind=None, keep: Path | None = None) -> dict:
+              params=(), wind=None, keep: Path | None = None, radio=None) -> dict:
     """One flight of ``plan_dir`` on freshly started vehicles (SITL when ``binary``, else
     the emulator, ``vary`` and ``seed`` giving each copter its differences) flown the
     ``strategy`` way, in ``wind`` (SPD, DIR, TURB: SITL's SIM_WIND_* set on each instance,
     the emulator's wind model); its summary. ``keep``: a folder for the flight's samples
-    and keeper trace and SITL's instance folders (DataFlash logs in ``instanceN/logs``)."""
+    and keeper trace and SITL's instance folders (DataFlash logs in ``instanceN/logs``).
+    ``radio`` (:class:`~ftlbo_mav.sim.radio.RadioOptions`): every vehicle behind one radio
+    (SITL: the router, sim/router.py; the emulator: its shared link), seeded by ``seed``."""
     planned = load_planned_flight(plan_dir)
+    udp_out = ("127.0.0.1", _free_udp_port()) if radio is not None else None
     if binary:
         from sitl import SitlSwarm
 
@@ -185,8 +197,17 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
         from ftlbo_mav.sim.server import Simulator
 
         swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary,
-                          **({"wind": wind} if wind else {}))
-    with swarm as vehicles:
+                          udp_out=udp_out, radio=radio, **({"wind": wind} if wind else {}))
+    with swarm as started, contextlib.ExitStack() as stack:
+        vehicles = _Urls(started.urls, None)
+        if radio is not None and binary:
+            from ftlbo_mav.sim.router import RadioRouter
+
+            router = stack.enter_context(RadioRouter(started.urls, udp_out, radio, seed=seed,
+                                                     time_scale=speedup))
+            vehicles = _Urls([router.udp_url], router.radio)
+        elif radio is not None:
+            vehicles = _Urls([started.udp_url], started.radio)
         # as `ftlbo-mav upload` sends them: mission, the fence and rally points if any,
         # and the plan's [vehicle] parameters
         assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
@@ -198,7 +219,24 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
                                          f"{r.message}" for r in failed))
         set_params(vehicles.urls, list(params) + (wind_params(wind, len(homes)) if binary
                                                   else []))
-        return fly_once(plan_dir, vehicles.urls, strategy, keep)
+        summary = fly_once(plan_dir, vehicles.urls, strategy, keep)
+        if vehicles.radio is not None:
+            c = vehicles.radio.counts
+            summary["radio"] = {"sent": c.sent, "lost": c.lost, "full": c.full,
+                                "air_s": round(c.air_s, 1)}
+        return summary
+
+
+@dataclass
+class _Urls:
+    urls: list
+    radio: object | None
+
+
+def _free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
 
 
 def print_clearance(scenario: Path, rows: dict, *, binary: str | None) -> None:
@@ -249,6 +287,15 @@ def write_recording(path: Path, plan_dir: Path, samples, summary: dict, *, strat
     print(f"recorded {path}", flush=True)
 
 
+def _radio(text: str):
+    from ftlbo_mav.sim.radio import parse_radio
+
+    try:
+        return parse_radio(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
@@ -280,6 +327,10 @@ def main() -> int:
                              "(degrees), turbulence m/s; on SITL its SIM_WIND_SPD/DIR/TURB "
                              "(and SIM_WIND_T 1, full strength to the ground) set on each "
                              "instance, on the emulator its wind model")
+    parser.add_argument("--radio", type=_radio, default=None, metavar="SPEC",
+                        help="every copter behind one telemetry radio: good, rough or "
+                             "key=value pairs (ftlbo-mav sim --radio); on SITL through the "
+                             "router (ftlbo_mav/sim/router.py)")
     parser.add_argument("--keep", type=Path, default=None, metavar="DIR",
                         help="keep each flight's positions and what the keeper saw "
                              "(DIR/runN-STRATEGY/samples.json) and, on SITL, its instance "
@@ -303,6 +354,7 @@ def main() -> int:
                     summary = fly_fresh(plan_dir, homes, strategy, binary=binary,
                                         speedup=args.speedup, seed=run, vary=args.vary,
                                         params=args.params, wind=args.wind,
+                                        radio=args.radio,
                                         keep=(args.keep / f"run{run}-{strategy.replace(' ', '')}"
                                               if args.keep else None))
                 except UploadFailed as exc:  # flying without its mission measures nothing
@@ -320,7 +372,9 @@ def main() -> int:
                       f"{summary['formation_error_max_legs_m']:.3f} m worst, legs "
                       f"{summary['leg_seconds']:.1f} s, clearance "
                       f"{summary['min_clearance_m']:.2f} m, landing error "
-                      f"{max(summary['final_distance_to_goal_m']):.2f} m", flush=True)
+                      f"{max(summary['final_distance_to_goal_m']):.2f} m"
+                      + (f"; left the plan: {summary['left_plan']}" if summary["left_plan"]
+                         else ""), flush=True)
     print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "
           f"speedup {args.speedup:g}, {args.runs} runs each"
           + (f"; parameters set: {', '.join(args.params)}" if args.params else "")

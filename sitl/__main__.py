@@ -1,4 +1,7 @@
-"""``python -m sitl --count 3 [--scenario FILE] [--binary PATH]``: run SITL copters until Ctrl-C."""
+"""``python -m sitl --count 3 [--scenario FILE] [--binary PATH] [--radio SPEC]``: run SITL
+copters until Ctrl-C; with ``--radio`` (``good``, ``rough`` or ``key=value`` pairs, as
+``ftlbo-mav sim --radio``) all of them behind one telemetry radio to ``--udp-out``
+(ftlbo_mav/sim/router.py): connect the ground station with ``udpin:HOST:PORT``."""
 
 from __future__ import annotations
 
@@ -26,6 +29,22 @@ def _speedup(text: str) -> float:
     return value
 
 
+def _radio(text: str):
+    from ftlbo_mav.sim.radio import parse_radio
+
+    try:
+        return parse_radio(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def _udp_out(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise argparse.ArgumentTypeError(f"{text}: HOST:PORT")
+    return host, int(port)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Exit codes: 0 stopped by Ctrl-C/SIGTERM, 2 bad input, 1 SITL failed (died, not ready)."""
     parser = argparse.ArgumentParser(prog="python -m sitl", description=__doc__)
@@ -37,6 +56,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="extra defaults .parm file (e.g. ArduPilot's copter.parm)")
     parser.add_argument("--speedup", type=_speedup, default=1.0)
     parser.add_argument("--workdir", help="keep the instances' files here")
+    parser.add_argument("--radio", type=_radio, default=None,
+                        help="one shared radio to --udp-out: good, rough, or key=value pairs")
+    parser.add_argument("--udp-out", type=_udp_out, default=("127.0.0.1", 14550),
+                        help="the ground station's UDP address for --radio "
+                             "(default 127.0.0.1:14550)")
+    parser.add_argument("--seed", type=int, default=0, help="the radio's losses and delays")
     args = parser.parse_args(argv)
 
     from ftlbo_mav.scenario import load_scenario
@@ -51,8 +76,17 @@ def main(argv: list[str] | None = None) -> int:
                        speedup=args.speedup, workdir=args.workdir) as swarm:
             for i, url in enumerate(swarm.urls):
                 print(f"SITL sysid {i + 1}: {url}  home {homes[i][0]:.7f}, {homes[i][1]:.7f}")
-            print("ready (GPS fix, pre-arm checks pass); Ctrl-C to stop", flush=True)
-            signal.pause()
+            if args.radio is None:
+                print("ready (GPS fix, pre-arm checks pass); Ctrl-C to stop", flush=True)
+                signal.pause()
+            else:
+                from ftlbo_mav.sim.router import RadioRouter
+
+                with RadioRouter(swarm.urls, args.udp_out, args.radio, seed=args.seed,
+                                 time_scale=args.speedup) as router:
+                    print(f"one radio for all: connect with {router.udp_url}; ready; "
+                          "Ctrl-C to stop", flush=True)
+                    signal.pause()
     except KeyboardInterrupt:
         pass
     except (FtlboError, ValueError, OSError) as exc:

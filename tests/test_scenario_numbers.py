@@ -6,6 +6,7 @@ Each case ends with one line naming the file and the field, exit 2, nothing writ
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -14,6 +15,8 @@ from click.testing import CliRunner
 
 from ftlbo_mav.cli import main
 from ftlbo_mav.errors import BadInput, ScenarioError
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.mission.export import write_plan
 from ftlbo_mav.planning.planner import PlanTooLarge, plan
 from ftlbo_mav.scenario import load_scenario, parse_scenario
 
@@ -30,6 +33,7 @@ FIELDS = {
     "formation.offsets[1]": ("[3.0, 0.0, -1.0]", "[{}, 0.0, -1.0]"),
     "formation.clearance": ("clearance = 1.0", "clearance = {}"),
     "formation.min_separation": ("clearance = 1.0", "clearance = 1.0\nmin_separation = {}"),
+    "formation.max_error": ("clearance = 1.0", "clearance = 1.0\nmax_error = {}"),
     "obstacles[0].lat": ("lat = 12.2333\n", "lat = {}\n"),
     "obstacles[0].radius": ("radius = 3.0", "radius = {}"),
     "planner.students": ("students = 12", "students = {}"),
@@ -131,6 +135,25 @@ def test_min_separation_is_a_setting_and_can_be_relaxed():
     relaxed = parse_scenario(close.replace("clearance = 1.0",
                                            "clearance = 1.0\nmin_separation = 0.5"))
     assert relaxed.min_separation_m == 0.5
+
+
+def test_the_formation_bound_is_a_setting_within_what_the_separation_allows(tmp_path):
+    with pytest.raises(ScenarioError, match=r"max_error: must be within \(0, 1000\] m, got 0"):
+        parse_scenario(SMALL.replace("clearance = 1.0", "clearance = 1.0\nmax_error = 0"))
+    tight = plan(parse_scenario(SMALL.replace(
+        "clearance = 1.0", "clearance = 1.0\nmax_error = 0.25")))
+    assert tight.scenario.max_formation_error_m == 0.25 and tight.formation_bound_m == 0.25
+    # the default 1 m, but no more than half the predicted flight's room beyond
+    # min_separation and two copters' navigation error
+    loose = plan(parse_scenario(SMALL))
+    room = (float(loose.prediction.separation.min()) - 2.0
+            - 2 ** 0.5 * loose.scenario.navigation.horizontal_m) / 2
+    assert loose.formation_bound_m == pytest.approx(min(1.0, room))
+    write_plan(loose, tmp_path)
+    doc = json.loads((tmp_path / "plan.json").read_text())
+    assert doc["formation_bound"] == {"max_error": 1.0,
+                                      "error_m": round(loose.formation_bound_m, 4)}
+    assert load_planned_flight(tmp_path).formation_bound_m == round(loose.formation_bound_m, 4)
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "missions").glob("*.toml")), ids=lambda p: p.name)

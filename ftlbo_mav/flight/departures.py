@@ -21,6 +21,15 @@ vehicle
   budget, a GPS glitch, ArduCopter's own glitch or EKF variance announcement:
   :mod:`.navigation`): ``navigation``;
 
+and, the formation as a whole on its legs (positions brought to one instant, given only
+while every report is fresh):
+
+- a UAV farther from its slot than the plan's bound (``formation_bound`` in plan.json,
+  :attr:`~ftlbo_mav.planning.planner.Plan.formation_bound_m`) for ``hold_s``:
+  ``formation``, the UAV farthest from its slot the one that left;
+- two UAVs closer than ``min_separation`` for ``hold_s``: ``separation``, the one of the
+  pair farther from its slot the one that left;
+
 and a ``link back`` event when a lost vehicle is heard from again. Pure: no I/O, the
 time is given.
 """
@@ -35,10 +44,12 @@ import numpy as np
 from ..ardupilot.failsafes import departure_text
 from ..gnss import NavigationBudget
 from .battery import BatteryWatch
+from .metrics import formation_error, slot_errors
 from .navigation import EkfReport, GpsReport, NavigationWatch
 
 LINK_LOST, LINK_BACK, MODE, FAILSAFE, FENCE, CRASH, NAVIGATION, BATTERY = (
     "link lost", "link back", "mode", "failsafe", "fence", "crash", "navigation", "battery")
+FORMATION, SEPARATION = "formation", "separation"
 DISARMED_AIRBORNE, NO_PROGRESS, LANDED_AWAY = "disarmed in the air", "no progress", "landed away"
 # departures the vehicle (its pilot, its failsafe, another station) chose: the flight
 # never commands that vehicle against them
@@ -63,6 +74,38 @@ class WatchOptions:
 
 
 DEFAULT_WATCH = WatchOptions()
+
+
+@dataclass(frozen=True, eq=False)
+class FormationBound:
+    """The formation's own watch: ``offsets`` ``(N, 3)`` the planned offsets, ``bound_m``
+    how far from its slot a UAV may be (the plan's ``formation_bound``): for no longer
+    than ``hold_s`` (a moment past it, a gust, is the keeper's to answer), and not at
+    all ``at_once`` times as far; ``min_separation_m`` how close two may come, for no
+    longer than ``separation_hold_s``. Seconds of the vehicles' clock, and in ``looks``
+    looks in a row at least (a ground station's timing errors, which a simulator run
+    faster than real time multiplies, last one look); ``names`` for the details."""
+
+    offsets: np.ndarray
+    bound_m: float
+    min_separation_m: float
+    hold_s: float = 0.5
+    at_once: float = 2.0
+    separation_hold_s: float = 0.2
+    looks: int = 3
+    names: Sequence[str] = ()
+
+    def name(self, i: int) -> str:
+        return self.names[i] if i < len(self.names) else f"UAV {i + 1}"
+
+
+@dataclass(frozen=True)
+class Together:
+    """Every vehicle's position ``(N, 3)`` ENU brought to one instant ``t`` (seconds of
+    the vehicles' clock)."""
+
+    positions: np.ndarray
+    t: float
 
 @dataclass(frozen=True)
 class Seen:
@@ -130,8 +173,12 @@ class DepartureWatch:
     def __init__(self, count: int, *, options: WatchOptions = WatchOptions(),
                  landing: Sequence[np.ndarray | None] | None = None,
                  navigation: NavigationBudget | None = None,
-                 battery: BatteryWatch | None = None) -> None:
+                 battery: BatteryWatch | None = None,
+                 formation: FormationBound | None = None) -> None:
         self.options = options
+        self.formation = formation
+        # FORMATION / SEPARATION: past the bound since (vehicles' clock), looks in a row
+        self._past: dict[str, tuple[float, int]] = {}
         self.battery = battery
         self.navigation = None if navigation is None else NavigationWatch(count, navigation)
         self.tracks = [_Track() for _ in range(count)]
@@ -154,12 +201,48 @@ class DepartureWatch:
         """After the flight sent the vehicle elsewhere, where it lands is no departure."""
         self.landing[index] = None
 
-    def check(self, seen: Sequence[Seen], now: float) -> list[Event]:
-        """The new events since the last call."""
+    def check(self, seen: Sequence[Seen], now: float,
+              together: Together | None = None) -> list[Event]:
+        """The new events since the last call. ``together``: every vehicle's position
+        brought to one instant, while the formation flies its legs and every report is
+        fresh (None: not now; the formation is not judged)."""
         out: list[Event] = []
         for i, s in enumerate(seen):
             out += self._check_one(i, s, now)
+        if together is not None and self.formation is not None and all(self.on_legs):
+            out += self._formation(np.asarray(together.positions, float), together.t, now)
         self.events += out
+        return out
+
+    def _formation(self, positions: np.ndarray, t: float, now: float) -> list[Event]:
+        """The formation at ``t`` (the vehicles' clock); events are stamped ``now``."""
+        f, out = self.formation, []
+        err = slot_errors(positions, f.offsets)
+        worst = int(np.argmax(err))
+        d = np.linalg.norm(positions[:, None] - positions[None], axis=-1)
+        d[np.diag_indices(len(d))] = np.inf
+        i, j = (int(k) for k in np.unravel_index(int(np.argmin(d)), d.shape))
+        for kind, past, hold in (
+                (FORMATION, err[worst] > f.bound_m,
+                 0.0 if err[worst] > f.at_once * f.bound_m else f.hold_s),
+                (SEPARATION, d[i, j] < f.min_separation_m, f.separation_hold_s)):
+            if not past:
+                self._past.pop(kind, None)
+                continue
+            since, looks = self._past.get(kind, (t, 0))
+            self._past[kind] = (since, looks + 1)
+            if t - since < hold or looks + 1 < f.looks:
+                continue
+            if kind == FORMATION:
+                detail = (f"{err[worst]:.2f} m from its slot for {t - since:.1f} s, past "
+                          f"the plan's bound of {f.bound_m:.2f} m (formation error "
+                          f"{float(formation_error(positions, f.offsets)):.2f} m RMS)")
+                out += self._once(worst, FORMATION, detail, now)
+            else:
+                k, other = (i, j) if err[i] >= err[j] else (j, i)
+                detail = (f"{d[i, j]:.2f} m from {f.name(other)} for {t - since:.1f} s, "
+                          f"closer than min_separation {f.min_separation_m:g} m")
+                out += self._once(k, SEPARATION, detail, now)
         return out
 
     # -- one vehicle

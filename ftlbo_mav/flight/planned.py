@@ -57,6 +57,9 @@ class PlannedFlight:
     min_separation_m: float = 2.0
     band: tuple[float, float] | None = None
     area: tuple[np.ndarray, np.ndarray] | None = None
+    # plan.json's formation bound: a UAV farther from its slot in flight is a departure
+    # (None: a plan written before it, not watched)
+    formation_bound_m: float | None = None
 
     @property
     def count(self) -> int:
@@ -102,6 +105,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
         navigation = budget_from_document(doc.get("navigation"))
         battery = _mission_battery(doc)
         min_separation = float(doc.get("min_separation", 2.0))
+        bound = (doc.get("formation_bound") or {}).get("error_m")
         area = doc["area"]
         band = ((float(area["min_altitude"]), float(area["max_altitude"]))
                 if "min_altitude" in area else None)
@@ -123,7 +127,8 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
                          clearance, fences,
                          None if None in predicted else np.array(predicted, float),
                          None if None in separated else np.array(separated, float),
-                         vehicle or None, navigation, battery, min_separation, band, box)
+                         vehicle or None, navigation, battery, min_separation, band, box,
+                         None if bound is None else float(bound))
 
 
 def _mission_battery(doc: dict) -> MissionBattery | None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -25,6 +26,7 @@ from ..link.firmware import version_request
 from .navigation import report_jump
 
 CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
+CLOCK_REPORTS = 20  # a report's time is judged against the least delayed of this many
 
 
 class FlightError(FtlboError):
@@ -71,13 +73,15 @@ class Status:
     seq: int = -1
     position_t: float = 0.0
     position_boot_s: float = 0.0
-    # ground clock minus vehicle clock, from the least-delayed report so far: a report's
-    # own time on the ground clock is position_boot_s + clock_offset_s (reports can arrive
-    # in bursts, so the arrival time overstates how fresh a position is)
+    # when the vehicle's clock read 0 on the ground clock, from the least-delayed of its
+    # recent reports: a report's own time on the ground clock is clock_offset_s +
+    # position_boot_s / clock_rate (reports can arrive in bursts, so the arrival time
+    # overstates how fresh a position is)
     clock_offset_s: float | None = None
     # vehicle seconds per ground second (1 but on a simulator run faster than real time:
     # an emulator's time scale, SITL's --speedup), from the reports of the last while
     clock_rate: float = 1.0
+    _recent: deque = field(default_factory=lambda: deque(maxlen=CLOCK_REPORTS))
     _rate_since: tuple[float, float] | None = None  # (ground, vehicle) seconds
     heartbeat_t: float = 0.0
     heard_t: float = 0.0  # the last message of any kind from the vehicle
@@ -174,11 +178,13 @@ class FlightVehicle:
                 s.position_t = now
                 boot_s = msg.time_boot_ms / 1000.0
                 if s.clock_offset_s is None or boot_s < s.position_boot_s:
-                    s.clock_offset_s = now - boot_s  # first report, or the vehicle rebooted
-                    s._rate_since = (now, boot_s)
+                    s._rate_since = (now, boot_s)  # first report, or the vehicle rebooted
+                    s._recent.clear()
                 elif s._rate_since is not None and now - s._rate_since[0] >= CLOCK_RATE_AFTER_S:
                     s.clock_rate = (boot_s - s._rate_since[1]) / (now - s._rate_since[0])
-                s.clock_offset_s = min(s.clock_offset_s, now - boot_s)
+                # the least delayed of the last few (over seconds the rate's error is nil)
+                s._recent.append((now, boot_s))
+                s.clock_offset_s = min(t - b / s.clock_rate for t, b in s._recent)
                 s.position_boot_s = boot_s
                 position = True
             elif kind == "MISSION_CURRENT":

@@ -17,7 +17,15 @@ from ..ardupilot.fence import rtl_target
 from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
 from .battery import BatteryWatch
-from .departures import DEFAULT_WATCH, DepartureWatch, Event, Seen, WatchOptions
+from .departures import (
+    DEFAULT_WATCH,
+    DepartureWatch,
+    Event,
+    FormationBound,
+    Seen,
+    Together,
+    WatchOptions,
+)
 from .homeward import GoingHome
 from .keeper import FormationKeeper
 from .navigation import ekf_report, gps_report
@@ -28,6 +36,7 @@ from .vehicle import FlightAborted, FlightError, FlightVehicle
 
 LOITER_REACHED_M = 2.0  # ArduCopter's default waypoint radius (WPNAV_RADIUS)
 MAX_REPORT_DELAY_S = 0.15  # a position report older than its arrival by more: a stale offset
+FRESH_S = 0.3  # the formation is judged only while every position report is this fresh
 
 
 class LeftPlan(Exception):  # noqa: N818 - a signal inside the flight, not an error
@@ -121,6 +130,26 @@ def watch_from_outside(departures: DepartureWatch, vehicles: Sequence[FlightVehi
             departures.expect(i, None)
 
 
+def formation_bound(planned: PlannedFlight) -> FormationBound | None:
+    """The formation's watch from the plan's bound (None: a plan without one)."""
+    if planned.formation_bound_m is None or planned.count < 2:
+        return None
+    return FormationBound(planned.offsets, planned.formation_bound_m,
+                          planned.min_separation_m, names=planned.names)
+
+
+def together_now(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]
+                 ) -> Together | None:
+    """Every vehicle's position at one instant (:func:`positions_now`), or None while a
+    report is older than :data:`FRESH_S` (a link's gap is no formation's fault) or
+    missing."""
+    st = [v.status for v in vehicles]
+    if any(s.lat_deg is None for s in st):
+        return None
+    positions, arrived, _age, t = positions_now(planned, st)
+    return Together(positions, t) if float(np.max(arrived)) <= FRESH_S else None
+
+
 def describe(event: Event, vehicles: Sequence[FlightVehicle]) -> str:
     v = vehicles[event.index]
     return f"{v.name} (sysid {v.sysid}): {event.kind}: {event.detail}"
@@ -140,7 +169,8 @@ class FlightWatch:
         self.departures = DepartureWatch(len(vehicles), options=options,
                                          landing=landing_points(planned),
                                          navigation=planned.navigation,
-                                         battery=battery_watch(planned))
+                                         battery=battery_watch(planned),
+                                         formation=formation_bound(planned))
         self.response = Response(policy, budget_s=budget_s,
                                  lost_wait_s=lost_wait_s,
                                  route_check=self.rtl_problem, landing=self.landing,
@@ -175,7 +205,9 @@ class FlightWatch:
         if self.started:
             self._legs()
         seen = [observe(v, self.planned) for v in self.vehicles]
-        events = self.departures.check(seen, now)
+        together = None if not self.started or self.response.active else \
+            together_now(self.planned, self.vehicles)
+        events = self.departures.check(seen, now, together)
         for e in events:
             line = describe(e, self.vehicles)
             self.say(line)
@@ -198,7 +230,8 @@ class FlightWatch:
             if i in self.response.left or i in self.response.answers:
                 continue
             s = v.status
-            on = s.mode == "AUTO" and 0 <= s.seq <= last_leg_seq(mission)
+            # (a landed copter's mission goes back to its first item: not on its legs)
+            on = s.armed and s.mode == "AUTO" and 0 < s.seq <= last_leg_seq(mission)
             item = mission[s.seq] if 0 <= s.seq < len(mission) else None
             hold = float(item.param1) if item is not None and item.command == CMD_NAV_WAYPOINT \
                 else 0.0
@@ -249,6 +282,39 @@ def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                if i not in skip)
 
 
+def positions_now(planned: PlannedFlight, st: Sequence) -> tuple[np.ndarray, np.ndarray,
+                                                                   np.ndarray, float]:
+    """Every vehicle's position (``(N, 3)`` ENU) brought to one instant from its last
+    report (:class:`~.vehicle.Status` each, every one with a position), how long ago each
+    report arrived and how old it is (``(N,)`` seconds, ours), and that instant on the
+    vehicles' clock."""
+    positions = planned.frame.to_enu(lat_deg=[s.lat_deg for s in st],
+                                     lon_deg=[s.lon_deg for s in st],
+                                     alt_m=[s.alt_m for s in st])
+    # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
+    # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
+    now = time.monotonic()
+    arrived = np.array([now - s.position_t for s in st])
+    age = np.array([now - (s.clock_offset_s + s.position_boot_s / s.clock_rate)
+                    if s.clock_offset_s is not None else a for s, a in zip(st, arrived)])
+    # a report is no fresher than its arrival, and no older than its arrival plus a link's
+    # delay: beyond that the clock offset (the least-delayed report's) has gone stale, the
+    # vehicle's clock running slower than ours (SITL on a loaded machine: a copter seen
+    # 1.6 m behind that was 0.4 m behind, and pauses for all three)
+    age = np.clip(age, arrived, arrived + MAX_REPORT_DELAY_S)
+    # the velocity is per second of the vehicle's clock, the age on ours
+    rate = np.array([s.clock_rate for s in st])
+    positions = positions + (np.array([s.velocity_enu for s in st])
+                             * np.clip(age * rate, 0, 0.5)[:, None])
+    # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
+    # with a time scale runs faster than ours), carried on between reports (10 Hz) for
+    # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
+    # last report on our clock
+    vehicle_now = max(s.position_boot_s + min(a, 0.1) * s.clock_rate
+                      for s, a in zip(st, arrived))
+    return positions, arrived, age, vehicle_now
+
+
 def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
                    keeper: FormationKeeper) -> bool:
     """One step of the formation keeper; False once the legs are over (every pause
@@ -262,34 +328,11 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
         return False
     if any(s.lat_deg is None for s in st):
         return True
-    positions = planned.frame.to_enu(lat_deg=[s.lat_deg for s in st],
-                                     lon_deg=[s.lon_deg for s in st],
-                                     alt_m=[s.alt_m for s in st])
-    # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
-    # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
-    now = time.monotonic()
-    arrived = np.array([now - s.position_t for s in st])
-    age = np.array([now - (s.position_boot_s + s.clock_offset_s)
-                    if s.clock_offset_s is not None else a for s, a in zip(st, arrived)])
-    # a report is no fresher than its arrival, and no older than its arrival plus a link's
-    # delay: beyond that the clock offset (the least-delayed report's) has gone stale, the
-    # vehicle's clock running slower than ours (SITL on a loaded machine: a copter seen
-    # 1.6 m behind that was 0.4 m behind, and pauses for all three)
-    age = np.clip(age, arrived, arrived + MAX_REPORT_DELAY_S)
-    # the velocity is per second of the vehicle's clock, the age on ours
-    rate = np.array([s.clock_rate for s in st])
-    positions = positions + (np.array([s.velocity_enu for s in st])
-                             * (np.clip(age, 0, 0.5) * rate)[:, None])
+    positions, arrived, age, vehicle_now = positions_now(planned, st)
     speeds = np.array([s.ground_speed_m_s for s in st])
-    # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
-    # with a time scale runs faster than ours), carried on between reports (10 Hz) for
-    # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
-    # last report on our clock
-    vehicle_now = max(s.position_boot_s + min(a, 0.1) * s.clock_rate
-                      for s, a in zip(st, arrived))
     trace = getattr(keeper, "trace", None)
     if trace is not None:
-        trace.append(("inputs", now, vehicle_now, arrived.tolist(), age.tolist(),
+        trace.append(("inputs", time.monotonic(), vehicle_now, arrived.tolist(), age.tolist(),
                       [s.position_boot_s for s in st], positions.tolist()))
     for i, pause in keeper.update(positions, speeds, vehicle_now, ages_s=arrived).items():
         _send_pause(vehicles[i], pause)

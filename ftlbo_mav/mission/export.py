@@ -35,7 +35,13 @@ from ..scenario import (
     Survey,
     ViaPoint,
 )
-from ..scenario.model import MAX_ALTITUDE_M, MAX_OFFSET_M, MAX_RADIUS_M, MIN_SEPARATION_M
+from ..scenario.model import (
+    MAX_ALTITUDE_M,
+    MAX_FORMATION_ERROR_M,
+    MAX_OFFSET_M,
+    MAX_RADIUS_M,
+    MIN_SEPARATION_M,
+)
 from .fence import UavFence, plan_fences
 from .files import OutputFolder, digest, read_mission_text
 from .geodetic import GeodeticPlan, geodetic_view
@@ -170,6 +176,9 @@ def plan_document(
         "predicted": _predicted_document(plan),
         **({} if sc.battery is None else {"battery": sc.battery.document()}),
         "min_separation": plan.scenario.min_separation_m,
+        # in flight: a UAV farther from its slot is a departure (flight/departures.py)
+        "formation_bound": {"max_error": sc.max_formation_error_m,
+                            "error_m": _round(_finite(plan.formation_bound_m), 4)},
         "area": {
             "corner_a": [sc.corner_a.lat_deg, sc.corner_a.lon_deg],
             "corner_b": [sc.corner_b.lat_deg, sc.corner_b.lon_deg],
@@ -454,6 +463,8 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
             # what the plan was made with, so that it can be planned again (fly --resume)
             mission=_mission_settings(doc),
             min_separation_m=float(doc.get("min_separation", MIN_SEPARATION_M)),
+            max_formation_error_m=float((doc.get("formation_bound") or {}).get(
+                "max_error", MAX_FORMATION_ERROR_M)),
             vehicle=vehicle_navigation({str(k): float(v)
                                         for k, v in (doc.get("vehicle") or {}).items()}),
             battery=battery_from_document(doc.get("battery")),

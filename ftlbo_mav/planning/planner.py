@@ -29,6 +29,7 @@ from .predicted import (
     FlightModel,
     Prediction,
     beyond_area,
+    formation_room,
     keep_clearance,
     predict,
     predicted_violations,
@@ -157,6 +158,18 @@ class Plan:
     @property
     def feasible(self) -> bool:
         return not self.violations
+
+    @property
+    def formation_bound_m(self) -> float:
+        """How far from its slot a UAV may be in flight before ``fly`` counts it a
+        departure: ``[formation] max_error``, and never more than the predicted flight's
+        separation room allows (:func:`.predicted.formation_room`)."""
+        sc = self.scenario
+        if self.prediction is None:
+            return sc.max_formation_error_m
+        room = formation_room(self.prediction, min_separation_m=sc.min_separation_m,
+                              navigation_m=sc.navigation.horizontal_m)
+        return min(sc.max_formation_error_m, room)
 
     @property
     def corner_stops(self) -> int:

@@ -14,6 +14,7 @@ Pure computation, metres ENU and seconds.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -340,6 +341,18 @@ def keep_clearance(problem: PlanningProblem, centroid: np.ndarray, *, model: Fli
                 pushes[j] = MAX_PUSHES  # overshot too): left to the plan's violations
     return Kept(centroid=path, holds_s=holds, prediction=pred, moved=moved, stops=stops,
                 rounds=rounds, stopped_for=stopped_for)
+
+
+def formation_room(prediction: Prediction, *, min_separation_m: float,
+                   navigation_m: float) -> float:
+    """How far from its slot each copter may be (metres, both of a pair towards each
+    other) with ``min_separation_m`` still kept where they truly are: half of what the
+    predicted flight's closest pair has beyond ``min_separation_m`` and two copters'
+    combined navigation error (``sqrt(2) x navigation_m``); 0 when it has nothing."""
+    if prediction.positions.shape[0] < 2:
+        return math.inf
+    closest = float(np.min(prediction.separation))
+    return max((closest - min_separation_m - math.sqrt(2.0) * navigation_m) / 2.0, 0.0)
 
 
 def navigation_room(prediction: Prediction, *, clearance_m: float,

@@ -53,6 +53,9 @@ MAX_NAVIGATION_ERROR_M = 50.0
 """The largest ``[navigation] horizontal_error`` (metres, 95 %) a scenario may give."""
 MIN_SEPARATION_M = 2.0
 """``[formation] min_separation``'s default: the closest two UAVs of the formation may be."""
+MAX_FORMATION_ERROR_M = 1.0
+"""``[formation] max_error``'s default: how far from its slot a UAV may be in flight
+before the flight counts it a departure (a plan may state less: ``Plan.formation_bound_m``)."""
 MIN_STUDENTS, MAX_STUDENTS = 4, 100_000
 MAX_WAYPOINTS = 1_000
 """Free waypoints of one leg (``"auto"`` looks at up to 256)."""
@@ -165,6 +168,9 @@ class Scenario:
     survey: Survey | None = None
     min_separation_m: float = MIN_SEPARATION_M
     """No two UAVs of the formation are closer than this (metres)."""
+    max_formation_error_m: float = MAX_FORMATION_ERROR_M
+    """How far from its slot (the group's centroid plus its offset) a UAV may be in
+    flight before ``fly`` counts it a departure (``[formation] max_error``)."""
     vehicle: Navigation = field(default_factory=Navigation)
     """How the copters fly (the ``[vehicle]`` table: ArduCopter's parameters, its defaults
     unless set); the planner predicts the flown path with it."""

@@ -38,6 +38,7 @@ from .model import (
     MAX_ALTITUDE_M,
     MAX_AREA_SIDE_M,
     MAX_DISTANCE_M,
+    MAX_FORMATION_ERROR_M,
     MAX_ITERATIONS,
     MAX_LANES,
     MAX_NAVIGATION_ERROR_M,
@@ -106,6 +107,8 @@ def parse_scenario(
     separation = form.number("min_separation", MIN_SEPARATION_M, lo=0.0, hi=MAX_DISTANCE_M,
                              unit="m")
     _check_separation(form, offsets, separation, navigation)
+    max_error = form.number("max_error", MAX_FORMATION_ERROR_M, lo=0.0, lo_open=True,
+                            hi=MAX_DISTANCE_M, unit="m")
     form.done()
 
     obstacles = _read_obstacles(root.raw("obstacles", []), source)
@@ -142,6 +145,7 @@ def parse_scenario(
         source=source,
         via=via,
         min_separation_m=separation,
+        max_formation_error_m=max_error,
         vehicle=vehicle,
         navigation=navigation,
         battery=battery,

@@ -32,6 +32,10 @@ import numpy as np
 
 UP, DOWN = "up", "down"
 """To the vehicles, from the vehicles."""
+RADIO_SYSID, RADIO_COMPID = 51, 68
+"""What a SiK radio's own RADIO_STATUS comes from ('3', 'D')."""
+RADIO_STATUS_S = 1.0
+"""How often each radio reports RADIO_STATUS to its end."""
 
 
 @dataclass(frozen=True)
@@ -159,6 +163,50 @@ class SharedRadio:
         return self._bad
 
 
+class StatusSender:
+    """A radio's RADIO_STATUS frames (MAVLink 2, from system 51 component 68, as SiK
+    radios send them): ``frame(txbuf)`` with the radio's counts of lost frames as
+    ``rxerrors``; its own sequence numbers."""
+
+    def __init__(self, radio: SharedRadio) -> None:
+        from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+
+        self.radio = radio
+        self._msg = mavlink2.MAVLink_radio_status_message
+        self._mav = mavlink2.MAVLink(None, srcSystem=RADIO_SYSID, srcComponent=RADIO_COMPID)
+
+    def frame(self, txbuf: int) -> bytes:
+        c = self.radio.counts
+        msg = self._msg(rssi=200, remrssi=200, txbuf=txbuf, noise=40, remnoise=40,
+                        rxerrors=min(c.lost[UP] + c.lost[DOWN], 65535), fixed=0)
+        buf = bytes(msg.pack(self._mav))
+        self._mav.seq = (self._mav.seq + 1) % 256
+        return buf
+
+
+def split_frames(buffer: bytearray) -> list[bytes]:
+    """The whole MAVLink frames at the front of ``buffer`` (a byte stream, as a serial
+    port or TCP gives it), taken out of it; bytes before a frame's start (0xFE, MAVLink
+    1; 0xFD, MAVLink 2, with its signature when flagged) are dropped, a partial frame
+    stays for the next call. Frames are not checked (the radio carries bytes)."""
+    out = []
+    while buffer:
+        starts = [k for k in (buffer.find(0xFD), buffer.find(0xFE)) if k >= 0]
+        if not starts:
+            buffer.clear()
+            break
+        del buffer[:min(starts)]
+        if len(buffer) < 3:
+            break
+        n = buffer[1]
+        size = 8 + n if buffer[0] == 0xFE else 12 + n + (13 if buffer[2] & 1 else 0)
+        if len(buffer) < size:
+            break
+        out.append(bytes(buffer[:size]))
+        del buffer[:size]
+    return out
+
+
 _KEYS = {"bytes": "bytes_per_s", "latency": "latency_s", "jitter": "jitter_s", "loss": "loss",
          "burst": "burst", "buffer": "buffer_bytes", "overhead": "frame_overhead",
          "outage": "outage_s", "every": "outage_every_s"}
@@ -191,4 +239,6 @@ def parse_radio(text: str) -> RadioOptions:
     return replace(base, **changes)
 
 
-__all__ = ["DOWN", "ROUGH_DAY", "UP", "parse_radio", "RadioCounts", "RadioOptions", "SharedRadio"]
+__all__ = ["DOWN", "RADIO_COMPID", "RADIO_STATUS_S", "RADIO_SYSID", "ROUGH_DAY", "UP",
+           "parse_radio", "split_frames", "RadioCounts", "RadioOptions", "SharedRadio",
+           "StatusSender"]

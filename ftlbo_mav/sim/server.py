@@ -23,7 +23,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from .faults import Faults, FaultyPipe
 from .physics import varied
-from .radio import DOWN, UP, RadioOptions, SharedRadio
+from .radio import DOWN, RADIO_STATUS_S, UP, RadioOptions, SharedRadio, StatusSender
 from .vehicle import Vehicle, VehicleOptions
 from .wind import Gusts, Wind
 
@@ -32,9 +32,6 @@ MAX_TIME_SCALE = 100.0
 """The fastest the vehicles' clock may run: every tick steps each vehicle's flight in
 20 ms steps (sim/autopilot.py), so 100x is 100 steps per vehicle and tick; far faster
 and a tick never ends, and nothing (not even SIGTERM) is handled."""
-RADIO_SYSID, RADIO_COMPID = 51, 68
-"""What a SiK radio's own RADIO_STATUS comes from ('3', 'D')."""
-RADIO_STATUS_S = 1.0
 # replies to a request, which a muted vehicle (Faults.mute) does not send
 _ANSWERS = frozenset({"MISSION_REQUEST", "MISSION_ACK", "MISSION_COUNT", "MISSION_ITEM",
                       "MISSION_ITEM_INT", "COMMAND_ACK"})
@@ -174,7 +171,7 @@ class _SharedUdp(asyncio.DatagramProtocol):
         self.atts: list[tuple[VehicleRunner, _Attachment]] = []
         self.transport = None
         self._next_status = 0.0
-        self._status = mavlink2.MAVLink(None, srcSystem=RADIO_SYSID, srcComponent=RADIO_COMPID)
+        self._status = None if radio is None else StatusSender(radio)
 
     def connection_made(self, transport) -> None:
         self.transport = transport
@@ -217,19 +214,9 @@ class _SharedUdp(asyncio.DatagramProtocol):
         if now < self._next_status:
             return
         self._next_status = now + RADIO_STATUS_S
-        self._deliver(self._radio_status(self.radio.txbuf_pct(UP, now)))
+        self._deliver(self._status.frame(self.radio.txbuf_pct(UP, now)))
         for r, att in self.atts:
-            status = self._radio_status(self.radio.txbuf_pct(DOWN, now, r.vehicle.sysid))
-            r.feed(att, status)
-
-    def _radio_status(self, txbuf: int) -> bytes:
-        c = self.radio.counts
-        msg = mavlink2.MAVLink_radio_status_message(
-            rssi=200, remrssi=200, txbuf=txbuf, noise=40, remnoise=40,
-            rxerrors=min(c.lost[UP] + c.lost[DOWN], 65535), fixed=0)
-        buf = bytes(msg.pack(self._status))
-        self._status.seq = (self._status.seq + 1) % 256
-        return buf
+            r.feed(att, self._status.frame(self.radio.txbuf_pct(DOWN, now, r.vehicle.sysid)))
 
     def error_received(self, exc) -> None:  # nobody listening yet: ICMP port unreachable
         pass

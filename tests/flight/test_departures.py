@@ -12,13 +12,17 @@ from ftlbo_mav.flight.departures import (
     DISARMED_AIRBORNE,
     FAILSAFE,
     FENCE,
+    FORMATION,
     LANDED_AWAY,
     LINK_BACK,
     LINK_LOST,
     MODE,
     NO_PROGRESS,
+    SEPARATION,
     DepartureWatch,
+    FormationBound,
     Seen,
+    Together,
 )
 
 
@@ -117,3 +121,98 @@ def test_no_progress_on_the_legs_allows_the_items_hold_time():
         assert w.check([seen(position=here + [t - 1000.0, 0, 0], heard_t=t)], float(t)) == []
     w.legs(0, False)
     assert w.check([seen(position=here, heard_t=1100.0)], 1100.0) == []
+
+
+# -- the formation as a whole: the plan's bound and min_separation
+
+OFFSETS = np.array([[0.0, 0.0, 2.0], [3.0, 0.0, -1.0], [-3.0, 0.0, -1.0]])
+
+
+def formation_watch(**kw) -> DepartureWatch:
+    bound = FormationBound(OFFSETS, kw.pop("bound_m", 0.77), kw.pop("min_separation_m", 2.0),
+                           names=("uav1", "uav2", "uav3"))
+    w = DepartureWatch(3, formation=bound)
+    for i in range(3):
+        w.legs(i, True)
+    return w
+
+
+def flown(shift=(0.0, 0.0, 0.0), who: int = 1) -> np.ndarray:
+    """The formation at (50, 20, 4) with UAV ``who`` moved by ``shift``."""
+    p = OFFSETS + np.array([50.0, 20.0, 4.0])
+    p[who] += shift
+    return p
+
+
+def look(w: DepartureWatch, t: float, positions, *, clock: float = 1000.0) -> list:
+    """The watch at ``t`` on our clock; the vehicles' clock ``clock`` seconds on."""
+    together = None if positions is None else Together(positions, t + clock)
+    return w.check([seen(heard_t=t)] * 3, t, together)
+
+
+def test_a_uav_off_its_slot_past_the_bound_for_half_a_second_is_a_formation_departure():
+    w = formation_watch()
+    assert look(w, 100.0, flown((0.5, 0.0, 0.0))) == []  # 0.33 m from its slot
+    off = flown((0.0, 1.5, 0.0))  # uav2 1.5 m behind: 1.0 m from its slot
+    assert look(w, 100.1, off) == []
+    assert look(w, 100.4, off) == []  # past the bound for 0.3 s: a gust, the keeper's
+    events = look(w, 100.6, off)
+    assert [(e.index, e.kind, e.t) for e in events] == [(1, FORMATION, 100.6)]
+    assert "1.00 m from its slot for 0.5 s" in events[0].detail
+    assert "the plan's bound of 0.77 m" in events[0].detail
+    assert look(w, 101.0, off) == []  # told once
+
+
+def test_the_hold_is_on_the_vehicles_clock_and_twice_the_bound_is_at_once():
+    w = formation_watch()
+    off = flown((0.0, 1.5, 0.0))
+    # an emulator six times faster: 0.05 s of ours is 0.3 s of theirs
+    assert look(w, 100.0, off, clock=0.0) == []
+    assert look(w, 100.05, off, clock=0.25) == []
+    assert [e.kind for e in look(w, 100.1, off, clock=0.5)] == [FORMATION]
+    w = formation_watch()
+    far = flown((0.0, 2.4, 0.0))  # 1.6 m from its slot: more than twice 0.77 m
+    assert look(w, 100.0, far) == [] and look(w, 100.05, far) == []
+    assert [e.kind for e in look(w, 100.1, far)] == [FORMATION]
+
+
+def test_one_look_past_the_bound_is_not_enough_however_long_the_clock_says():
+    """A ground station's timing errors (a simulator run twenty times faster makes 10 ms
+    of ours 0.2 s of its) show in one look: three in a row are needed."""
+    w = formation_watch()
+    far = flown((0.0, 2.4, 0.0))
+    assert look(w, 100.0, far, clock=0.0) == []
+    assert look(w, 100.05, flown(), clock=20.0) == []
+    assert look(w, 100.1, far, clock=40.0) == [] and look(w, 100.15, far, clock=60.0) == []
+    assert [e.kind for e in look(w, 100.2, far, clock=80.0)] == [FORMATION]
+
+
+def test_back_within_the_bound_starts_the_count_again():
+    w = formation_watch()
+    off = flown((0.0, 1.5, 0.0))
+    assert look(w, 100.0, off) == []
+    assert look(w, 100.4, flown()) == []
+    assert look(w, 100.5, off) == [] and look(w, 100.9, off) == []
+    assert [e.kind for e in look(w, 101.0, off)] == [FORMATION]
+
+
+def test_the_formation_is_not_judged_without_positions_together_or_off_the_legs():
+    w = formation_watch()
+    off = flown((0.0, 3.0, 0.0))
+    w.legs(2, False)  # one still taking off
+    assert look(w, 100.0, off) == []
+    w.legs(2, True)
+    assert look(w, 102.0, None) == []  # stale reports: no judgement
+    assert DepartureWatch(3).check([seen(heard_t=104.0)] * 3, 104.0,
+                                   Together(off, 104.0)) == []  # a plan without a bound
+
+
+def test_two_uavs_closer_than_min_separation_is_a_separation_departure():
+    # uav2 moves 2.5 m towards uav3: 3.04 m below-beside uav1 (4.24 m apart as planned)
+    w = formation_watch(bound_m=5.0, min_separation_m=3.2)
+    close = flown((-2.5, 0.0, 0.0), who=1)
+    assert look(w, 100.0, close) == [] and look(w, 100.1, close) == []
+    events = look(w, 100.25, close)
+    assert [(e.index, e.kind) for e in events] == [(1, SEPARATION)]
+    assert "3.04 m from uav1" in events[0].detail
+    assert "min_separation 3.2 m" in events[0].detail

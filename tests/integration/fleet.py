@@ -16,6 +16,8 @@ import pytest
 
 from ftlbo_mav.sim.faults import Faults
 from ftlbo_mav.sim.homes import default_homes
+from ftlbo_mav.sim.radio import SharedRadio
+from ftlbo_mav.sim.router import RadioRouter
 from ftlbo_mav.sim.server import Simulator
 from ftlbo_mav.sim.vehicle import VehicleOptions
 
@@ -37,6 +39,7 @@ class Fleet:
     extra: dict = field(default_factory=dict)
     serial1_urls: list[str] = field(default_factory=list)
     kill: Callable[[int], None] | None = None
+    radio: SharedRadio | None = None  # the shared link's radio, if any
 
     def missions(self) -> list[list]:
         """What each emulated vehicle stores (emulator only)."""
@@ -52,15 +55,16 @@ def free_udp_port() -> int:
 @contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
              shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0,
-             params: dict[str, float] | None = None, radio=None):
+             params: dict[str, float] | None = None, radio=None, router: bool = False):
     """``count`` vehicles, system ids 1..count, ready for uploads; ``homes`` (default a
     row at SITL's default location) and ``speedup`` (the emulator's time scale, SITL's
     --speedup) for flights; ``params``: parameters every vehicle boots with (SITL: a
     defaults file after its own; CAM1_TYPE, for one, is read at boot); ``radio``: the
-    shared link is one telemetry radio (:mod:`ftlbo_mav.sim.radio`; emulator only)."""
+    shared link is one telemetry radio (:mod:`ftlbo_mav.sim.radio`): the emulator's own,
+    or with ``router`` (always on SITL) a :class:`~ftlbo_mav.sim.router.RadioRouter`
+    between the vehicles' TCP ports and the ground station."""
     homes = default_homes(count) if homes is None else homes
-    emulator_only = (faults is not None or options is not None or signing_key or shared_link
-                     or radio is not None)
+    emulator_only = faults is not None or options is not None or signing_key or shared_link
     if BACKEND == "sitl":
         if emulator_only:
             pytest.skip("needs the emulator's fault injection")
@@ -73,17 +77,33 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
             with SitlSwarm(binary=SITL_BINARY, homes=homes, speedup=speedup,
                            defaults=[extra.name] if params else ()) as swarm:
                 serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
-                yield Fleet(urls=swarm.urls, serial1_urls=serial1,
-                            kill=lambda i: swarm.processes[i].kill())
+                fleet = Fleet(urls=swarm.urls, serial1_urls=serial1,
+                              kill=lambda i: swarm.processes[i].kill())
+                if radio is None:
+                    yield fleet
+                    return
+                with RadioRouter(swarm.urls, ("127.0.0.1", free_udp_port()), radio, seed=seed,
+                                 time_scale=speedup) as r:
+                    fleet.udp_url, fleet.radio = r.udp_url, r.radio
+                    yield fleet
         finally:
             os.unlink(extra.name)
         return
-    udp_out = ("127.0.0.1", free_udp_port()) if shared_link or radio is not None else None
+    own_radio = radio is not None and not router
+    udp_out = ("127.0.0.1", free_udp_port()) if shared_link or own_radio else None
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
-                   signing_key=signing_key, seed=seed, radio=radio) as sim:
+                   signing_key=signing_key, seed=seed,
+                   radio=radio if own_radio else None) as sim:
         if params:
             sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
-        yield Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
-                    serial1_urls=sim.serial1_urls, kill=sim.kill)
+        fleet = Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
+                      serial1_urls=sim.serial1_urls, kill=sim.kill, radio=sim.radio)
+        if radio is None or own_radio:
+            yield fleet
+            return
+        with RadioRouter(sim.urls, ("127.0.0.1", free_udp_port()), radio, seed=seed,
+                         time_scale=speedup) as r:
+            fleet.udp_url, fleet.radio = r.udp_url, r.radio
+            yield fleet

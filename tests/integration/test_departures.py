@@ -86,6 +86,11 @@ class SecondPort:
                                         R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
                                         CopterMode[mode], 0, 0, 0, 0, 0)
 
+    def pause(self, pause: bool) -> None:
+        """MAV_CMD_DO_PAUSE_CONTINUE: another station holds the copter on its track."""
+        self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_DO_PAUSE_CONTINUE, 0,
+                                        0 if pause else 1, 0, 0, 0, 0, 0, 0)
+
     def set_param(self, name: str, value: float) -> None:
         self.conn.mav.param_set_send(self.sysid, 1, name.encode(), value,
                                      R.MAV_PARAM_TYPE_REAL32)
@@ -193,6 +198,36 @@ def test_a_mode_taken_over_from_a_second_port_is_left_alone(plan_dir):
     assert "left to what it chose: not commanded" in out
     assert "uav1 (sysid 1): stopped on its track (pause)" in out and "LAND at" in out
     assert took < 60.0
+
+
+def test_a_formation_that_falls_apart_is_a_departure_not_a_silent_exit_0(plan_dir):
+    """Another station holds uav2 on its track mid-leg (a pause from its SERIAL1): the
+    others fly on, uav2 falls behind its slot past the plan's bound (0.77 m for the
+    example) and, a second later, the flight counts it a departure and answers it."""
+    bound = load_planned_flight(plan_dir).formation_bound_m
+    assert 0.5 < bound < 1.0
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        other = SecondPort(fleet.serial1_urls[1], 2)
+
+        def fault():
+            _in_auto_for(other, 6.0)
+            other.pause(True)
+            return time.monotonic()
+
+        try:
+            result, took = _fly_with(plan_dir, fleet.urls, fault)
+        finally:
+            other.close()
+    out = result.output
+    assert result.exit_code == 1, out
+    assert "Traceback" not in out
+    assert "uav2 (sysid 2): formation: " in out and f"the plan's bound of {bound:.2f} m" in out
+    for name in ("uav1 (sysid 1)", "uav3 (sysid 3)"):
+        assert f"{name}: stopped on its track (pause)" in out
+    assert took < 60.0
+    summary = _summary(plan_dir)
+    assert any(line.startswith("uav2 (sysid 2): formation") for line in summary["departures"])
 
 
 def test_a_fence_crossed_in_flight_is_seen_and_answered(plan_dir):

@@ -23,8 +23,10 @@ EXPECTED = {
     # position controller's parameters in "vehicle" (PSC_VELXY_*, ANGLE_MAX); the
     # missions are as they were; then "navigation" (class "none": this stored plan was
     # made before navigation budgets, issue 27), then "mission" (end action and speed,
-    # so that a plan can be planned again from its plan.json: fly --resume, issue 29)
-    "plan.json": "30581d55a849ef178e911ac89469187069d8b4c18c1d7f1ba251727d2d9b5ef1",
+    # so that a plan can be planned again from its plan.json: fly --resume, issue 29),
+    # then "formation_bound" (the stored plan has no prediction: [formation] max_error's
+    # 1 m; issue 28)
+    "plan.json": "6dcc6d0d5ee6d316205df0a3ebe5c75515f673c62f7b9150a44dcdbc00786c81",
     "plan.kml": "34978a2a892e1c305510fc2fa59d7fd71aeee24cf29841a226208da315009848",
     "uav1.plan": "07c2c82fc64bcfa5015f814294223e7a2a6648583903c37f6b00af0e631d657f",
     "uav1.waypoints": "c5989eff6b30ed4ee87b7cea965815d1a8e0dec678b8e241247a2ab954fc4171",

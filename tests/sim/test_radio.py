@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftlbo_mav.sim.radio import DOWN, UP, RadioOptions, SharedRadio
+from ftlbo_mav.sim.radio import DOWN, UP, RadioOptions, SharedRadio, split_frames
 
 CLEAN = RadioOptions(bytes_per_s=1000.0, latency_s=0.05, jitter_s=0.0, loss=0.0,
                      buffer_bytes=2048)
@@ -71,3 +71,40 @@ def test_figures_a_radio_cannot_have_are_refused():
                 dict(latency_s=0.01, jitter_s=0.02), dict(outage_s=2.0, outage_every_s=1.0)):
         with pytest.raises(ValueError):
             RadioOptions(**bad)
+
+
+def _frames() -> list[bytes]:
+    from pymavlink.dialects.v10 import ardupilotmega as v1
+    from pymavlink.dialects.v20 import ardupilotmega as v2
+
+    one = v1.MAVLink(None, srcSystem=1)
+    two = v2.MAVLink(None, srcSystem=2)
+    signed = v2.MAVLink(None, srcSystem=3)
+    signed.signing.secret_key = bytes(32)
+    signed.signing.sign_outgoing = True
+    signed.signing.link_id = 0
+    hb = (6, 8, 0, 0, 0)
+    return [bytes(v1.MAVLink_heartbeat_message(*hb, 3).pack(one)),
+            bytes(v2.MAVLink_heartbeat_message(*hb, 3).pack(two)),
+            bytes(v2.MAVLink_statustext_message(6, b"Fence Breached").pack(two)),
+            bytes(v2.MAVLink_heartbeat_message(*hb, 3).pack(signed))]
+
+
+def test_a_byte_stream_is_cut_into_whole_frames_of_either_version_signed_or_not():
+    frames = _frames()
+    assert [len(f) for f in frames][::3] == [17, 34]  # v1 heartbeat; v2, signed (+13)
+    stream = b"\x00garbage" + b"".join(frames)
+    buffer = bytearray()
+    got = []
+    for k in range(0, len(stream), 7):  # as a TCP stream arrives: in pieces
+        buffer += stream[k:k + 7]
+        got += split_frames(buffer)
+    assert got == frames and not buffer
+
+
+def test_a_partial_frame_waits_for_its_rest():
+    frame = _frames()[2]
+    buffer = bytearray(frame[:-3])
+    assert split_frames(buffer) == [] and bytes(buffer) == frame[:-3]
+    buffer += frame[-3:]
+    assert split_frames(buffer) == [frame]
