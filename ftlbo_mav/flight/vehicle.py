@@ -327,7 +327,11 @@ class FlightVehicle:
 
     def takeoff(self, alt_m: float) -> None:
         result = self.command(R.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, alt_m, step="takeoff")
-        if result != R.MAV_RESULT_ACCEPTED:
+        # a resend refused because the first try was taken and its ACK lost (a radio):
+        # ArduCopter refuses a takeoff once off the ground (ArduCopter/takeoff.cpp
+        # Mode::do_user_takeoff, ``!copter.ap.land_complete``); climbing, it is taking off
+        if result != R.MAV_RESULT_ACCEPTED and not self.wait_for(
+                lambda s: s.alt_m > 0.3 or s.climb_m_s > 0.2, 1.0):
             raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
 
     def read_param(self, name: str, *, timeout_s: float = 1.0, retries: int = 2) -> float | None:

@@ -39,7 +39,11 @@ def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
         uploaded = CliRunner().invoke(main, ["upload", str(out), "--sysid", "1..3",
                                              "--connect", urls])
         assert uploaded.exit_code == 0, uploaded.output
-        flown = CliRunner().invoke(main, ["fly", str(out), "--sysid", "1..3",
+        # the emulator at 12x: the keeper's 20 Hz looks are 0.6 s of the copters' apart,
+        # too coarse to pace a U-turn (a copter 1 m off its slot, now a departure): off,
+        # as in the other fast flights
+        keeper = ["--no-keeper"] if BACKEND == "emulator" else []
+        flown = CliRunner().invoke(main, ["fly", str(out), "--sysid", "1..3", *keeper,
                                           "--control-port", "0", "--connect", urls])
         assert flown.exit_code == 0, flown.output
     assert "all vehicles finished their missions" in flown.stdout
