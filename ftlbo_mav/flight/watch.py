@@ -334,7 +334,10 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     if trace is not None:
         trace.append(("inputs", time.monotonic(), vehicle_now, arrived.tolist(), age.tolist(),
                       [s.position_boot_s for s in st], positions.tolist()))
-    for i, pause in keeper.update(positions, speeds, vehicle_now, ages_s=arrived).items():
+    sent = keeper.update(positions, speeds, vehicle_now, ages_s=arrived)
+    if trace is not None and sent:
+        trace.append(("sent", time.monotonic(), vehicle_now, {int(i): p for i, p in sent.items()}))
+    for i, pause in sent.items():
         _send_pause(vehicles[i], pause)
     return True
 

@@ -53,9 +53,9 @@ def test_arducopter_texts_that_mean_it_left_its_mission(text, kind):
 
 def test_a_silent_vehicle_is_lost_after_the_timeout_and_back_when_heard():
     w = DepartureWatch(1)
-    assert w.check([seen(heard_t=100.0)], 101.4) == []
-    (e,) = w.check([seen(heard_t=100.0)], 101.6)
-    assert (e.kind, e.index) == (LINK_LOST, 0) and "no message for 1.6 s" in e.detail
+    assert w.check([seen(heard_t=100.0)], 101.7) == []
+    (e,) = w.check([seen(heard_t=100.0)], 101.9)
+    assert (e.kind, e.index) == (LINK_LOST, 0) and "no message for 1.9 s" in e.detail
     assert w.check([seen(heard_t=100.0)], 103.0) == []  # said once
     (back,) = w.check([seen(heard_t=104.0)], 104.1)
     assert back.kind == LINK_BACK and not back.departure
