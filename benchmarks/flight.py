@@ -48,6 +48,7 @@ from ftlbo_mav.flight.monitor import Monitor
 from ftlbo_mav.flight.outcome import FlightLeftPlan
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.report import summarize
+from ftlbo_mav.link.budget import choose
 from ftlbo_mav.link.swarm import Assignment, upload_swarm
 from ftlbo_mav.link.transfer import Timing
 from ftlbo_mav.mission.export import write_plan
@@ -118,12 +119,19 @@ def wind_params(wind, n: int) -> list[str]:
         ("SIM_WIND_TURB", turb))]
 
 
-def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None) -> dict:
+def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None, *,
+             link_bytes_per_s: float | None = None) -> dict:
+    """``link_bytes_per_s``: the streams at the rates that fit that link, as ``fly
+    --link`` chooses them (ftlbo_mav/link/budget.py)."""
     planned = load_planned_flight(plan_dir)
     monitor = Monitor(planned)
     keeper, left = None, None
     sysids = list(range(1, planned.count + 1))
-    with Fleet(planned.names, sysids, urls, on_position=monitor) as fleet:
+    rates = {}
+    if link_bytes_per_s is not None:
+        b = choose(planned.count, link_bytes_per_s)
+        rates = {"position_hz": b.position_hz, "status_hz": b.status_hz}
+    with Fleet(planned.names, sysids, urls, on_position=monitor, **rates) as fleet:
         monitor.vehicles = fleet.vehicles  # Fleet asks each vehicle for 10 Hz positions
         if strategy == "naive":
             for v, m in zip(fleet.vehicles, planned.missions):
@@ -219,7 +227,8 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
                                          f"{r.message}" for r in failed))
         set_params(vehicles.urls, list(params) + (wind_params(wind, len(homes)) if binary
                                                   else []))
-        summary = fly_once(plan_dir, vehicles.urls, strategy, keep)
+        summary = fly_once(plan_dir, vehicles.urls, strategy, keep,
+                           link_bytes_per_s=None if radio is None else radio.bytes_per_s)
         if vehicles.radio is not None:
             c = vehicles.radio.counts
             summary["radio"] = {"sent": c.sent, "lost": c.lost, "full": c.full,

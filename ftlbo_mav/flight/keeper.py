@@ -21,7 +21,7 @@ leg changed nothing on that leg and held from the leg after: a correction a leg 
 and one that stays after its reason has gone.
 
 The keeper only nudges: each vehicle flies its own uploaded mission at its own speed.
-A pause lasts at most ``max_pause_s`` and every continue is sent twice more; when a
+A pause lasts at most ``max_pause_s`` and every continue is sent again over seconds; when a
 vehicle's reports stop, the keeper stands aside and keeps sending continue. A copter
 whose link is lost for good within a pause (a window of ``max_pause_s``) holds its
 position in AUTO, paused, until the link is back or its own failsafe acts.
@@ -66,6 +66,13 @@ class KeeperOptions:
     station's machine busy, one copter's reports came 1 s late, and a keeper measuring on
     them saw it 1.5 m behind where it was and paused the others in turn: 0.50 m RMS).
     Reports older than ``stale_s`` make the keeper stand aside (continue for everyone).
+    Every continue is sent again ``continue_again_s`` after it (the vehicles' seconds),
+    until the copter is paused anew: a continue lost leaves its copter stopped, and a
+    radio loses frames in bursts (the repeats 50 ms apart lost together) and for a second
+    at a time (on SITL behind the rough-day radio, sim/radio.py ROUGH_DAY, a copter held
+    0.85 s for a 0.30 s pause and the formation 1.9 m apart: a departure). A continue to a
+    copter that is not paused changes nothing (ModeAuto::resume: AC_WPNav::set_resume
+    clears its pause flag).
 
     The numbers are measured, not a taste: docs/flight.md."""
 
@@ -79,6 +86,7 @@ class KeeperOptions:
     period_s: float = 0.05
     late_s: float = 0.3
     stale_s: float = 1.0
+    continue_again_s: tuple[float, ...] = (0.05, 0.1, 0.4, 1.2, 2.2)
     navigation: Navigation = Navigation()  # ArduCopter's defaults (copter.parm keeps them)
 
     def __post_init__(self) -> None:
@@ -191,7 +199,7 @@ class FormationKeeper:
     _rest_until: list[float] = field(default_factory=list)
     _pause: list = field(default_factory=list)  # the last pause: (when, seconds), or None
     _progress: list = field(default_factory=list)  # the last progress measured, per UAV
-    _resend: list[int] = field(default_factory=list)  # continues still to repeat
+    _resend: list[list[float]] = field(default_factory=list)  # when to repeat continues
     _resumed_at: list[float] = field(default_factory=list)
     _last_t: float | None = None
     _standing_aside: bool = False
@@ -209,7 +217,7 @@ class FormationKeeper:
         self._rest_until = [-np.inf] * n
         self._pause = [None] * n
         self._progress = [0.0] * n
-        self._resend = [0] * n
+        self._resend = [[] for _ in range(n)]
         self._resumed_at = [-np.inf] * n
         self.log = KeeperLog.empty(n)
 
@@ -288,25 +296,34 @@ class FormationKeeper:
                     log.paused_s[i] += now - self._paused_at[i]
                     self._cut_short(i, now)
                     self._paused_at[i], self._resumed_at[i] = None, now
-                    self._resend[i] = 2
+                    self._resend[i] = [now + t for t in o.continue_again_s]
                     out[i] = False
-            elif self._resend[i] > 0:
-                self._resend[i] -= 1
-                out[i] = False
             elif (flying and not late and now >= self._rest_until[i]
                   and (ahead[i] > o.engage_m
-                       or (ahead[i] > o.floor_m and ahead_s[i] > o.engage_s))):
-                # sized as a lead in metres at the cruise speed: never more than the
-                # lead needs, whichever kind it is (see KeeperOptions)
-                d = o.pause_for(float(ahead[i]), max(group_speed, self.cruise_speed_m_s),
-                                self.cruise_speed_m_s)
-                if d > 0:
-                    self._paused_at[i], self._resume_at[i] = now, now + d
-                    self._rest_until[i] = now + d + o.rest_s
-                    self._pause[i] = (now, d)
-                    log.pauses[i] += 1
-                    out[i] = True
+                       or (ahead[i] > o.floor_m and ahead_s[i] > o.engage_s))
+                  and self._start_pause(i, float(ahead[i]), group_speed, now)):
+                out[i] = True
+            elif self._resend[i] and now >= self._resend[i][0]:
+                while self._resend[i] and now >= self._resend[i][0]:
+                    self._resend[i].pop(0)
+                out[i] = False
         return out
+
+    def _start_pause(self, i: int, lead_m: float, group_speed: float, now: float) -> bool:
+        """Pause vehicle i for a lead of ``lead_m``, sized as a lead in metres at the
+        cruise speed: never more than the lead needs, whichever kind it is (see
+        :class:`KeeperOptions`). False when no pause of 10 ms or more would do."""
+        o = self.options
+        d = o.pause_for(lead_m, max(group_speed, self.cruise_speed_m_s), self.cruise_speed_m_s)
+        if d <= 0:
+            return False
+        # the continues still to repeat were sent before: they arrive first
+        self._resend[i] = []
+        self._paused_at[i], self._resume_at[i] = now, now + d
+        self._rest_until[i] = now + d + o.rest_s
+        self._pause[i] = (now, d)
+        self.log.pauses[i] += 1
+        return True
 
     def _cut_short(self, i: int, now: float) -> None:
         """A pause continued before its time owes what a pause that long does."""
@@ -318,12 +335,12 @@ class FormationKeeper:
         """Continue for every vehicle paused (the legs are over, or the reports stopped)."""
         out = {}
         for i in range(len(self.paths)):
-            if self._paused_at[i] is not None or self._resend[i] > 0:
+            if self._paused_at[i] is not None or self._resend[i]:
                 if self._paused_at[i] is not None:
                     self.log.paused_s[i] += max(now - self._paused_at[i], 0.0)
                     self._cut_short(i, now)
                     self._paused_at[i], self._resumed_at[i] = None, now
-                self._resend[i] = 0
+                self._resend[i] = []
                 out[i] = False
         return out
 

@@ -65,11 +65,14 @@ def test_a_leader_waits_just_long_enough_to_lose_its_lead_then_continues():
 
     assert keeper.update(flown(1.0 + pause - 0.06), speeds, 1.0 + pause - 0.06) == {}
     assert keeper.update(flown(1.0 + pause), speeds, 1.0 + pause) == {0: False}
-    # the continue is said twice more (a lost one is not final), then nothing: what the
-    # pause has still to take counts as taken, so nobody is paused for it
-    said = [keeper.update(flown(1.1 + pause + 0.1 * k), speeds, 1.1 + pause + 0.1 * k)
-            for k in range(4)]
-    assert said == [{0: False}, {0: False}, {}, {}]
+    # the continue is said again 0.05, 0.1, 0.4, 1.2 and 2.2 s after (a lost one would
+    # leave the copter stopped; a radio loses frames in bursts and for a second at a
+    # time), and nothing else: what the pause has still to take counts as taken, so
+    # nobody is paused for it
+    said = [keeper.update(flown(1.0 + pause + 0.1 * k), speeds, 1.0 + pause + 0.1 * k)
+            for k in range(1, 24)]
+    assert [k + 1 for k, out in enumerate(said) if out] == [1, 4, 12, 22]
+    assert all(out in ({}, {0: False}) for out in said)
     assert keeper.log.pauses == [1, 0, 0] and keeper.log.paused_s[0] == pytest.approx(pause)
     assert keeper.log.max_lead_m[0] == pytest.approx(0.4)  # the formation's view: the mean
 
@@ -97,8 +100,10 @@ def test_a_waited_leader_rests_before_it_is_paused_again():
     assert keeper.update(positions_at([6.6, 6.0, 6.0]), speeds, t) == {0: False}
     for k in range(1, 3):
         keeper.update(positions_at([6.6, 6.0, 6.0]), speeds, t + 0.1 * k)
-    # still ahead (its pace not back yet): no second pause within rest_s
-    assert keeper.update(positions_at([7.6, 7.0, 7.0]), speeds, t + ON.rest_s - 0.1) == {}
+    # still ahead (its pace not back yet): no second pause within rest_s (the continue
+    # said again 0.4 s after it)
+    assert keeper.update(positions_at([7.6, 7.0, 7.0]), speeds, t + ON.rest_s - 0.1) == {
+        0: False}
     assert keeper.update(positions_at([7.6, 7.0, 7.0]), speeds, t + ON.rest_s) == {0: True}
 
 
