@@ -86,13 +86,27 @@ def upload_fence_set(channel, fence_set: FenceSet, *, timing: Timing,
         return None
 
     (fence_label, fence_kind), (rally_label, rally_kind) = PARTS
+    switch = {k: v for k, v in fence_set.params.items() if k == "FENCE_ENABLE"}
+    others = {k: v for k, v in fence_set.params.items() if k != "FENCE_ENABLE"}
     if more_channels is None:
         problems = [part(channel, fence_label, fence_kind)]
         problems.append(part(channel, rally_label, rally_kind) if problems[0] is None else None)
+        if not any(problems):
+            switch = fence_set.params  # every parameter after the fence, as one window
     else:
+        # the rally points beside the fence, then the parameters but FENCE_ENABLE (which
+        # change nothing until it is on: one window of round trips fewer at the end)
         def rally() -> str | None:
             with more_channels() as ch:
-                return part(ch, rally_label, rally_kind)
+                problem = part(ch, rally_label, rally_kind)
+                if problem is None and others:
+                    if progress is not None:
+                        progress("parameters", 0, len(others))
+                    try:
+                        set_params(ch, others, timing=timing)
+                    except ParamError as exc:
+                        return f"fence parameters: {exc.name}: {exc.problem}"
+                return problem
 
         with ThreadPoolExecutor(max_workers=1) as pool:
             later = pool.submit(rally)
@@ -100,10 +114,11 @@ def upload_fence_set(channel, fence_set: FenceSet, *, timing: Timing,
     failed = [p for p in problems if p is not None]
     if failed:
         return False, "; ".join(failed)
-    if progress is not None:
-        progress("parameters", 0, len(fence_set.params))
+    if progress is not None and switch:
+        progress("parameters", 0, len(switch))
     try:
-        set_params(channel, fence_set.params, timing=timing)
+        if switch:
+            set_params(channel, switch, timing=timing)
     except ParamError as exc:
         return False, f"fence parameters: {exc.name}: {exc.problem}"
     return True, fence_set.describe()

@@ -196,9 +196,11 @@ class Upload(_Transfer):
 
 
 READ_WINDOW = 8
-"""MISSION_REQUEST_INTs outstanding at once in a read-back, divided among the vehicles
-that share the link (a shared radio's buffer is theirs together: 10 copters asking 8
-each overflowed a 2 KiB buffer). ArduPilot answers each on its own
+READ_ON_LINK = 24
+"""MISSION_REQUEST_INTs outstanding at once in a read-back: up to READ_WINDOW, and
+READ_ON_LINK divided among the vehicles that share the link (a shared radio's buffer is
+theirs together: 10 copters asking 8 each overflowed a 2 KiB buffer; 24 answers of ~50
+bytes fit it, so three copters still ask 8 each, ten 2). ArduPilot answers each on its own
 (MissionItemProtocol::handle_mission_request_int keeps no state while sending), so a
 read-back asks for a window of items at once: one round trip for the window, not one an
 item (through a shared radio, 60 ms each way, 8 items took 1.7 s)."""
@@ -213,7 +215,7 @@ class Download(_Transfer):
     def __init__(self, **kw):
         super().__init__(**kw)
         # a window of its own: READ_WINDOW shared among the vehicles on the link
-        self.window = max(1, READ_WINDOW // self.sharing)
+        self.window = max(1, min(READ_WINDOW, READ_ON_LINK // self.sharing))
         self.count: int | None = None
         self.got: dict[int, MissionItem] = {}
         self.asked: dict[int, float] = {}  # seq -> when last asked, for those not answered

@@ -51,9 +51,9 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     channel's ``sharing``, a new one as each answer comes) and resend the unanswered ones
     when no answer came for a while:
     ``timing.timeout_s``, or once the link's round trip is known (``channel.srtt``, from
-    the mission transfers before) four round trips (at least ``timing.min_resend_s``), as
-    the mission protocol resends; a name not answered within ``timing.budget_s`` of its
-    first request is None.
+    the mission transfers before) :data:`~.transfer.RESEND_RTTS` round trips (at least
+    ``timing.min_resend_s``), as the mission protocol resends; a name not answered within
+    ``timing.budget_s`` of its first request is None.
 
     One round trip for a window of parameters, not one for each: through a shared
     telemetry radio (60 ms each way) 18 parameters took 18 round trips and a lost one
@@ -61,8 +61,7 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     clock = getattr(channel, "clock", time.monotonic)
     window = max(1, PARAM_WINDOW // getattr(channel, "sharing", 1))
     srtt = getattr(channel, "srtt", None)
-    resend_s = (min(timing.timeout_s, max(timing.min_resend_s, 4.0 * srtt))
-                if timing.adaptive and srtt else timing.timeout_s)
+    resend_s = timing.resend_after(srtt) if timing.adaptive and srtt else timing.timeout_s
     got: dict[str, float | None] = dict.fromkeys(requests)
     waiting = list(requests)  # not sent yet
     out: dict[str, float] = {}  # sent, unanswered: name -> when first sent
@@ -98,8 +97,14 @@ def read_params(channel, names: Iterable[str], *, timing: Timing) -> dict[str, f
 
 
 def set_params(channel, params: Mapping[str, float], *, timing: Timing) -> None:
-    """PARAM_SET each, then read each back; :class:`ParamError` for the first that is
-    not answered or not kept."""
+    """PARAM_SET each and check what it holds; :class:`ParamError` for the first that is
+    not answered or not kept.
+
+    ArduPilot answers PARAM_SET with the PARAM_VALUE of what it now holds
+    (GCS_Param.cpp ``handle_param_set``: ``set_and_notify``, then
+    ``send_parameter_value``): a read-back of its own. Only a parameter whose answer
+    differs (a PARAM_VALUE sent before the set, still on its way) is read again: one
+    round trip for a window of parameters, where a read-back after the sets was two."""
     def setter(name: str, value: float):
         kind = _TYPES[name].type if name in _TYPES else R.MAV_PARAM_TYPE_REAL32
         return lambda: R.MAVLink_param_set_message(channel.sysid, 1, name.encode(),
@@ -110,8 +115,10 @@ def set_params(channel, params: Mapping[str, float], *, timing: Timing) -> None:
         if answered[name] is None:
             raise ParamError(channel.sysid, name, f"no PARAM_VALUE answered PARAM_SET within "
                              f"{timing.budget_s:g} s (does this vehicle have it?)")
-    back = read_params(channel, params, timing=timing)
-    for name, value in params.items():
+    again = [n for n, v in params.items() if not param_equal(n, v, answered[n])]
+    back = read_params(channel, again, timing=timing) if again else {}
+    for name in again:
+        value = params[name]
         if back[name] is None:
             raise ParamError(channel.sysid, name, "set, but not answered on read-back")
         if not param_equal(name, value, back[name]):

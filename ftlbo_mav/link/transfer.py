@@ -50,6 +50,15 @@ def describe_result(code: int) -> str:
     return f"{RESULT_TEXT.get(code, 'unknown result code')} ({label})"
 
 
+RESEND_RTTS = 2.5
+"""A message unanswered after this many round trips (the median of the recent ones) is
+taken for lost and sent again. Through a telemetry radio of 60 +- 40 ms each way the
+round trips spread 0.10-0.25 s about a 0.17 s median: 2.5 of them wait out the slowest
+answer, where 4 (0.68 s) made every lost frame of an upload cost a round trip or two
+more (sim/radio.py; docs/link.md). A resend that was not needed costs a duplicate, which
+ArduPilot answers and forgets (MissionItemProtocol: INVALID_SEQUENCE)."""
+
+
 @dataclass(frozen=True)
 class Timing:
     """Time-outs and retry budgets of a transfer.
@@ -58,7 +67,8 @@ class Timing:
     item) that makes no progress is resent after ``timeout_s``, and fails after
     ``retries`` resends, i.e. after ``timeout_s * (retries + 1)`` without progress
     (QGroundControl's defaults are about 1.5 s and 5). Once a round trip has been timed,
-    resends come sooner (every ~4 round trips, at least ``min_resend_s``), within the same
+    resends come sooner (every :data:`RESEND_RTTS` round trips, at least
+    ``min_resend_s``), within the same
     time budget: on a fast lossy link a lost message costs a fraction of a second, not
     1.5 s, and the budget rides out long runs of losses. ``not_ready_s``: how long a
     vehicle may answer NO_SPACE (booting) or DENIED (busy) before that is final,
@@ -75,6 +85,10 @@ class Timing:
     min_resend_s: float = 0.2
     first_resend_s: float = 0.5
     adaptive: bool = True
+
+    def resend_after(self, srtt: float) -> float:
+        """Seconds before a resend once the round trip ``srtt`` (a median) is known."""
+        return min(self.timeout_s, max(self.min_resend_s, RESEND_RTTS * srtt))
 
     @property
     def budget_s(self) -> float:
@@ -138,12 +152,13 @@ class _Transfer:
         self.srtt = statistics.median(self._samples)
 
     def _resend_s(self) -> float:
-        """When to resend a seemingly lost message: ~4 round trips, within bounds."""
+        """When to resend a seemingly lost message: :data:`RESEND_RTTS` round trips,
+        within bounds."""
         if not self.timing.adaptive:
             return self.timing.timeout_s
         if self.srtt is None:
             return min(self.timing.timeout_s, self.timing.first_resend_s)
-        return min(self.timing.timeout_s, max(self.timing.min_resend_s, 4.0 * self.srtt))
+        return self.timing.resend_after(self.srtt)
 
     def _out_of_budget(self, now: float) -> bool:
         return now - self.last_progress >= self.timing.budget_s - 1e-9

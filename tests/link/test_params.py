@@ -35,9 +35,10 @@ def test_set_changes_only_what_differs_and_reads_it_back():
     assert set_vehicle_params(ch, PLANNED, timing=TIMING) == [("WPNAV_ACCEL", 500.0, 250.0)]
     assert ch.vehicle.autopilot.nav_params().wp_accel == 2.5  # it flies with it now
     assert read_vehicle_params(ch, PLANNED, timing=TIMING) == []
-    # read (all) + one PARAM_SET + its read-back, then the read of this test (all)
+    # read (all) + one PARAM_SET, answered with what it now holds (a read-back of its
+    # own), then the read of this test (all)
     assert (len([m for m in ch.received if m.get_type() == "PARAM_VALUE"]) - sets
-            == 2 * len(PLANNED) + 2)
+            == 2 * len(PLANNED) + 1)
     assert set_vehicle_params(ch, PLANNED, timing=TIMING) == []  # nothing left to set
 
 
@@ -85,3 +86,39 @@ def test_a_shared_link_divides_the_window_among_its_vehicles():
     assert all(v is not None for v in got.values())
     at_start = [t for t, _m in sent if t == sent[0][0]]
     assert len(at_start) == PARAM_WINDOW // 4  # then one more as each answer comes
+
+
+class _StaleFirst:
+    """A vehicle whose answer to PARAM_SET is overtaken by a PARAM_VALUE sent before it
+    (the old value, still on its way): only a read-back tells what it holds."""
+
+    sysid = 1
+
+    def __init__(self) -> None:
+        self.held, self.sent, self.queue = {"FENCE_ALT_MAX": 100.0}, [], []
+
+    def send(self, msg) -> None:
+        self.sent.append(msg.get_type())
+        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+        name = name.rstrip("\x00")
+        if msg.get_type() == "PARAM_SET":
+            self.queue.append((name, self.held[name]))  # the stale one arrives first
+            self.held[name] = msg.param_value
+        else:
+            self.queue.append((name, self.held[name]))
+
+    def recv(self, _timeout):
+        from pymavlink.dialects.v20 import ardupilotmega as R
+
+        if not self.queue:
+            return None
+        name, value = self.queue.pop(0)
+        return R.MAVLink_param_value_message(name.encode(), value, 9, 1, 0)
+
+
+def test_an_answer_that_differs_from_the_set_is_read_back_before_it_counts():
+    from ftlbo_mav.link.params import set_params
+
+    ch = _StaleFirst()
+    set_params(ch, {"FENCE_ALT_MAX": 8.0}, timing=TIMING)
+    assert ch.sent == ["PARAM_SET", "PARAM_REQUEST_READ"] and ch.held["FENCE_ALT_MAX"] == 8.0
