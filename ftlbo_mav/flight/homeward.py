@@ -39,6 +39,12 @@ from .planned import PlannedFlight
 from .vehicle import FlightError, FlightVehicle
 
 ON_GROUND_M, AT_HOME_M = 0.5, 2.0
+ROUTE_START_M = 0.5
+"""How far from where its route home begins (where it stopped) a vehicle may be when the
+route is started: its first leg keeps the clearance from there. Through a rough radio the
+position a route was planned from can be a second old (an outage) and the copter not
+stopped yet: on SITL one started 5 m off its route's first point, crossed a tree's fence
+and ended 0.39 m inside the tree's radius."""
 """A vehicle below this height within this distance of its home is on the ground there."""
 KEEP_OUT_SPEED_M_S = 5.0
 """How fast a vehicle that left is taken to move, at the least (its last ground speed if
@@ -168,6 +174,10 @@ class GoingHome:
             if not ok:
                 self._done.put((j, False, f"its route home was not uploaded ({why})"))
                 return
+            off = self._off_start(j)
+            if off is not None:
+                self._done.put((j, False, f"its route home was not started: {off}"))
+                return
             v.set_current(1)
             v.set_mode("AUTO")
         except FlightError as exc:
@@ -179,6 +189,24 @@ class GoingHome:
             f"{route.layer_m:.1f} m{wait}; predicted clearance {route.clearance_m:.2f} m, "
             f"{route.seconds:.0f} s to the ground; uploaded, verified and started in "
             f"{time.monotonic() - t0:.1f} s)")))
+
+    def _off_start(self, j: int) -> str | None:
+        """Why vehicle j is not where its route home begins (a fresh report, within
+        :data:`ROUTE_START_M`), or None when it is."""
+        s = self.vehicles[j].status
+        if s.lat_deg is None:
+            return "its position is unknown"
+        here = np.asarray(self.planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
+                                                    alt_m=s.alt_m), float)
+        start = np.asarray(self.plan.routes[j].points[0], float)
+        off = float(np.linalg.norm(here[:2] - start[:2]))
+        age = time.monotonic() - s.position_t
+        if age > 1.0:
+            return f"its last position is {age:.1f} s old"
+        if off > ROUTE_START_M:
+            return (f"it is {off:.1f} m from where the route begins (it had not stopped "
+                    f"where it was planned from; at most {ROUTE_START_M:g} m)")
+        return None
 
     def results(self) -> list[tuple[int, bool, str]]:
         """The vehicles whose start home has ended since the last call: (vehicle, started,

@@ -117,3 +117,27 @@ def test_a_copter_still_on_the_ground_at_home_has_nothing_to_fly(planned):
     refused = home.start([0], [], 0.0)
     assert refused == {0: "still on the ground at its home"}
     assert not home.plan.routes
+
+
+def test_a_route_is_started_only_from_where_it_begins_and_on_a_fresh_position(planned):
+    """Through a rough radio the position a route was planned from can be old and the
+    copter not stopped yet (SITL: started 5 m off, into a tree's fence)."""
+    import time
+
+    from ftlbo_mav.planning.homeward import plan_return
+
+    stand_in = StandIn("uav1", 1)
+    home = GoingHome(planned, [stand_in, StandIn(), StandIn()])
+    here = {0: np.array([19.4, 13.3, 6.0])}
+    home.plan = plan_return(here, {0: planned.paths[0][0][:2]}, return_world(planned))
+
+    def at(east_north, age_s=0.0):
+        lat, lon, _ = planned.frame.to_lla(np.array([*east_north, 6.0]))
+        stand_in.status = Status(lat_deg=float(lat), lon_deg=float(lon), alt_m=6.0,
+                                 position_t=time.monotonic() - age_s)
+        return home._off_start(0)
+
+    assert at((19.4, 13.3)) is None
+    assert at((19.7, 13.5)) is None  # 0.36 m: within what a stopped copter holds
+    assert "2.0 m from where the route begins" in at((21.4, 13.3))
+    assert "1.5 s old" in at((19.4, 13.3), age_s=1.5)
