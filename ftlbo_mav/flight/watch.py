@@ -66,11 +66,15 @@ def rally_points(planned: PlannedFlight, j: int) -> np.ndarray:
 
 
 def rtl_line_problem(planned: PlannedFlight, j: int, position: np.ndarray,
-                     others: Sequence[np.ndarray], *, separation_m: float = 2.0) -> str | None:
+                     others: Sequence[np.ndarray], *, separation_m: float = 2.0,
+                     routes: Sequence[np.ndarray] = ()) -> str | None:
     """Why ArduCopter's RTL from ``position`` (ENU) would not be safe for vehicle j, or
     None: RTL climbs where it is and flies straight to its rally point or home
     (:func:`~ftlbo_mav.ardupilot.fence.rtl_target`); that line must keep the plan's
-    clearance from every obstacle and ``separation_m`` from the other vehicles."""
+    clearance from every obstacle and ``separation_m`` from the other vehicles, where they
+    are and along the ``routes`` home they fly (``(P, 3)`` each: RTL climbs through their
+    layers; on SITL one sent to RTL for want of a route came 0.65 m from one on its
+    route)."""
     home = np.asarray(planned.paths[j][0][:2], float)
     rally = rally_points(planned, j)
     k = rtl_target(position[:2], home, rally)
@@ -87,7 +91,22 @@ def rtl_line_problem(planned: PlannedFlight, j: int, position: np.ndarray,
         if near < separation_m:
             return (f"the straight line to {name} passes {near:.1f} m from another vehicle; "
                     "landing where it stopped")
+    for route in routes:
+        near = float(np.min(segment_distance(_along(np.asarray(route, float)[:, :2]),
+                                             here, target)))
+        if near < separation_m:
+            return (f"the straight line to {name} passes {near:.1f} m from another "
+                    "vehicle's route home; landing where it stopped")
     return None
+
+
+def _along(points: np.ndarray, step_m: float = 0.25) -> np.ndarray:
+    """Points every ``step_m`` along a polyline ``(P, 2)`` (its corners among them)."""
+    out = [points[:1]]
+    for a, b in zip(points[:-1], points[1:]):
+        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step_m)))
+        out.append(a + (b - a) * (np.arange(1, n + 1) / n)[:, None])
+    return np.vstack(out)
 
 
 def last_leg_seq(mission) -> int:
@@ -190,7 +209,9 @@ class FlightWatch:
         if seen[j].position is None:
             return "its position is unknown"
         others = [s.position for i, s in enumerate(seen) if i != j and s.position is not None]
-        return rtl_line_problem(self.planned, j, seen[j].position, others)
+        plan = self.response.homeward.plan if self.response.homeward is not None else None
+        routes = [] if plan is None else [r.points for k, r in plan.routes.items() if k != j]
+        return rtl_line_problem(self.planned, j, seen[j].position, others, routes=routes)
 
     def expect(self, mode: str | None) -> None:
         """The mode every vehicle still on the plan is in from now on."""

@@ -141,3 +141,24 @@ def test_a_route_is_started_only_from_where_it_begins_and_on_a_fresh_position(pl
     assert at((19.7, 13.5)) is None  # 0.36 m: within what a stopped copter holds
     assert "2.0 m from where the route begins" in at((21.4, 13.3))
     assert "1.5 s old" in at((19.4, 13.3), age_s=1.5)
+
+
+def test_rtl_is_refused_where_its_line_crosses_another_vehicles_route_home(planned):
+    """RTL climbs where it is and flies straight home, through the layers of the others'
+    routes (SITL: a copter sent to RTL for want of a route came 0.65 m from one on its
+    route): a line that passes within 2 m of a route lands instead."""
+    from ftlbo_mav.ardupilot.fence import rtl_target
+    from ftlbo_mav.flight.watch import rally_points, rtl_line_problem
+
+    here = np.array([5.0, 40.0, 3.0])  # north-west of the trees: its line home runs south
+    home = np.asarray(planned.paths[1][0][:2], float)
+    rally = rally_points(planned, 1)
+    k = rtl_target(here[:2], home, rally)
+    target = home if k is None else rally[k]
+    assert rtl_line_problem(planned, 1, here, []) is None
+    mid = (here[:2] + target) / 2  # a route across the middle of its line, on a layer
+    crossing = np.array([[mid[0] - 15.0, mid[1], 7.0], [mid[0] + 15.0, mid[1], 7.0]])
+    why = rtl_line_problem(planned, 1, here, [], routes=[crossing])
+    assert why is not None and "another vehicle's route home" in why
+    far = crossing + np.array([0.0, 60.0, 0.0])
+    assert rtl_line_problem(planned, 1, here, [], routes=[far]) is None
