@@ -138,6 +138,8 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
         summary["keeper"] = {"enabled": keeper.options.enabled,
                              "off_reason": keeper.off_reason,
                              "link_gaps": keeper.log.link_gaps,
+                             "rough_link_s": round(keeper.log.rough_s, 1),
+                             "worst_jitter_s": round(keeper.log.worst_jitter_s, 3),
                              "vehicles": keeper.log.as_dict(planned.names)}
     # fly asked for AUTOPILOT_VERSION at its pre-flight
     if any(v.status.firmware_version is not None for v in monitor.vehicles):
@@ -246,7 +248,10 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
         waited = {n: v for n, v in keeper["vehicles"].items() if v["pauses"]}
         click.echo("formation keeper: " + (_keeper_line(waited) if waited
                                            else "no vehicle needed to wait") + (
-            f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else ""))
+            f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else "")
+            + (f"; no pauses for {keeper['rough_link_s']:.0f} s: the link's delays varied by "
+               f"up to {keeper['worst_jitter_s']:.2f} s, too much to time one"
+               if keeper.get("rough_link_s") else ""))
     link = summary.get("link") or {}
     measured = link.get("measured") or {}
     if measured.get("total") is not None:

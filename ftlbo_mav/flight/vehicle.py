@@ -16,6 +16,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ..ardupilot.modes import CopterMode, mode_name
@@ -27,6 +28,7 @@ from .navigation import report_jump
 
 CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
 CLOCK_REPORTS = 20  # a report's time is judged against the least delayed of this many
+DELAY_REPORTS = 50  # a link's delays are judged over this many reports (5 s at 10 Hz)
 
 
 class FlightError(FtlboError):
@@ -82,6 +84,9 @@ class Status:
     # an emulator's time scale, SITL's --speedup), from the reports of the last while
     clock_rate: float = 1.0
     _recent: deque = field(default_factory=lambda: deque(maxlen=CLOCK_REPORTS))
+    # each position report's delay beyond the least delayed of its neighbours (the
+    # vehicle's seconds), the last DELAY_REPORTS: how much a link's latency varies
+    delays: deque = field(default_factory=lambda: deque(maxlen=DELAY_REPORTS))
     _rate_since: tuple[float, float] | None = None  # (ground, vehicle) seconds
     heartbeat_t: float = 0.0
     heard_t: float = 0.0  # the last message of any kind from the vehicle
@@ -106,6 +111,13 @@ class Status:
     vehicle_type: int | None = None
     autopilot: int | None = None
     firmware_version: int | None = None
+
+    def jitter_s(self) -> float | None:
+        """The 90th percentile of the recent reports' delays beyond the least delayed
+        (the vehicle's seconds); None before there are 20."""
+        if len(self.delays) < 20:
+            return None
+        return float(np.quantile(np.array(list(self.delays), float), 0.9))
 
     @property
     def texts(self) -> list[str]:
@@ -185,6 +197,8 @@ class FlightVehicle:
                 # the least delayed of the last few (over seconds the rate's error is nil)
                 s._recent.append((now, boot_s))
                 s.clock_offset_s = min(t - b / s.clock_rate for t, b in s._recent)
+                # how much later than the least delayed this one came (its seconds)
+                s.delays.append((now - s.clock_offset_s) * s.clock_rate - boot_s)
                 s.position_boot_s = boot_s
                 position = True
             elif kind == "MISSION_CURRENT":

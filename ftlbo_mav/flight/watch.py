@@ -355,7 +355,9 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     if trace is not None:
         trace.append(("inputs", time.monotonic(), vehicle_now, arrived.tolist(), age.tolist(),
                       [s.position_boot_s for s in st], positions.tolist()))
-    sent = keeper.update(positions, speeds, vehicle_now, ages_s=arrived)
+    jitters = [j for s in st if (j := s.jitter_s()) is not None]
+    sent = keeper.update(positions, speeds, vehicle_now, ages_s=arrived,
+                         jitter_s=max(jitters) if len(jitters) == len(st) else None)
     if trace is not None and sent:
         trace.append(("sent", time.monotonic(), vehicle_now, {int(i): p for i, p in sent.items()}))
     for i, pause in sent.items():

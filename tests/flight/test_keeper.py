@@ -230,3 +230,16 @@ def test_progress_does_not_jump_to_the_way_back_of_a_spur():
     keeper = FormationKeeper(spur[None], CRUISE, options=ON)
     seen = [float(keeper.progress(np.array([[x, 0.45, 4.0]]))[0]) for x in range(13)]
     assert np.all(np.diff(seen) > 0) and seen[-1] < 13.0, seen
+
+
+def test_no_pause_while_the_links_delays_vary_too_much_to_time_one():
+    """A pause and its continue cross the same link: where their delays vary by more than
+    ``max_jitter_s`` a pause takes back what the difference makes of it (SITL behind the
+    rough-day radio: the formation came apart with the keeper, held without it)."""
+    keeper = FormationKeeper(PATHS, CRUISE, options=ON)
+    speeds = np.full(3, 5.0)
+    keeper.update(positions_at([5.0, 5.0, 5.0]), speeds, 0.0, jitter_s=0.3)
+    assert keeper.update(positions_at([5.6, 5.0, 5.0]), speeds, 1.0, jitter_s=0.3) == {}
+    assert keeper.log.rough_s == pytest.approx(1.0) and keeper.log.worst_jitter_s == 0.3
+    # the link settles: the lead is answered
+    assert keeper.update(positions_at([6.1, 5.5, 5.5]), speeds, 1.1, jitter_s=0.08) == {0: True}

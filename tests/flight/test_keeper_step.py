@@ -21,8 +21,8 @@ class SeenPositions:
 
     active, pausing = True, False
 
-    def update(self, positions, speeds, now, ages_s=None):
-        self.positions = positions
+    def update(self, positions, speeds, now, ages_s=None, jitter_s=None):
+        self.positions, self.jitter_s = positions, jitter_s
         return {}
 
     def release(self, now=0.0):
@@ -51,3 +51,23 @@ def test_a_stale_clock_offset_does_not_move_a_copter_along_its_track():
     moved = keeper.positions[:, 0] - (np.asarray(PLANNED.paths)[:, 0, 0] + 10.0)
     assert moved[1] <= 5.0 * (MAX_REPORT_DELAY_S + 0.05)  # not 5 m/s x 0.4 s
     assert abs(moved[0]) < 0.1 and abs(moved[2]) < 0.1
+
+
+def test_the_links_jitter_is_the_worst_vehicles_once_every_one_has_enough_reports():
+    now = time.monotonic()
+    copters = [vehicle(i, clock_offset_s=now - 100.0, boot_s=100.0, arrived_ago_s=0.0)
+               for i in range(3)]
+    keeper = SeenPositions()
+    keep_formation(PLANNED, copters, keeper)
+    assert keeper.jitter_s is None  # not known yet
+    for k, v in enumerate(copters):
+        v.status.delays.extend(np.linspace(0.0, 0.05 * (k + 1), 50))
+    keep_formation(PLANNED, copters, keeper)
+    assert abs(keeper.jitter_s - 0.9 * 0.15) < 0.01  # uav3's: 90 % of its delays below
+
+
+def test_a_status_measures_each_reports_delay_beyond_the_least_delayed():
+    s = Status()
+    assert s.jitter_s() is None
+    s.delays.extend([0.0] * 18 + [0.3, 0.3])
+    assert s.jitter_s() is not None and s.jitter_s() < 0.3
