@@ -168,6 +168,8 @@ def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None, *,
              "t0": monitor.t0}))
     if keeper is not None:
         summary["keeper"] = {"active": keeper.active, "link_gaps": keeper.log.link_gaps,
+                             "rough_link_s": round(keeper.log.rough_s, 1),
+                             "worst_jitter_s": round(keeper.log.worst_jitter_s, 3),
                              "off_reason": keeper.off_reason,
                              "vehicles": keeper.log.as_dict(planned.names)}
     return summary

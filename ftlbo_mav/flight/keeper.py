@@ -70,10 +70,10 @@ class KeeperOptions:
     90th percentile of the last 5 s of position reports' delays beyond the least delayed,
     any vehicle): a pause and its continue cross the same link, so a pause meant to take
     back 0.3 m takes back what the difference of their delays makes of it. On SITL behind
-    a good-day radio (60 +- 40 ms) that figure was 0.05-0.10 s and the keeper held
-    0.05 m RMS; behind the rough day's (120 +- 80 ms, 10 % lost, outages) 0.14-0.46 s,
-    and with the keeper each flight's formation came apart (1-3 m, a departure), without
-    it 0.12 m RMS.
+    a good-day radio (60 +- 40 ms) that figure was 0.07-0.125 s (four flights) and the
+    keeper held 0.05 m RMS; behind the rough day's (120 +- 80 ms, 10 % lost, outages)
+    0.148-0.48 s (four flights), and with the keeper pausing each flight's formation came
+    apart (1-3 m, a departure), without it 0.12 m RMS.
     Every continue is sent again ``continue_again_s`` after it (the vehicles' seconds),
     until the copter is paused anew: a continue lost leaves its copter stopped, and a
     radio loses frames in bursts (the repeats 50 ms apart lost together) and for a second
@@ -95,7 +95,7 @@ class KeeperOptions:
     late_s: float = 0.3
     stale_s: float = 1.0
     continue_again_s: tuple[float, ...] = (0.05, 0.1, 0.4, 1.2, 2.2)
-    max_jitter_s: float = 0.12
+    max_jitter_s: float = 0.14
     navigation: Navigation = Navigation()  # ArduCopter's defaults (copter.parm keeps them)
 
     def __post_init__(self) -> None:
