@@ -126,8 +126,13 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
         return (v.status.gps_raw is not None and v.status.ekf_raw is not None
                 and (planned.battery is None or v.status.battery_pct is not None))
 
+    # an EKF that has not (or not yet again) got its absolute position is waited for too,
+    # as readiness is, up to the same time (SITL through a radio: one copter's
+    # EKF_STATUS_REPORT lacked it at the first look after the upload, and a flight was
+    # refused that a few seconds' wait may have let go)
     while time.monotonic() < deadline and not all(
-            is_ready(v.link, v.sysid) and reported(v) for v in vehicles):
+            is_ready(v.link, v.sysid) and reported(v) and not navigation_problems(planned, v)
+            for v in vehicles):
         time.sleep(0.1)
     problems = []
     for i, (v, why, problem) in enumerate(zip(vehicles, onboard, firmware)):
