@@ -38,6 +38,7 @@ from .departures import LINK_BACK, LINK_LOST, DepartureWatch, Event
 from .vehicle import FlightError, FlightVehicle
 
 STOPPED_M_S = 0.3
+STOP_AGAIN_S = 1.0  # a vehicle not slowing this long after its pause is paused again
 HOME_BUDGET_FACTOR = 1.5  # the flight home is watched this many times its predicted length
 
 
@@ -60,6 +61,7 @@ class _Answer:
     mode: str | None = None  # the mode it is sent to once stopped
     since: float = 0.0
     sent_t: float = 0.0
+    speed_at_send: float = 0.0  # its ground speed when its pause was sent
     tries: int = 0
     done: list[str] = field(default_factory=list)
 
@@ -149,6 +151,7 @@ class Response:
         watch.legs(j, False)
         watch.expect(j, None)
         on_track = v.status.mode == "AUTO"
+        a.sent_t, a.speed_at_send = now, v.status.ground_speed_m_s
         try:
             if on_track:  # stays in AUTO, stops on its track (ModeAuto::pause)
                 v.send_pause(True)
@@ -168,6 +171,16 @@ class Response:
         for j, a in self.answers.items():
             v = vehicles[j]
             then = self.policy.then_mode
+            speed = v.status.ground_speed_m_s
+            if (a.stage == "stop" and v.status.mode == "AUTO" and now - a.sent_t >= STOP_AGAIN_S
+                    and speed >= STOPPED_M_S and speed >= 0.9 * a.speed_at_send):
+                # not slowing: a pause lost on the way (a radio's burst, an outage) leaves
+                # it flying its mission (a paused AC_WPNav slows within a second or two)
+                a.sent_t, a.speed_at_send = now, speed
+                try:
+                    v.send_pause(True)
+                except FlightError:
+                    pass  # its link: the watch reports that
             if a.stage == "stop" and then is not None and not self._going_home(j):
                 slow = v.status.ground_speed_m_s < STOPPED_M_S
                 if slow or now - a.since >= self.stop_s:

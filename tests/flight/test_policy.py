@@ -211,3 +211,17 @@ def test_a_vehicle_answered_late_goes_home_on_its_own_route_once_it_has_stopped(
     assert calls[1] == ([1], 10.0)  # its own way home, clear of the others' (the planner)
     assert "no route home" in r.lines(vs)[1]  # the stand-in refuses uav2: RTL as it allows
     assert vs[1].sent == ["pause", "RTL"]
+
+
+def test_a_stop_that_does_not_slow_the_vehicle_is_sent_again():
+    """A pause lost on a radio (a burst, an outage) leaves the copter flying its mission:
+    one not slowing a second after its pause is paused again; one slowing is not."""
+    vs, watch = fleet(), DepartureWatch(3)
+    r = response()
+    r.react([Event(2, MODE, "switched to LOITER", 10.0)], vs, watch, 10.0)
+    vs[2].status.mode = "LOITER"
+    vs[1].status.ground_speed_m_s = 2.0  # slowing
+    r.step(vs, watch, 11.0)
+    assert vs[0].sent == ["pause", "pause"] and vs[1].sent == ["pause"]
+    r.step(vs, watch, 11.5)
+    assert vs[0].sent == ["pause", "pause"]  # a second between
