@@ -27,8 +27,8 @@ while every report is fresh):
 - a UAV farther from its slot than the plan's bound (``formation_bound`` in plan.json,
   :attr:`~ftlbo_mav.planning.planner.Plan.formation_bound_m`) for ``hold_s``:
   ``formation``, the UAV farthest from its slot the one that left;
-- two UAVs closer than ``min_separation`` for ``hold_s``: ``separation``, the one of the
-  pair farther from its slot the one that left;
+- two UAVs closer than ``min_separation`` for ``separation_hold_s``: ``separation``, the
+  one of the pair farther from its slot the one that left;
 
 and a ``link back`` event when a lost vehicle is heard from again. Pure: no I/O, the
 time is given.
@@ -62,11 +62,10 @@ class WatchOptions:
     1 Hz and a flight asks for positions at 10 Hz): through a radio on a rough day (10 %
     of frames lost in bursts, a 1 s outage every 15 s: sim/radio.py ROUGH_DAY) a copter's
     longest silence in ten modelled minutes was 1.35 s, and a loss is still seen within
-    2 s. ``mode_grace_s``: how long after this
-    station asked for a mode the vehicle may still be in the one before. ``stall_s`` /
-    ``stall_m``: no progress. ``airborne_m``: above this a disarm is in the air (and below
-    it a vehicle has landed). ``landed_away_m``: how far from its mission's landing point
-    a vehicle may land."""
+    2 s. ``mode_grace_s``: how long after this station asked for a mode the vehicle may
+    still be in the one before. ``stall_s`` / ``stall_m``: no progress. ``airborne_m``:
+    above this a disarm is in the air (and below it a vehicle has landed).
+    ``landed_away_m``: how far from its mission's landing point a vehicle may land."""
 
     link_lost_s: float = 1.8
     mode_grace_s: float = 3.0
@@ -109,6 +108,7 @@ class Together:
 
     positions: np.ndarray
     t: float
+
 
 @dataclass(frozen=True)
 class Seen:
