@@ -26,6 +26,9 @@ from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
 from .vehicle import FlightVehicle
 
+NAVIGATION_SETTLE_S = 5.0
+"""How long after readiness a vehicle's navigation may take to meet the plan's budget."""
+
 
 class PreflightError(FtlboError):
     """Pre-flight checks failed; ``problems`` holds one line per failing vehicle."""
@@ -126,13 +129,15 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
         return (v.status.gps_raw is not None and v.status.ekf_raw is not None
                 and (planned.battery is None or v.status.battery_pct is not None))
 
-    # an EKF that has not (or not yet again) got its absolute position is waited for too,
-    # as readiness is, up to the same time (SITL through a radio: one copter's
-    # EKF_STATUS_REPORT lacked it at the first look after the upload, and a flight was
-    # refused that a few seconds' wait may have let go)
     while time.monotonic() < deadline and not all(
-            is_ready(v.link, v.sysid) and reported(v) and not navigation_problems(planned, v)
-            for v in vehicles):
+            is_ready(v.link, v.sysid) and reported(v) for v in vehicles):
+        time.sleep(0.1)
+    # an EKF that has not yet got its absolute position is waited for a few seconds more
+    # (SITL through a radio: one copter's EKF_STATUS_REPORT lacked it at the first look
+    # after the upload, and a flight was refused); a receiver short of the budget does
+    # not come good by waiting, and is refused then
+    settle = min(deadline, time.monotonic() + NAVIGATION_SETTLE_S)
+    while time.monotonic() < settle and any(navigation_problems(planned, v) for v in vehicles):
         time.sleep(0.1)
     problems = []
     for i, (v, why, problem) in enumerate(zip(vehicles, onboard, firmware)):

@@ -124,6 +124,11 @@ class VehicleRunner:
                 self.detach(att)
                 att.close()  # the link drops mid-upload
                 return
+        # the flight stepped up to now first, so that a command takes effect when it
+        # arrives and not at the last tick: with a time scale a tick (20 ms of ours) is
+        # a long time of the copters' (0.4 s at 20x), and three AUTOs of one burst that
+        # straddled a tick started 0.4 s apart, a copter 0.8 m off its slot
+        self.tick()
         self._send(att, self.vehicle.handle(msg, self.clock(), att.link))
 
     def _send(self, att: _Attachment, msgs: list) -> None:
