@@ -9,6 +9,7 @@ import contextlib
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import click
@@ -319,6 +320,10 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
                    "catch up (a faster next leg); see docs/flight.md.")
 @click.option("--arm-budget", type=FiniteFloat(0, 86_400), default=60.0, show_default=True,
               help="Seconds to keep retrying a refused arm (EKF still converging).")
+@click.option("--formation-bound", type=FiniteFloat(0.01, 1000), default=None,
+              help="Metres a copter may be from its slot before the flight counts it a "
+                   "departure, for this flight (default: the plan's formation_bound; more "
+                   "than the plan's gives up what that bound keeps: separation).")
 @click.option("--preflight-timeout", type=FiniteFloat(0, 86_400),
               default=60.0, show_default=True,
               help="Seconds to wait for a 3D GPS fix and passing pre-arm checks.")
@@ -345,7 +350,8 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
 @_rtcm_option
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
-                on_departure, lost_wait, use_keeper, arm_budget, preflight_timeout, flight_timeout,
+                on_departure, lost_wait, use_keeper, arm_budget, formation_bound,
+                preflight_timeout, flight_timeout,
                 any_firmware, link_text, resume, progress_file, timeout, retries,
                 ready_timeout, discover_timeout, signing_key, rtcm_source):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
@@ -372,6 +378,8 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
                           timing=_timing(timeout, retries, ready_timeout),
                           discover_timeout_s=discover_timeout)
         plan_dir = planned.folder
+    if formation_bound is not None:
+        planned = replace(planned, formation_bound_m=formation_bound)
     monitor = Monitor(planned)
     options = FlyOptions(ready_timeout_s=preflight_timeout, arm_budget_s=arm_budget,
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode,

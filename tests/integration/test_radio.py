@@ -22,6 +22,10 @@ pytestmark = pytest.mark.sitl
 
 # (the keeper measures in real time: off, as in the other fast flights)
 SPEEDUP = 1.0 if BACKEND == "sitl" else 12.0
+# the emulator at 12x: the ground station's timing (its threads, the links) is 12 times
+# coarser in the copters' seconds, and a formation flown without the keeper drifts past
+# the plan's 0.77 m: this test is not about the formation (test_departures.py is)
+LOOSE = ["--formation-bound", "5"] if BACKEND == "emulator" else []
 
 
 @pytest.mark.parametrize("router", [False, True] if BACKEND == "emulator" else [True],
@@ -34,7 +38,7 @@ def test_the_example_uploads_and_flies_through_one_shared_radio(plan_dir, router
                                        "--connect", fleet.udp_url])
         upload_s = (time.monotonic() - t0) * SPEEDUP  # in the radio's (the vehicles') time
         assert up.exit_code == 0, up.output
-        flown = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+        flown = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3", *LOOSE,
                                           "--control-port", "0", "--no-keeper", "--link", "sik-64",
                                           "--connect", fleet.udp_url])
         counts = fleet.radio.counts

@@ -37,6 +37,10 @@ pytestmark = pytest.mark.sitl
 
 SURVEY = ROOT / "missions" / "field-survey"
 SPEEDUP = 1.0 if BACKEND == "sitl" else 20.0
+# the emulator at 20x: the ground station's timing (its threads, the links) is 20 times
+# coarser in the copters' seconds, and a formation flown without the keeper drifts past
+# the plan's 0.77 m: this test is not about the formation (test_departures.py is)
+LOOSE = ["--formation-bound", "5"] if BACKEND == "emulator" else []
 STOP_AFTER_S = 56.0  # in AUTO: in lane 3, after 4-6 of its 11 photos
 PHOTO_TOLERANCE_M = 2.0
 """How far a taken photo may be from where the plan puts it: the 50 Hz trigger's step,
@@ -75,13 +79,14 @@ def test_a_survey_stopped_in_a_lane_resumes_and_every_photo_is_taken_once(tmp_pa
                 pilot.set_mode("RTL")  # the pilot brings it home
                 return time.monotonic()
 
-            first, _took = _fly_with(folder, fleet.urls, stop_in_a_lane)
+            first, _took = _fly_with(folder, fleet.urls, stop_in_a_lane, *LOOSE)
             assert first.exit_code == 1, first.output
             assert "--resume" in first.stdout  # the user is told how to carry on
             assert pilot.wait(lambda p: not p.armed, 300.0 / SPEEDUP + 60.0)
         finally:
             pilot.close()
-        resumed = CliRunner().invoke(main, ["fly", str(folder), "--resume", "--sysid", "1..3",
+        resumed = CliRunner().invoke(main, ["fly", str(folder), "--resume", *LOOSE,
+                                            "--sysid", "1..3",
                                             "--control-port", "0", "--no-keeper",
                                             "--connect", " ".join(fleet.urls)])
         print(f"[{BACKEND}] fly --resume, exit {resumed.exit_code}:\n{resumed.output}")

@@ -23,6 +23,10 @@ pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
 SURVEY = ROOT / "missions" / "orchard-survey.toml"
 SPEEDUP = 12.0
+# the emulator at 12x: the ground station's timing (its threads, the links) is 12 times
+# coarser in the copters' seconds, and a formation flown without the keeper drifts past
+# the plan's 0.77 m: this test is not about the formation (test_departures.py is)
+LOOSE = ["--formation-bound", "5"] if BACKEND == "emulator" else []
 PASS_M = 3.0
 """How near each UAV must come to each of its lane ends: ArduCopter's waypoint radius
 (WPNAV_RADIUS, 2 m) plus a margin for corner cutting at the turns."""
@@ -43,7 +47,7 @@ def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
         # too coarse to pace a U-turn (a copter 1 m off its slot, now a departure): off,
         # as in the other fast flights
         keeper = ["--no-keeper"] if BACKEND == "emulator" else []
-        flown = CliRunner().invoke(main, ["fly", str(out), "--sysid", "1..3", *keeper,
+        flown = CliRunner().invoke(main, ["fly", str(out), "--sysid", "1..3", *keeper, *LOOSE,
                                           "--control-port", "0", "--connect", urls])
         assert flown.exit_code == 0, flown.output
     assert "all vehicles finished their missions" in flown.stdout
