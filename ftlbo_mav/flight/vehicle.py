@@ -339,14 +339,21 @@ class FlightVehicle:
                                   f"refused for {budget_s:g} s (last: {why})")
             time.sleep(retry_s)
 
-    def takeoff(self, alt_m: float) -> None:
-        result = self.command(R.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, alt_m, step="takeoff")
-        # a resend refused because the first try was taken and its ACK lost (a radio):
-        # ArduCopter refuses a takeoff once off the ground (ArduCopter/takeoff.cpp
-        # Mode::do_user_takeoff, ``!copter.ap.land_complete``); climbing, it is taking off
-        if result != R.MAV_RESULT_ACCEPTED and not self.wait_for(
-                lambda s: s.alt_m > 0.3 or s.climb_m_s > 0.2, 1.0):
-            raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
+    def takeoff(self, alt_m: float, *, tries: int = 3, retry_s: float = 0.5) -> None:
+        """NAV_TAKEOFF, tried again a few times when refused while still on the ground
+        (through a lossy radio the arm or the mode before it can still be on its way)."""
+        for attempt in range(tries):
+            result = self.command(R.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, alt_m,
+                                  step="takeoff")
+            # a resend refused because the first try was taken and its ACK lost:
+            # ArduCopter refuses a takeoff once off the ground (ArduCopter/takeoff.cpp
+            # Mode::do_user_takeoff, ``!copter.ap.land_complete``); climbing, it is taking off
+            if result == R.MAV_RESULT_ACCEPTED or self.wait_for(
+                    lambda s: s.alt_m > 0.3 or s.climb_m_s > 0.2, 1.0):
+                return
+            if attempt + 1 < tries:
+                time.sleep(retry_s)
+        raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
 
     def read_param(self, name: str, *, timeout_s: float = 1.0, retries: int = 2) -> float | None:
         """A parameter's value (PARAM_REQUEST_READ -> PARAM_VALUE), None if unanswered."""
