@@ -25,7 +25,6 @@ import contextlib
 import json
 import os
 import shutil
-import socket
 import sys
 import tempfile
 import time
@@ -55,6 +54,7 @@ from ftlbo_mav.mission.export import write_plan
 from ftlbo_mav.planning.planner import plan
 from ftlbo_mav.scenario import load_scenario
 from ftlbo_mav.sim.homes import scenario_homes
+from tests.integration.fleet import free_udp_port
 
 EXAMPLE = ROOT / "missions" / "nha-trang-orchard.toml"
 STRATEGIES = ("naive", "fly --no-keeper", "fly")
@@ -198,7 +198,7 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
     ``radio`` (:class:`~ftlbo_mav.sim.radio.RadioOptions`): every vehicle behind one radio
     (SITL: the router, sim/router.py; the emulator: its shared link), seeded by ``seed``."""
     planned = load_planned_flight(plan_dir)
-    udp_out = ("127.0.0.1", _free_udp_port()) if radio is not None else None
+    udp_out = ("127.0.0.1", free_udp_port()) if radio is not None else None
     if binary:
         from sitl import SitlSwarm
 
@@ -243,11 +243,6 @@ class _Urls:
     urls: list
     radio: object | None
 
-
-def _free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def print_clearance(scenario: Path, rows: dict, *, binary: str | None) -> None:

@@ -95,27 +95,35 @@ RADIOS = {
 """Shared radios (``ftlbo-mav sim --radio``) the plans are uploaded through."""
 
 
+def _planned(tmp: Path):
+    """The example's and the ten-copter orchard's scenarios, each planned into a folder
+    of ``tmp``: ``(scenario, folder)``."""
+    from ftlbo_mav.mission.export import write_plan
+    from ftlbo_mav.planning.planner import plan
+    from ftlbo_mav.scenario import load_scenario
+
+    for source in (ROOT / "missions" / "nha-trang-orchard.toml",
+                   ROOT / "benchmarks" / "scenarios" / "orchard-ten-uavs.toml"):
+        scenario = load_scenario(source)
+        folder = tmp / source.stem
+        write_plan(plan(scenario), folder)
+        yield scenario, folder
+
+
 def through_radio(runs: int) -> list[dict]:
     """The whole ``upload`` (mission, fence, rally points, fence and [vehicle] parameters,
     each read back and verified) of a plan's 3 and 10 copters through one emulated radio
     (sim/radio.py), at the vehicles' real time: median and worst seconds."""
     from ftlbo_mav.link.commands import mission_files, plan_vehicle_params
-    from ftlbo_mav.mission.export import write_plan
     from ftlbo_mav.mission.fence_files import read_fence_set
     from ftlbo_mav.mission.waypoints import read_waypoints
-    from ftlbo_mav.planning.planner import plan
-    from ftlbo_mav.scenario import load_scenario
     from ftlbo_mav.sim.homes import scenario_homes
     from ftlbo_mav.sim.radio import parse_radio
     from tests.integration.fleet import free_udp_port
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for source in (ROOT / "missions" / "nha-trang-orchard.toml",
-                       ROOT / "benchmarks" / "scenarios" / "orchard-ten-uavs.toml"):
-            scenario = load_scenario(source)
-            folder = Path(tmp) / source.stem
-            write_plan(plan(scenario), folder)
+        for scenario, folder in _planned(Path(tmp)):
             files = mission_files(folder)
             params = plan_vehicle_params(folder)
             assignments = [Assignment(f.stem, k + 1, tuple(read_waypoints(f)),
@@ -148,19 +156,12 @@ def flying_through_radio(runs: int, speedup: float) -> list[dict]:
     from benchmarks.flight import fly_fresh
     from ftlbo_mav.errors import BadInput
     from ftlbo_mav.link.budget import choose
-    from ftlbo_mav.mission.export import write_plan
-    from ftlbo_mav.planning.planner import plan
-    from ftlbo_mav.scenario import load_scenario
     from ftlbo_mav.sim.homes import scenario_homes
     from ftlbo_mav.sim.radio import parse_radio
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for source in (ROOT / "missions" / "nha-trang-orchard.toml",
-                       ROOT / "benchmarks" / "scenarios" / "orchard-ten-uavs.toml"):
-            scenario = load_scenario(source)
-            folder = Path(tmp) / source.stem
-            write_plan(plan(scenario), folder)
+        for scenario, folder in _planned(Path(tmp)):
             for name, spec in RADIOS.items():
                 flights = []
                 try:

@@ -53,6 +53,19 @@ def free_udp_port() -> int:
 
 
 @contextmanager
+def _behind(fleet: Fleet, radio, *, seed: int, speedup: float):
+    """``fleet``'s TCP vehicles behind one :class:`RadioRouter` of ``radio`` (its
+    ``udp_url`` and ``radio`` set), or as they are when ``radio`` is None."""
+    if radio is None:
+        yield
+        return
+    with RadioRouter(fleet.urls, ("127.0.0.1", free_udp_port()), radio, seed=seed,
+                     time_scale=speedup) as r:
+        fleet.udp_url, fleet.radio = r.udp_url, r.radio
+        yield
+
+
+@contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
              shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0,
              params: dict[str, float] | None = None, radio=None, router: bool = False):
@@ -79,12 +92,7 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
                 serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
                 fleet = Fleet(urls=swarm.urls, serial1_urls=serial1,
                               kill=lambda i: swarm.processes[i].kill())
-                if radio is None:
-                    yield fleet
-                    return
-                with RadioRouter(swarm.urls, ("127.0.0.1", free_udp_port()), radio, seed=seed,
-                                 time_scale=speedup) as r:
-                    fleet.udp_url, fleet.radio = r.udp_url, r.radio
+                with _behind(fleet, radio, seed=seed, speedup=speedup):
                     yield fleet
         finally:
             os.unlink(extra.name)
@@ -100,10 +108,5 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
             sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
         fleet = Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
                       serial1_urls=sim.serial1_urls, kill=sim.kill, radio=sim.radio)
-        if radio is None or own_radio:
-            yield fleet
-            return
-        with RadioRouter(sim.urls, ("127.0.0.1", free_udp_port()), radio, seed=seed,
-                         time_scale=speedup) as r:
-            fleet.udp_url, fleet.radio = r.udp_url, r.radio
+        with _behind(fleet, None if own_radio else radio, seed=seed, speedup=speedup):
             yield fleet
