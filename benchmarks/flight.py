@@ -149,7 +149,8 @@ def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None, *,
                 keeper.trace = []
             try:
                 fly(planned, fleet.vehicles, options=options, timing=Timing(),
-                    say=lambda _t: None, tick=lambda: None, keeper=keeper)
+                    say=lambda t: print(f"    {t}", file=sys.stderr), tick=lambda: None,
+                    keeper=keeper)
             except FlightLeftPlan as exc:  # measured all the same, and said
                 left = str(exc)
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)

@@ -39,9 +39,9 @@ def test_plan_writes_one_mission_per_uav_and_plan_json(small_path, tmp_path):
         file = out / uav["mission_file"]
         items = read_waypoints(file)
         assert mavwp.MAVWPLoader().load(str(file)) == len(items)
-        # home, takeoff, start, 4 waypoints, goal, land
-        assert len(items) == 1 + 1 + 6 + 1
-        flown = [(i.lat_deg, i.lon_deg, i.alt_m) for i in items[2:-1]]
+        # home, takeoff, start, its gate, 4 waypoints, goal, land
+        assert len(items) == 1 + 1 + 1 + 6 + 1 and items[3].name == "DELAY"
+        flown = [(i.lat_deg, i.lon_deg, i.alt_m) for i in items[2:-1] if i.name != "DELAY"]
         listed = [(p["lat"], p["lon"], p["alt"]) for p in uav["waypoints"]]
         assert np.allclose(flown, listed, atol=1e-6)
         # the UAV's first point is the centroid start plus its offset

@@ -115,7 +115,8 @@ def test_plan_json_reports_every_leg_and_the_total(tmp_path):
         items = read_waypoints(out / uav["mission_file"])
         names = [i.name for i in items]
         assert names.count("TAKEOFF") == 1 and names.count("LAND") == 1
-        assert names[-1] == "LAND" and len(items) == 2 + len(doc["centroid"]) + 1
+        # home, takeoff, every point, the start gate, the landing
+        assert names[-1] == "LAND" and len(items) == 2 + len(doc["centroid"]) + 1 + 1
     # read back (ftlbo-mav plot): the legs, the via points
     again = read_plan(out)
     assert [g.waypoints for g in again.legs] == [g["waypoints"] for g in legs]

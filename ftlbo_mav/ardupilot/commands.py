@@ -121,7 +121,7 @@ NAV_LAST = R.MAV_CMD_NAV_LAST  # 95: commands below are navigation commands (AP_
 MISSION_COMMAND_NAMES = {
     R.MAV_CMD_NAV_TAKEOFF: "Takeoff", R.MAV_CMD_NAV_WAYPOINT: "WP", R.MAV_CMD_NAV_LAND: "Land",
     R.MAV_CMD_NAV_RETURN_TO_LAUNCH: "RTL", R.MAV_CMD_NAV_LOITER_UNLIM: "LoitUnlim",
-    R.MAV_CMD_DO_CHANGE_SPEED: "ChangeSpeed",
+    R.MAV_CMD_DO_CHANGE_SPEED: "ChangeSpeed", R.MAV_CMD_NAV_DELAY: "Delay",
 }
 
 
@@ -135,3 +135,60 @@ def mission_started(seq: int, command: int) -> tuple[int, str] | None:
 def reached_command(seq: int) -> tuple[int, str]:
     """ModeAuto::verify_nav_wp, once a waypoint is reached: "Reached command #N"."""
     return (R.MAV_SEVERITY_INFO, f"Reached command #{seq}")
+
+
+DAY_MS = 86_400_000
+
+
+def time_until_utc_ms(hour: int, minute: int, second: int, ms: int, utc_ms: int) -> int:
+    """AP_RTC::get_time_utc (libraries/AP_RTC/AP_RTC.cpp): milliseconds from ``utc_ms``
+    (the vehicle's clock, ms since the Unix epoch) until the time of day given by the
+    fields that are not -1. The largest field given sets the period it wraps in: a time
+    already past is the next one (``second`` alone: within the minute; ``minute``: the
+    hour; ``hour``: the day), and the same second as now is a whole period away."""
+    if hour != -1:
+        largest = 4
+    elif minute != -1:
+        largest = 3
+    elif second != -1:
+        largest = 2
+    elif ms != -1:
+        largest = 1
+    else:
+        return 0
+    day = utc_ms % DAY_MS
+    cur_hour, rest = divmod(day, 3_600_000)
+    cur_min, rest = divmod(rest, 60_000)
+    cur_sec, cur_ms = divmod(rest, 1000)
+    total = ms - cur_ms
+    for level, value, current, unit, period in (
+            (1, None, None, 0, 1000), (2, second, cur_sec, 1000, 60_000),
+            (3, minute, cur_min, 60_000, 3_600_000), (4, hour, cur_hour, 3_600_000, DAY_MS)):
+        if level > largest:
+            break
+        if value is not None:
+            total += (value - current) * unit
+        if level == largest and total < 0:
+            return total + period
+    return total % 2**32  # static_cast<uint32_t>
+
+
+def nav_delay_ms(item, utc_ms: int | None) -> int:
+    """How long ArduCopter holds at a NAV_DELAY mission item (ModeAuto::do_nav_delay,
+    ArduCopter/mode_auto.cpp): ``param1`` > 0 seconds from when the item starts, else
+    until the UTC time of day in ``param2``-``param4`` (hour, minute, second; -1: not
+    given; stored as int8, :mod:`.storage`), by the vehicle's clock (AP_RTC, set from
+    its GPS): :func:`time_until_utc_ms` with 0 ms. Without a clock (``utc_ms`` None: no GPS
+    time yet) 0. Every field -1 holds until the next whole second. The item ends on the
+    first loop after that many ms (verify_nav_delay: ``millis() - start > max``)."""
+    if item.param1 > 0:
+        return int(item.param1 * 1000) % 2**32
+    if utc_ms is None:
+        return 0
+    return time_until_utc_ms(int(item.param2), int(item.param3), int(item.param4), 0, utc_ms)
+
+
+def delaying(ms: int) -> tuple[int, str]:
+    """ModeAuto::do_nav_delay's announcement: "Delaying N sec" (whole seconds, rounded
+    down)."""
+    return (R.MAV_SEVERITY_INFO, f"Delaying {ms // 1000} sec")

@@ -84,14 +84,21 @@ def reschedule_interval_s(interval_s: float, slowdown_ms: int) -> float:
     return min(interval_s + slowdown_ms / 1000.0, 60.0)
 
 
+CLOCK_HZ = 1.0
+"""SYSTEM_TIME (the vehicle's UTC clock, AP_RTC, beside its boot clock) during a flight:
+the timed start of the legs is set by it (:mod:`ftlbo_mav.flight.launch`)."""
+
+
 def flight_streams(position_hz: float, status_hz: float = 2.0) -> dict[int, float]:
     """A flight's needs: readiness, the position at ``position_hz``, the current item and
     the EKF's health (the navigation budget is watched on GPS_RAW_INT and it), these at
-    ``status_hz`` (a slow shared radio: less, :mod:`ftlbo_mav.link.budget`)."""
+    ``status_hz`` (a slow shared radio: less, :mod:`ftlbo_mav.link.budget`), and the
+    vehicle's clock at :data:`CLOCK_HZ`."""
     return {R.MAVLINK_MSG_ID_SYS_STATUS: status_hz, R.MAVLINK_MSG_ID_GPS_RAW_INT: status_hz,
             R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT: position_hz,
             R.MAVLINK_MSG_ID_MISSION_CURRENT: status_hz,
-            R.MAVLINK_MSG_ID_EKF_STATUS_REPORT: status_hz}
+            R.MAVLINK_MSG_ID_EKF_STATUS_REPORT: status_hz,
+            R.MAVLINK_MSG_ID_SYSTEM_TIME: CLOCK_HZ}
 
 
 def message_name(msgid: int) -> str:

@@ -141,6 +141,7 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                              "link_gaps": keeper.log.link_gaps,
                              "rough_link_s": round(keeper.log.rough_s, 1),
                              "worst_jitter_s": round(keeper.log.worst_jitter_s, 3),
+                             "worst_gap_s": round(keeper.log.worst_gap_s, 2),
                              "vehicles": keeper.log.as_dict(planned.names)}
     # fly asked for AUTOPILOT_VERSION at its pre-flight
     if any(v.status.firmware_version is not None for v in monitor.vehicles):
@@ -251,8 +252,9 @@ def _print_summary(summary: dict, out_dir: Path) -> None:
                                            else "no vehicle needed to wait") + (
             f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else "")
             + (f"; no pauses for {keeper['rough_link_s']:.0f} s: the link's delays varied by "
-               f"up to {keeper['worst_jitter_s']:.2f} s, too much to time one"
-               if keeper.get("rough_link_s") else ""))
+               f"up to {keeper['worst_jitter_s']:.2f} s and its reports stopped for up to "
+               f"{keeper.get('worst_gap_s', 0.0):.1f} s (a pause could not be timed or "
+               "undone)" if keeper.get("rough_link_s") else ""))
     link = summary.get("link") or {}
     measured = link.get("measured") or {}
     if measured.get("total") is not None:

@@ -24,7 +24,14 @@ from ..link.transfer import Timing
 from .departures import WatchOptions
 from .fleet import Fleet, concurrently
 from .keeper import FormationKeeper, KeeperOptions, planned_speed
-from .launch import align_at_start, first_leg, start_together, take_off, takeoff_item
+from .launch import (
+    align_at_start,
+    first_leg,
+    restore_gates,
+    start_together,
+    take_off,
+    takeoff_item,
+)
 from .outcome import FlightLeftPlan, abort, aborted
 from .planned import PlannedFlight
 from .policy import FaultPolicy
@@ -117,6 +124,7 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     fw = FlightWatch(planned, vehicles, say=say, on_event=on_event, options=options.watch,
                      budget_s=options.departure_budget_s, lost_wait_s=options.lost_wait_s,
                      policy=FaultPolicy.LAND if policy is FaultPolicy.CONTINUE else policy)
+    gates_written = False
     try:
         try:
             fw.expect("GUIDED")
@@ -124,7 +132,9 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
             align_at_start(planned, vehicles, options, say, poll=fw.check)
             say("all hovering at their start points: starting the missions together")
             fw.expect("AUTO")
-            started = start_together(planned, vehicles)
+            gates_written = True
+            started = start_together(planned, vehicles, say=say, poll=fw.check,
+                                     timing=timing)
         except LeftPlan:
             raise fw.until_ended(tick=tick) from None
         except FlightError as exc:  # a vehicle refused or could not be reached
@@ -148,6 +158,7 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
         watch_abort(vehicles, timeout_s=min(options.flight_timeout_s, 60.0), tick=tick)
         raise
     except KeyboardInterrupt:
+        gates_written = False  # out at once; the next flight writes its own time
         ours = [v for i, v in enumerate(vehicles) if i not in fw.response.chose]
         late = abort(ours, mode=options.abort_mode)
         say(f"interrupted: every vehicle sent to {options.abort_mode}"
@@ -156,3 +167,20 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
                f"{', '.join(v.name for v in vehicles if v not in ours)}"
                if len(ours) < len(vehicles) else ""))
         raise
+    finally:
+        if gates_written:
+            _restore_gates(planned, vehicles, say)
+
+
+def _restore_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
+                   say: Callable[[str], None]) -> None:
+    """The start gates back to the plan's placeholder on every vehicle that has landed
+    (disarmed: a mission changed under a copter flying AUTO restarts its leg,
+    ModeAuto::run's mis_change_detector)."""
+    left = [f"{v.name}: still armed" for v in vehicles if v.status.armed]
+    left += restore_gates(planned, vehicles,
+                          [i for i, v in enumerate(vehicles) if not v.status.armed])
+    if left:
+        say("start time left in the mission of " + "; ".join(left) + " (the next flight "
+            "writes its own; flown by another ground station it holds up to a minute at "
+            "its start)")

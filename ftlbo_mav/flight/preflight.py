@@ -18,6 +18,7 @@ from ..link.codec import mission_differences
 from ..link.endpoints import is_ready, readiness_problems
 from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
+from .launch import gate_as_onboard
 from ..link.params import read_vehicle_params
 from ..link.transfer import Timing
 from .battery import preflight_problem as battery_preflight
@@ -109,7 +110,7 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
         except FtlboError as exc:
             return [f"cannot read its mission or fence back: {exc}"]
         why = []
-        diff = mission_differences(expected, onboard)
+        diff = mission_differences(gate_as_onboard(expected, onboard, planned.frame), onboard)
         if diff:
             why.append(f"holds a different mission than {vehicle.name}.waypoints "
                        f"({diff[0]}); run `ftlbo-mav upload` first")

@@ -151,6 +151,10 @@ class FlightRecord:
         """
         per = [self.of(s) for s in sysids]
         when = [sample_times(p) for p in per]
+        # in the order they were taken (a link may deliver one late)
+        order = [np.argsort(w, kind="stable") for w in when]
+        per = [[p[k] for k in o] for p, o in zip(per, order)]
+        when = [w[o] for w, o in zip(when, order)]
         if any(len(p) < 2 for p in per):
             return np.zeros(0), np.zeros((0, len(sysids), 3)), np.zeros((0, len(sysids)), int)
         start = max(w[0] for w in when)
@@ -192,7 +196,10 @@ def fitted_times(t: np.ndarray, boot: np.ndarray) -> np.ndarray:
     be used."""
     t = np.asarray(t, float)
     boot = np.asarray(boot, float)
-    if len(t) < 3 or not np.all(np.isfinite(boot)) or np.any(np.diff(boot) <= 0):
+    # stamps that go back by seconds: a reboot, not one clock (a report delivered late
+    # goes back a fraction of a second and is fitted like the others)
+    if len(t) < 3 or not np.all(np.isfinite(boot)) or np.any(np.diff(boot) < -1.0) or (
+            np.ptp(boot) <= 0):
         return t
     b, _a = np.polyfit(boot, t, 1)
     if not b > 0:

@@ -26,6 +26,8 @@ from ..link.endpoints import LinkError
 from ..link.firmware import version_request
 from .navigation import report_jump
 
+GAP_REPORTS = 400  # 40 s of positions at 10 Hz
+REBOOT_BACK_S = 5.0  # a position report this much older than the last: the vehicle rebooted
 CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
 CLOCK_REPORTS = 20  # a report's time is judged against the least delayed of this many
 DELAY_REPORTS = 50  # a link's delays are judged over this many reports (5 s at 10 Hz)
@@ -88,6 +90,9 @@ class Status:
     # vehicle's seconds), the last DELAY_REPORTS: how much a link's latency varies
     delays: deque = field(default_factory=lambda: deque(maxlen=DELAY_REPORTS))
     _rate_since: tuple[float, float] | None = None  # (ground, vehicle) seconds
+    # silences between position reports: (arrival, seconds since the one before, both
+    # ground), the last GAP_REPORTS
+    gaps: deque = field(default_factory=lambda: deque(maxlen=GAP_REPORTS))
     heartbeat_t: float = 0.0
     heard_t: float = 0.0  # the last message of any kind from the vehicle
     # every STATUSTEXT as (arrival time, severity, text), the last 50; text_count counts
@@ -111,6 +116,29 @@ class Status:
     vehicle_type: int | None = None
     autopilot: int | None = None
     firmware_version: int | None = None
+    # SYSTEM_TIME: its UTC clock (AP_RTC, from its GPS) less its boot clock, seconds;
+    # None until it has one
+    utc_offset_s: float | None = None
+
+    def vehicle_now(self, now: float) -> float | None:
+        """Its boot clock at ground time ``now`` (seconds; None before a position report)."""
+        if self.clock_offset_s is None:
+            return None
+        return (now - self.clock_offset_s) * self.clock_rate
+
+    def utc_now(self, now: float) -> float | None:
+        """Its UTC clock at ground time ``now`` (seconds since the epoch), or None."""
+        boot = self.vehicle_now(now)
+        return None if boot is None or self.utc_offset_s is None else boot + self.utc_offset_s
+
+    def longest_gap_s(self, now: float, window_s: float) -> float:
+        """The longest silence between position reports in the last ``window_s`` of the
+        vehicle's seconds (and the one going on now), in its seconds."""
+        rate = self.clock_rate
+        since = now - window_s / rate
+        past = [gap for t, gap in self.gaps if t >= since]
+        current = now - self.position_t if self.position_t else 0.0
+        return max([current, *past]) * rate
 
     def jitter_s(self) -> float | None:
         """The 90th percentile of the recent reports' delays beyond the least delayed
@@ -182,13 +210,18 @@ class FlightVehicle:
             elif kind == "AUTOPILOT_VERSION":
                 s.firmware_version = int(msg.flight_sw_version)
             elif kind == "GLOBAL_POSITION_INT":
+                boot_s = msg.time_boot_ms / 1000.0
+                if (s.clock_offset_s is not None
+                        and s.position_boot_s - REBOOT_BACK_S < boot_s <= s.position_boot_s):
+                    return  # older than one already had (a link that reorders): no news
                 s.lat_deg, s.lon_deg = msg.lat * 1e-7, msg.lon * 1e-7
                 s.alt_m = msg.relative_alt / 1000.0
                 s.climb_m_s = -msg.vz / 100.0
                 s.ground_speed_m_s = (msg.vx ** 2 + msg.vy ** 2) ** 0.5 / 100.0
                 s.velocity_enu = (msg.vy / 100.0, msg.vx / 100.0, -msg.vz / 100.0)
+                if s.position_t:
+                    s.gaps.append((now, now - s.position_t))
                 s.position_t = now
-                boot_s = msg.time_boot_ms / 1000.0
                 if s.clock_offset_s is None or boot_s < s.position_boot_s:
                     s._rate_since = (now, boot_s)  # first report, or the vehicle rebooted
                     s._recent.clear()
@@ -210,6 +243,11 @@ class FlightVehicle:
                 s.gps_raw = msg
             elif kind == "EKF_STATUS_REPORT":
                 s.ekf_raw = msg
+            elif kind == "SYSTEM_TIME":
+                # its UTC clock (AP_RTC) against its boot clock, sent together: 0 until
+                # its GPS gave it a time
+                s.utc_offset_s = (msg.time_unix_usec / 1e6 - msg.time_boot_ms / 1000.0
+                                  if msg.time_unix_usec else None)
             elif kind == "SYS_STATUS":
                 s.battery_pct = None if msg.battery_remaining < 0 else int(msg.battery_remaining)
                 s.battery_current_a = max(msg.current_battery, 0) / 100.0

@@ -356,8 +356,11 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
         trace.append(("inputs", time.monotonic(), vehicle_now, arrived.tolist(), age.tolist(),
                       [s.position_boot_s for s in st], positions.tolist()))
     jitters = [j for s in st if (j := s.jitter_s()) is not None]
+    now = time.monotonic()
+    gap = max(s.longest_gap_s(now, keeper.options.gap_memory_s) for s in st)
     sent = keeper.update(positions, speeds, vehicle_now, ages_s=arrived,
-                         jitter_s=max(jitters) if len(jitters) == len(st) else None)
+                         jitter_s=max(jitters) if len(jitters) == len(st) else None,
+                         gap_s=gap)
     if trace is not None and sent:
         trace.append(("sent", time.monotonic(), vehicle_now, {int(i): p for i, p in sent.items()}))
     for i, pause in sent.items():

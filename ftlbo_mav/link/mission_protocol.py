@@ -45,7 +45,8 @@ from .transfer import (  # re-exported: the protocol's public names live here
 
 __all__ = [
     "RESULT_TEXT", "Clear", "Download", "MissionTransferError", "Progress", "Timing", "Upload",
-    "clear_mission", "describe_result", "download_mission", "run_transfer", "upload_mission",
+    "clear_mission", "describe_result", "download_mission", "read_items", "run_transfer",
+    "upload_mission", "write_items",
 ]
 
 CAPACITY_TEXT = re.compile(r"Only (\d+) items are supported")
@@ -56,15 +57,20 @@ class Upload(_Transfer):
 
     ``acknowledged`` is False when the upload ended without the vehicle's ACCEPTED
     (see the module notes): only the read-back can then tell. ``highest`` is the highest
-    item the vehicle asked for (-1: it never asked for one).
+    item the vehicle asked for (-1: it never asked for one), counted from the first sent.
+
+    ``first``: replace the stored items from this seq on, in place, instead of the whole
+    mission (MISSION_WRITE_PARTIAL_LIST; MissionItemProtocol::handle_mission_write_partial_list
+    asks for them as for an upload); ``items`` are then those items, with their seqs.
     """
 
     step = "upload"
 
-    def __init__(self, items: Sequence[MissionItem], **kw):
+    def __init__(self, items: Sequence[MissionItem], *, first: int | None = None, **kw):
         super().__init__(**kw)
         if not items:
             raise ValueError("an upload needs at least one item")
+        self.first = first
         self.items = list(items)
         self.n = len(self.items)
         self.highest = -1
@@ -84,6 +90,10 @@ class Upload(_Transfer):
         self.count_sent_at = now
         self.count_sends += 1
         self.deadline = now + self._resend_s()
+        if self.first is not None:
+            return [R.MAVLink_mission_write_partial_list_message(
+                self.sysid, self.compid, self.first, self.first + self.n - 1,
+                self.mission_type)]
         return [R.MAVLink_mission_count_message(self.sysid, self.compid, self.n,
                                                 self.mission_type)]
 
@@ -105,7 +115,7 @@ class Upload(_Transfer):
         if not self._ours(msg):
             return []
         if kind in ("MISSION_REQUEST", "MISSION_REQUEST_INT"):
-            return self._on_request(msg.seq, now)
+            return self._on_request(msg.seq - (self.first or 0), now)
         if kind == "MISSION_ACK":
             return self._on_ack(msg.type, now)
         if kind == "STATUSTEXT":
@@ -208,12 +218,14 @@ item (through a shared radio, 60 ms each way, 8 items took 1.7 s)."""
 
 class Download(_Transfer):
     """MISSION_REQUEST_LIST, then MISSION_REQUEST_INT for the items, :data:`READ_WINDOW`
-    at once, then ACK ACCEPTED."""
+    at once, then ACK ACCEPTED. ``only``: just these seqs, without the count or the ACK
+    (:attr:`items` then has them in that order)."""
 
     step = "read-back"
 
-    def __init__(self, **kw):
+    def __init__(self, *, only: Sequence[int] | None = None, **kw):
         super().__init__(**kw)
+        self.only = None if only is None else list(only)
         # a window of its own: READ_WINDOW shared among the vehicles on the link
         self.window = max(1, min(READ_WINDOW, READ_ON_LINK // self.sharing))
         self.count: int | None = None
@@ -224,10 +236,15 @@ class Download(_Transfer):
         self.resent = False
         self.started_at = 0.0
         self.waiting_ready = False
+        if self.only is not None:
+            self.count = max(self.only) + 1
+            self.got = {seq: None for seq in range(self.count) if seq not in self.only}
 
     @property
     def items(self) -> list[MissionItem]:
         """The items received so far, in order, up to the first one missing."""
+        if self.only is not None:
+            return [self.got[seq] for seq in self.only if seq in self.got]
         out = []
         while len(out) in self.got:
             out.append(self.got[len(out)])
@@ -255,6 +272,8 @@ class Download(_Transfer):
 
     def _finish(self) -> list:
         self.finished = True
+        if self.only is not None:
+            return []
         return [R.MAVLink_mission_ack_message(self.sysid, self.compid, R.MAV_MISSION_ACCEPTED,
                                               self.mission_type)]
 
@@ -370,6 +389,26 @@ def upload_mission(channel, items: Sequence[MissionItem], *, timing: Timing | No
     machine = run_transfer(Upload(items, **_kw(channel, timing, progress, compid, mission_type)),
                            channel)
     return machine.acknowledged
+
+
+def write_items(channel, items: Sequence[MissionItem], *, timing: Timing | None = None,
+                compid: int = 1) -> bool:
+    """Replace stored mission items in place (``items``: consecutive, with their seqs;
+    MISSION_WRITE_PARTIAL_LIST), as :func:`upload_mission`: True when ACKed ACCEPTED.
+    Confirm with :func:`read_items`."""
+    first = items[0].seq
+    if [it.seq for it in items] != list(range(first, first + len(items))):
+        raise ValueError("write_items needs consecutive items")
+    machine = run_transfer(Upload(items, first=first, **_kw(channel, timing, None, compid)),
+                           channel)
+    return machine.acknowledged
+
+
+def read_items(channel, seqs: Sequence[int], *, timing: Timing | None = None,
+               compid: int = 1) -> list[MissionItem]:
+    """The stored mission items ``seqs``, read back (MISSION_REQUEST_INT each)."""
+    machine = Download(only=seqs, **_kw(channel, timing, None, compid))
+    return run_transfer(machine, channel).items
 
 
 def download_mission(channel, *, timing: Timing | None = None, progress: Progress | None = None,

@@ -22,6 +22,7 @@ CMD_NAV_LOITER_UNLIM = 17
 CMD_NAV_RETURN_TO_LAUNCH = 20
 CMD_NAV_LAND = 21
 CMD_NAV_TAKEOFF = 22
+CMD_NAV_DELAY = 93
 CMD_DO_CHANGE_SPEED = 178
 CMD_DO_SET_CAM_TRIGG_DIST = 206
 # fence and rally items (mission_type FENCE / RALLY; their storage: ardupilot/fence.py)
@@ -35,6 +36,7 @@ COMMAND_NAMES = {
     CMD_NAV_RETURN_TO_LAUNCH: "RETURN_TO_LAUNCH",
     CMD_NAV_LAND: "LAND",
     CMD_NAV_TAKEOFF: "TAKEOFF",
+    CMD_NAV_DELAY: "DELAY",
     CMD_DO_CHANGE_SPEED: "DO_CHANGE_SPEED",
     CMD_DO_SET_CAM_TRIGG_DIST: "DO_SET_CAM_TRIGG_DIST",
     CMD_FENCE_POLYGON_VERTEX_INCLUSION: "FENCE_POLYGON_VERTEX_INCLUSION",
@@ -113,8 +115,9 @@ def build_mission(
     relative to home.
 
     Items, in order: 0 home (frame 0, current=1, as Mission Planner writes it),
-    NAV_TAKEOFF to ``takeoff_alt_m``, one NAV_WAYPOINT per path point (with a
-    DO_CHANGE_SPEED after the first, the start point, when ``speed_m_s`` is given), then
+    NAV_TAKEOFF to ``takeoff_alt_m``, one NAV_WAYPOINT per path point (after the first,
+    the start point, the start gate :func:`start_gate` and, when ``speed_m_s`` is given,
+    a DO_CHANGE_SPEED), then
     NAV_LAND at the goal, RTL, or NAV_LOITER_UNLIM at the goal for ``end_action`` "land",
     "rtl" or "loiter". ``holds_s``: per path point the whole seconds the copter holds
     there (NAV_WAYPOINT param1: ArduCopter stops at such a waypoint instead of rounding
@@ -149,11 +152,12 @@ def build_mission(
                           param1=hold))
         items += after.get(k, [])
     if speed_m_s is not None:
-        # After the start point, before the first leg: a mission started there (fly's
-        # synchronized start) runs it as it begins, and ModeAuto::init would forget a
-        # speed given before AUTO. param1 = 1: ground speed; param3 = -1: throttle unchanged.
+        # After the start gate, before the first leg: it runs as the legs begin, and
+        # ModeAuto::init would forget a speed given before AUTO. param1 = 1: ground
+        # speed; param3 = -1: throttle unchanged.
         items.insert(3, dict(command=CMD_DO_CHANGE_SPEED, param1=1.0, param2=speed_m_s,
                              param3=-1.0))
+    items.insert(3, start_gate())
     lat_f, lon_f, alt_f = path[-1]
     if end_action == "land":
         items.append(dict(command=CMD_NAV_LAND, lat_deg=lat_f, lon_deg=lon_f, alt_m=0.0))
@@ -164,6 +168,20 @@ def build_mission(
     else:
         raise ValueError(f"unknown end action {end_action!r}")
     return [MissionItem(seq=i, **fields) for i, fields in enumerate(items)]
+
+
+def start_gate(hms: tuple[int, int, int] | None = None) -> dict:
+    """The NAV_DELAY after the start point, where ``fly`` starts AUTO: the legs begin
+    when the vehicle's clock (GPS time) reads ``hms`` (hour, minute, second UTC; -1: not
+    given), the same instant for every copter however late its AUTO came through the
+    radio (:func:`ftlbo_mav.ardupilot.commands.nav_delay_ms`). As planned (``hms`` None)
+    every field is -1: the copter holds until the next whole second of GPS time (less
+    than a second; without GPS time not at all), so the mission flies as before in any
+    ground station; ``fly`` writes its start second before the start and the placeholder
+    back after the flight."""
+    hour, minute, second = (-1, -1, -1) if hms is None else hms
+    return dict(command=CMD_NAV_DELAY, param1=-1.0, param2=float(hour),
+                param3=float(minute), param4=float(second))
 
 
 def mission_settings(items: Sequence[MissionItem]) -> tuple[str, float | None]:

@@ -124,6 +124,9 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self.boot = options.boot
         self.boot_time = boot_time
         self.time = boot_time
+        # the vehicle's clock (AP_RTC, from its GPS): UTC seconds = time + utc_offset_s;
+        # None: no GPS time (set by the vehicle, :class:`~ftlbo_mav.sim.vehicle.Vehicle`)
+        self.utc_offset_s: float | None = None
         self.position = np.zeros(3)
         self.velocity = np.zeros(3)
         self.mode = STABILIZE
@@ -398,6 +401,12 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             self.nav.param_speed_changed(self.params[name] / 100.0)
         return True
 
+    def utc_ms(self) -> int | None:
+        """AP_RTC::get_utc_usec in ms: the vehicle's UTC clock, None while it has none."""
+        if self.utc_offset_s is None:
+            return None
+        return int((self.time + self.utc_offset_s) * 1000)
+
     # -- mission execution
     def _start_nav(self, stopping_point: np.ndarray | None = None) -> None:
         """AC_WPNav::wp_and_spline_init at the copter's (stopped) position."""
@@ -534,7 +543,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             self._takeoff_step(dt, out)
         elif phase == "hover":
             self._hover_step(dt)
-        elif phase in ("wp", "land_fly", "goto", "rtl_climb", "rtl_return", "rtl_loiter"):
+        elif phase in ("wp", "land_fly", "nav_delay", "goto", "rtl_climb", "rtl_return",
+                       "rtl_loiter"):
             self._nav_step(dt, out)
         elif phase == "descend":
             self._descend_step(dt)
@@ -582,7 +592,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             self.position += self.gusts.step(dt, airspeed)
             self.velocity += self.gusts.error_vel
         self.position[2] = max(self.position[2], 0.0)
-        if self._phase in ("wp", "land_fly"):
+        if self._phase in ("wp", "land_fly", "nav_delay"):
             self._verify_auto_nav(out)
         elif self._phase.startswith("rtl_"):
             self._verify_rtl()

@@ -161,6 +161,22 @@ class MissionServer:
         self._item_warning_sent = self._request_warning_sent = False
         return self._request()
 
+    def _write_partial(self, msg, sender, now) -> list:  # handle_mission_write_partial_list
+        """Items ``start_index``..``end_index`` replaced in place, asked for one by one as
+        an upload's; no check for an upload under way (it is taken over)."""
+        count = len(self.items)
+        if (msg.start_index > count or msg.end_index > count
+                or msg.end_index < msg.start_index):
+            return [(EVERY_LINK, _text((R.MAV_SEVERITY_WARNING, "Flight plan update rejected")))
+                    ] + self._ack(sender, R.MAV_MISSION_ERROR)
+        self._new_fence = list(self.items)  # allocate_update_resources
+        self.receiving = True  # init_send_requests
+        self.request_i, self.request_last = msg.start_index, msg.end_index
+        self.dest, self.link = sender, self._incoming
+        self.timelast_receive = self.timelast_request = now
+        self._item_warning_sent = self._request_warning_sent = False
+        return self._request()
+
     def _item(self, msg, sender, now) -> list:
         if not self.receiving:  # GCS_Common.cpp GCS_MAVLINK::handle_mission_item
             return self._ack(sender, R.MAV_MISSION_ERROR)
@@ -306,6 +322,7 @@ class MissionServer:
 
 _HANDLERS = {
     "MISSION_COUNT": "_count",
+    "MISSION_WRITE_PARTIAL_LIST": "_write_partial",
     "MISSION_ITEM_INT": "_item",
     "MISSION_ITEM": "_item",
     "MISSION_REQUEST_LIST": "_request_list",

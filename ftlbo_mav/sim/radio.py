@@ -144,7 +144,9 @@ class SharedRadio:
             return None
         arrival = self.air_free + o.latency_s + (
             self.rng.uniform(-o.jitter_s, o.jitter_s) if o.jitter_s else 0.0)
-        arrival = max(arrival, self._last_arrival[direction])  # in order, each way
+        # in order, each way: strictly later than the last (frames due at one instant
+        # were delivered in any order by the event loop's timer heap)
+        arrival = max(arrival, self._last_arrival[direction] + 1e-6)
         self._last_arrival[direction] = arrival
         c.delivered[direction] += 1
         return arrival

@@ -317,9 +317,10 @@ class Simulator:
         def clock() -> float:
             return start + (loop.time() - start) * scale
 
+        utc_offset = time.time() - start  # one GPS time for all: the wall clock at start
         for i, home in enumerate(self.homes):
             v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
-                        boot_time=start)
+                        boot_time=start, utc_offset_s=utc_offset)
             if self.wind is not None and not self.wind.calm:
                 v.autopilot.gusts = Gusts(self.wind, np.random.default_rng([self.seed, 0x57, i]),
                                           nav=v.autopilot.nav_params())

@@ -18,6 +18,7 @@ ArduCopter 4.5.6 SITL: ``tests/data/ardupilot-4.5.6/boot.json``.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
@@ -129,7 +130,11 @@ class Vehicle:
     compid = R.MAV_COMP_ID_AUTOPILOT1
 
     def __init__(self, *, sysid: int, home: tuple[float, float, float],
-                 options: VehicleOptions = VehicleOptions(), boot_time: float = 0.0):
+                 options: VehicleOptions = VehicleOptions(), boot_time: float = 0.0,
+                 utc_offset_s: float | None = None):
+        """``utc_offset_s``: the UTC its GPS gives at ``now`` = 0 (its clock: UTC seconds =
+        now + offset); default the wall clock at its boot. Vehicles of one simulator share
+        one, as GPS receivers share GPS time."""
         self.sysid = sysid
         self.options = options
         self.boot_time = boot_time
@@ -156,6 +161,8 @@ class Vehicle:
         self.autopilot = Autopilot(home=(lat, lon), boot_time=boot_time,
                                    options=AutopilotOptions(boot=self.boot, limits=options.limits))
         self.autopilot.home_alt_m = alt
+        self.utc_offset_s = time.time() - boot_time if utc_offset_s is None else utc_offset_s
+        self.autopilot.utc_offset_s = self.utc_offset_s  # flies only after its GPS fix
         self.gps = GpsError(options.gps, self.autopilot.params, lat_deg=lat)
         self._ground_truth: np.ndarray | None = np.zeros(2)  # placed at its home, truly
         self.links: dict[Link, LinkState] = {}
@@ -514,6 +521,11 @@ class Vehicle:
             return R.MAVLink_ekf_status_report_message(flags, 0.01, 0.01, 0.01, 0.01, 0.0, 0.0)
         if msgid == R.MAVLINK_MSG_ID_SIM_STATE:
             return self.sim_state(now)
+        if msgid == R.MAVLINK_MSG_ID_SYSTEM_TIME:
+            # GCS_MAVLINK::send_system_time: AP_RTC's UTC (0 until its GPS gave a time)
+            utc_us = int((now + self.utc_offset_s) * 1e6) if fix else 0
+            return R.MAVLink_system_time_message(
+                utc_us, int((now - self.boot_time) * 1000) & 0xFFFFFFFF)
         if msgid == R.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
             return self.autopilot_version()
         if msgid == R.MAVLINK_MSG_ID_MISSION_CURRENT:

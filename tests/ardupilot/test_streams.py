@@ -19,7 +19,8 @@ def test_each_message_is_asked_for_at_its_interval():
     req.want(flight_streams(10.0))
     out = req.due(0.0)
     assert {m.param1 for m in out} == {1, GPS, POS, R.MAVLINK_MSG_ID_MISSION_CURRENT,
-                                       R.MAVLINK_MSG_ID_EKF_STATUS_REPORT}
+                                       R.MAVLINK_MSG_ID_EKF_STATUS_REPORT,
+                                       R.MAVLINK_MSG_ID_SYSTEM_TIME}
     pos = next(m for m in out if m.param1 == POS)
     assert pos.command == R.MAV_CMD_SET_MESSAGE_INTERVAL and pos.param2 == 100_000
     assert pos.target_system == 2 and req.due(0.5) == []

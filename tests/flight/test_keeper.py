@@ -183,6 +183,7 @@ def test_planned_speed_is_the_missions_or_unknown():
 
 def test_auto_starts_at_the_first_real_leg_and_keeps_the_cruise_speed():
     from ftlbo_mav.flight.fly import first_leg
+    from ftlbo_mav.flight.launch import start_gate
     from ftlbo_mav.geo import LocalFrame
     from ftlbo_mav.mission.items import build_mission
 
@@ -191,15 +192,19 @@ def test_auto_starts_at_the_first_real_leg_and_keeps_the_cruise_speed():
     path = [(12.2332099, 109.1145051, 4.0), (12.2332254, 109.1145969, 4.0),
             (12.2332408, 109.1146886, 4.0)]
     plain = build_mission(home=(12.2332099, 109.1145051), takeoff_alt_m=4.0, path=path)
-    assert [it.command for it in plain[:4]] == [16, 22, 16, 16]
-    assert first_leg(plain, frame) == (3, [])  # item 2 is the start point it hovers at
+    assert [it.command for it in plain[:5]] == [16, 22, 16, 93, 16]
+    assert first_leg(plain, frame) == (3, [])  # item 2 is the start point, 3 its gate
+    assert start_gate(plain, frame) == 3
     fast = build_mission(home=(12.2332099, 109.1145051), takeoff_alt_m=4.0, path=path,
                          speed_m_s=3.0)
-    assert [it.command for it in fast[:5]] == [16, 22, 16, 178, 16]
-    # AUTO starts at the DO_CHANGE_SPEED after the start point: the vehicle runs it itself
+    assert [it.command for it in fast[:6]] == [16, 22, 16, 93, 178, 16]
+    # AUTO starts at the gate; the DO_CHANGE_SPEED after it runs as the legs begin
     assert first_leg(fast, frame) == (3, [])
+    # without the gate (a mission of an earlier plan): at the DO_CHANGE_SPEED
+    ungated = [replace(it, seq=k) for k, it in enumerate(fast[:3] + fast[4:])]
+    assert first_leg(ungated, frame) == (3, []) and start_gate(ungated, frame) is None
     # another tool's mission, the speed before the start point: skipped, sent after AUTO
-    other = [fast[0], fast[1], fast[3], fast[2], *fast[4:]]
+    other = [ungated[0], ungated[1], ungated[3], ungated[2], *ungated[4:]]
     other = [replace(it, seq=k) for k, it in enumerate(other)]
     seq, speeds = first_leg(other, frame)
     assert seq == 4 and [(s.command, s.param2) for s in speeds] == [(178, 3.0)]
@@ -243,3 +248,15 @@ def test_no_pause_while_the_links_delays_vary_too_much_to_time_one():
     assert keeper.log.rough_s == pytest.approx(1.0) and keeper.log.worst_jitter_s == 0.3
     # the link settles: the lead is answered
     assert keeper.update(positions_at([6.1, 5.5, 5.5]), speeds, 1.1, jitter_s=0.08) == {0: True}
+
+
+def test_no_pause_while_the_link_has_lately_gone_silent():
+    """A link that went silent for more than ``max_gap_s`` lately can hold a paused copter
+    paused that long, its continues lost (SITL, rough-day radio: 2.1 m, a departure)."""
+    keeper = FormationKeeper(PATHS, CRUISE, options=ON)
+    speeds = np.full(3, 5.0)
+    keeper.update(positions_at([5.0, 5.0, 5.0]), speeds, 0.0, gap_s=1.0)
+    assert keeper.update(positions_at([5.6, 5.0, 5.0]), speeds, 1.0, gap_s=1.0) == {}
+    assert keeper.log.rough_s == pytest.approx(1.0) and keeper.log.worst_gap_s == 1.0
+    # short silences only (a frame or two lost): the lead is answered
+    assert keeper.update(positions_at([6.1, 5.5, 5.5]), speeds, 1.1, gap_s=0.3) == {0: True}

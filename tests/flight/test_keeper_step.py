@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ftlbo_mav.flight.keeper import KeeperOptions
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.vehicle import Status
 from ftlbo_mav.flight.watch import MAX_REPORT_DELAY_S, keep_formation
@@ -20,9 +21,10 @@ class SeenPositions:
     """A keeper that records what it is given."""
 
     active, pausing = True, False
+    options = KeeperOptions()
 
-    def update(self, positions, speeds, now, ages_s=None, jitter_s=None):
-        self.positions, self.jitter_s = positions, jitter_s
+    def update(self, positions, speeds, now, ages_s=None, jitter_s=None, gap_s=None):
+        self.positions, self.jitter_s, self.gap_s = positions, jitter_s, gap_s
         return {}
 
     def release(self, now=0.0):
@@ -71,3 +73,12 @@ def test_a_status_measures_each_reports_delay_beyond_the_least_delayed():
     assert s.jitter_s() is None
     s.delays.extend([0.0] * 18 + [0.3, 0.3])
     assert s.jitter_s() is not None and s.jitter_s() < 0.3
+
+
+def test_the_longest_silence_of_reports_is_in_the_vehicles_seconds():
+    s = Status(clock_rate=2.0)
+    s.gaps.extend([(100.0, 0.1), (101.0, 0.45), (108.0, 0.1)])
+    s.position_t = 108.0
+    assert s.longest_gap_s(108.05, window_s=20.0) == 0.9  # 0.45 s of ground time at 2x
+    assert s.longest_gap_s(108.05, window_s=10.0) == 0.2  # the long one is 14 s ago
+    assert s.longest_gap_s(109.0, window_s=1.0) == 2.0  # going on now: 1 s

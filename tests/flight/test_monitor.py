@@ -31,7 +31,7 @@ def test_lines_show_each_vehicle_and_the_group():
     lines = monitor.lines()
     assert len(lines) == 4
     assert lines[0].split()[:4] == ["uav1", "sysid", "1", "AUTO"]
-    assert "item 5/7" in lines[0] and "slot" in lines[0]
+    assert "item 5/8" in lines[0] and "slot" in lines[0]
     # uav2 0.6 m east of its slot: the centroid moves 0.2 m, its slot error is 0.4 m
     assert "slot  0.40 m" in lines[1]
     assert lines[3].startswith("formation error 0.28 m RMS")

@@ -65,14 +65,22 @@ class SecondPort:
         self.conn = mavutil.mavlink_connection(url, source_system=246,
                                                dialect="ardupilotmega", retries=10)
         self.mode, self.armed, self.texts = "?", False, []
+        self.seq, self._asked = -1, 0.0
 
     def wait(self, predicate, timeout_s: float) -> bool:
         deadline = time.monotonic() + timeout_s
         while time.monotonic() < deadline:
+            if self.seq < 0 and time.monotonic() - self._asked > 1.0:
+                self._asked = time.monotonic()  # MISSION_CURRENT at 5 Hz on this port
+                self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_SET_MESSAGE_INTERVAL,
+                                                0, R.MAVLINK_MSG_ID_MISSION_CURRENT, 200_000,
+                                                0, 0, 0, 0, 0)
             msg = self.conn.recv_match(blocking=True, timeout=0.1)
             if msg is None or msg.get_srcSystem() != self.sysid:
                 continue
-            if msg.get_type() == "HEARTBEAT":
+            if msg.get_type() == "MISSION_CURRENT":
+                self.seq = msg.seq
+            elif msg.get_type() == "HEARTBEAT":
                 self.mode = mode_name(msg.custom_mode)
                 self.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
             elif msg.get_type() == "STATUSTEXT":
@@ -129,8 +137,12 @@ def _fly_with(plan_dir: Path, urls, fault, *extra):
     return holder["result"], took
 
 
+START_GATE = 3  # the example's start gate: its legs begin after it (fly's timed start)
+
+
 def _in_auto_for(port: SecondPort, seconds: float) -> None:
-    assert port.wait(lambda p: p.armed and p.mode == "AUTO", 120.0)
+    """``seconds`` (the vehicles') into the legs."""
+    assert port.wait(lambda p: p.armed and p.mode == "AUTO" and p.seq > START_GATE, 120.0)
     port.wait(lambda p: False, seconds / SPEEDUP)
 
 

@@ -80,7 +80,7 @@ def test_three_mavsdk_vehicles_receive_exactly_the_mission_files(tmp_path):
             args += ["--connect", v.url]
         result = CliRunner().invoke(main, args, catch_exceptions=False)
         assert result.exit_code == 0, result.output
-        assert result.output.count("verified (15 items)") == 3
+        assert result.output.count("verified (16 items)") == 3
         for v, items in zip(fleet, missions):
             assert v.got.wait(5.0)
             (outcome, got), = v.received

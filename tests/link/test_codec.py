@@ -77,16 +77,16 @@ def test_an_arducopter_read_back_verifies_what_was_sent():
 def test_what_a_copter_would_not_keep_is_named_before_upload():
     items = make_mission()
     assert storage_warnings(items) == []
-    held = items[:3] + [replace(items[3], param1=2.5)] + items[4:]
+    held = items[:4] + [replace(items[4], param1=2.5)] + items[5:]
     (line,) = storage_warnings(held)
-    assert line.startswith("item 3 (WAYPOINT): param1 (hold time) 2.5 is stored as 2")
+    assert line.startswith("item 4 (WAYPOINT): param1 (hold time) 2.5 is stored as 2")
 
 
 def test_item_zero_is_not_compared_but_length_and_every_other_item_are():
     items = make_mission()
     vehicle_home = replace(items[0], lat_deg=-35.0, lon_deg=149.0, alt_m=584.0)
     assert mission_differences(items, [vehicle_home] + items[1:]) == []
-    assert mission_differences(items, items[:10]) == ["read back 10 items, sent 15"]
+    assert mission_differences(items, items[:10]) == ["read back 10 items, sent 16"]
     wrong = items[:4] + [replace(items[4], command=21)] + items[5:]
     assert mission_differences(items, wrong) == ["item 4: command 21, expected 16"]
 

@@ -17,7 +17,9 @@ from ftlbo_mav.link.mission_protocol import (
     clear_mission,
     describe_result,
     download_mission,
+    read_items,
     upload_mission,
+    write_items,
 )
 from ftlbo_mav.link.swarm import upload_and_verify
 from ftlbo_mav.sim.faults import Faults
@@ -252,6 +254,45 @@ def test_upload_then_read_back_over_a_clean_link():
     # the vehicle asked with MISSION_REQUEST, as ArduPilot does
     assert {m.get_type() for m in ch.received} >= {"MISSION_REQUEST"}
     assert "MISSION_REQUEST_INT" not in {m.get_type() for m in ch.received}
+
+
+def test_one_item_is_replaced_in_place_and_read_back_alone():
+    """MISSION_WRITE_PARTIAL_LIST (MissionItemProtocol::handle_mission_write_partial_list):
+    the vehicle asks for just that item; the rest of the mission stays as it was."""
+    from dataclasses import replace
+
+    ch = LoopbackChannel(vehicle())
+    assert upload_mission(ch, ITEMS) is True
+    changed = replace(ITEMS[4], alt_m=ITEMS[4].alt_m + 3.0)
+    before = len(ch.received)
+    assert write_items(ch, [changed]) is True
+    asked = [m.seq for m in ch.received[before:] if m.get_type() == "MISSION_REQUEST"]
+    assert asked == [4]
+    (back,) = read_items(ch, [4])
+    assert back.alt_m == pytest.approx(changed.alt_m)
+    assert mission_differences([*ITEMS[:4], changed, *ITEMS[5:]], download_mission(ch)) == []
+
+
+def test_a_partial_write_past_the_end_is_refused():
+    from dataclasses import replace
+
+    ch = LoopbackChannel(vehicle())
+    assert upload_mission(ch, ITEMS) is True
+    with pytest.raises(MissionTransferError):
+        write_items(ch, [replace(ITEMS[1], seq=N + 1)])
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_a_partial_write_gets_through_loss(seed):
+    from dataclasses import replace
+
+    faults = Faults(loss_up=0.3, loss_down=0.3, duplicate=0.05, reorder=0.05)
+    ch = LoopbackChannel(vehicle(), faults=faults, rng=np.random.default_rng(seed))
+    assert upload_mission(ch, ITEMS) is not None
+    changed = replace(ITEMS[2], param1=3.0)
+    write_items(ch, [changed])
+    (back,) = read_items(ch, [2])
+    assert back.param1 == 3.0
 
 
 @pytest.mark.parametrize("seed", range(40))

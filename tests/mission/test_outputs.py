@@ -17,7 +17,7 @@ from ftlbo_mav.mission.export import FORMATS, read_plan, write_plan
 STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"
 
 EXPECTED = {
-    "plan.geojson": "0faf4f1890ba9489c526da8137455a93549fdefccb6a41b917d5dc728e4333e3",
+    "plan.geojson": "10d8fb270db89aa1c5cc7e87e56c2cb19744750ed18f83df2a14e5b1eb3fcbef",
     # plan.json gained "corner_allowance" (issue 11), then "vehicle" and "predicted" (null
     # for this stored plan, made before the flown path was predicted; issue 19), then the
     # position controller's parameters in "vehicle" (PSC_VELXY_*, ANGLE_MAX); the
@@ -25,15 +25,17 @@ EXPECTED = {
     # made before navigation budgets, issue 27), then "mission" (end action and speed,
     # so that a plan can be planned again from its plan.json: fly --resume, issue 29),
     # then "formation_bound" (the stored plan has no prediction: [formation] max_error's
-    # 1 m; issue 28)
-    "plan.json": "6dcc6d0d5ee6d316205df0a3ebe5c75515f673c62f7b9150a44dcdbc00786c81",
-    "plan.kml": "34978a2a892e1c305510fc2fa59d7fd71aeee24cf29841a226208da315009848",
-    "uav1.plan": "07c2c82fc64bcfa5015f814294223e7a2a6648583903c37f6b00af0e631d657f",
-    "uav1.waypoints": "c5989eff6b30ed4ee87b7cea965815d1a8e0dec678b8e241247a2ab954fc4171",
-    "uav2.plan": "9c6c1aa1f5de9aa20d576bad24a1848e0d04f9744349cea4a355d5364aa69bd8",
-    "uav2.waypoints": "ee850c15c93d8de3a20218b342ff86f2128b750f5bbaba2e3992092a7135f191",
-    "uav3.plan": "2d598e9e86d6f8758a19dd8cf5292401cf73ad9dcee620b7cb6c6b3656996e60",
-    "uav3.waypoints": "b974a5acb6b8dd6841cc92ef4573d7b12e2bd81e5c87f1878978eb7a1c07dfe4",
+    # 1 m; issue 28); every file with a mission (and the mission hashes of plan.json and
+    # the items of the KML and GeoJSON) then gained the start gate, a NAV_DELAY after
+    # the start point (issue 28)
+    "plan.json": "6248c139c615468c19bfe109bacc4e66a31b948e19896e8c15c4a1dea4659413",
+    "plan.kml": "c01569e79ab1caba7566a496ad6c16ac899474075372f5fc18c009223f1303cb",
+    "uav1.plan": "4c331e937e8c791dfc838b6377dc473acbc0fa40e490613f0f2d918899266015",
+    "uav1.waypoints": "41f7bbc17bffd9ba38147620a33e54406c1796e586d0bbea132b4f5e20f0db14",
+    "uav2.plan": "56492f69ffa4f76c439d03f13a0b7ca155a97c948255333bef52b04f2a9ea4f6",
+    "uav2.waypoints": "e54efdd37ca834580f93c176e9c0ce2d63c28eb077587052107177a310b25ce6",
+    "uav3.plan": "3fa3c2f5e9d5fccad5b7e431a65c36f4f37f37d50dd272957c494019f6224f61",
+    "uav3.waypoints": "194b74a434da304281bf3fca4172b4f6739695c83eb94c9743f8d82eae294cb5",
 }
 
 

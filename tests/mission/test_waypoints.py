@@ -8,6 +8,7 @@ from pymavlink import mavwp
 from ftlbo_mav.errors import MissionFileError
 from ftlbo_mav.mission.items import (
     CMD_DO_CHANGE_SPEED,
+    CMD_NAV_DELAY,
     CMD_NAV_LAND,
     CMD_NAV_LOITER_UNLIM,
     CMD_NAV_RETURN_TO_LAUNCH,
@@ -47,9 +48,11 @@ def test_mission_layout_and_file_format(tmp_path):
     path = [(12.23, 109.11, 4.0), (12.2301, 109.1101, 5.0), (12.2302, 109.1102, 4.0)]
     items = build_mission(home=(12.23, 109.11), takeoff_alt_m=4.0, path=path)
     assert [it.command for it in items] == [
-        CMD_NAV_WAYPOINT, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT, CMD_NAV_WAYPOINT, CMD_NAV_WAYPOINT,
-        CMD_NAV_LAND,
+        CMD_NAV_WAYPOINT, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT, CMD_NAV_DELAY, CMD_NAV_WAYPOINT,
+        CMD_NAV_WAYPOINT, CMD_NAV_LAND,
     ]
+    # the start gate as planned: no time given (fly writes one before its start)
+    assert (items[3].param1, items[3].param2, items[3].param3, items[3].param4) == (-1,) * 4
     assert items[0].frame == FRAME_GLOBAL and items[0].current == 1
     assert all(it.frame == FRAME_GLOBAL_RELATIVE_ALT for it in items[1:])
     assert all(it.autocontinue == 1 for it in items)
@@ -71,9 +74,10 @@ def test_end_actions_and_speed():
     loiter = build_mission(home=(1, 2), takeoff_alt_m=4, path=path, end_action="loiter")
     assert loiter[-1].command == CMD_NAV_LOITER_UNLIM and loiter[-1].alt_m == 4.0
     fast = build_mission(home=(1, 2), takeoff_alt_m=4, path=path, speed_m_s=3.0)
-    # after the start point, where fly's synchronized AUTO start begins (first_leg)
-    assert [it.command for it in fast[1:5]] == [22, 16, CMD_DO_CHANGE_SPEED, 16]
-    assert fast[3].param2 == 3.0 and [it.seq for it in fast] == list(range(len(fast)))
+    # after the start point and its gate, where fly's synchronized AUTO start begins
+    # (first_leg): it runs as the legs begin
+    assert [it.command for it in fast[1:6]] == [22, 16, CMD_NAV_DELAY, CMD_DO_CHANGE_SPEED, 16]
+    assert fast[4].param2 == 3.0 and [it.seq for it in fast] == list(range(len(fast)))
     with pytest.raises(ValueError):
         build_mission(home=(1, 2), takeoff_alt_m=4, path=path, end_action="crash")
 

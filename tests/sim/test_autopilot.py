@@ -50,11 +50,13 @@ def test_guided_takeoff_then_auto_flies_the_mission_and_lands_at_the_goal():
     assert ap.set_current(2) and ap.set_mode(AUTO, t)
     t, log = _run(ap, t, lambda a: not a.armed)
     reached = [m.seq for m in log if m.get_type() == "MISSION_ITEM_REACHED"]
-    assert reached == [2, 3, 4, 5]  # the landing ends in the disarm, not a reached item
+    assert reached == [2, 3, 4, 5, 6]  # the landing ends in the disarm, not a reached item
     texts = [m.text for m in log if m.get_type() == "STATUSTEXT"]
-    assert texts == ["Mission: 2 WP", "Reached command #2", "Mission: 3 WP",
-                     "Reached command #3", "Mission: 4 WP", "Reached command #4",
-                     "Mission: 5 WP", "Reached command #5", "Mission: 6 Land",
+    # the start gate without a clock (no GPS time): no delay
+    assert texts == ["Mission: 2 WP", "Reached command #2", "Mission: 3 Delay",
+                     "Delaying 0 sec", "Mission: 4 WP",
+                     "Reached command #4", "Mission: 5 WP", "Reached command #5",
+                     "Mission: 6 WP", "Reached command #6", "Mission: 7 Land",
                      "Disarming motors", "Mission: 1 Takeoff"]
     assert np.allclose(ap.position, [20, 10, 0], atol=0.05)
     assert ap.current == 1
@@ -152,6 +154,35 @@ def test_local_tangent_round_trip_and_scale():
     assert np.allclose(t.to_en(lat, lon), (30.0, -20.0))
     # 1e-5 degree of latitude is about 1.106 m at 12 degrees north
     assert t.to_en(HOME[0] + 1e-5, HOME[1])[1] == pytest.approx(1.1061, abs=1e-3)
+
+
+def test_the_start_gate_holds_until_its_second_of_gps_time():
+    """ModeAuto::do_nav_delay with the second of the minute (AP_RTC::get_time_utc): the
+    copter holds where it is and begins the next leg on the first step after that
+    second; "Delaying N sec" says the whole seconds."""
+    from dataclasses import replace
+
+    items, _ = _mission()
+    gate = 3
+    items = [replace(it, param4=37.0) if it.seq == gate else it for it in items]
+    ap = Autopilot(home=HOME, boot_time=0.0)
+    ap.utc_offset_s = 1_764_936_000.0 + 20.25  # its clock reads hh:mm:20.25 at t = 0
+    ap.set_mission(items)
+    ap.set_mode(GUIDED, 0.0)
+    ap.arm(0.0)
+    ap.takeoff(4.0)
+    t, _ = _run(ap, 0.0, lambda a: abs(a.position[2] - 4.0) < 0.05, dt=0.02)
+    ap.set_current(gate)
+    ap.set_mode(AUTO, t)
+    t_auto = t
+    at_start = ap.position.copy()
+    t, log = _run(ap, t, lambda a: a.current > gate, dt=0.005)
+    due = 37.0 - 20.25  # the copter's seconds at which its clock reads :37
+    assert due < t <= due + 0.01
+    assert np.allclose(ap.position, at_start, atol=0.02)  # held there until then
+    texts = [m.text for m in log if m.get_type() == "STATUSTEXT"]
+    assert texts[:2] == ["Mission: 3 Delay", f"Delaying {int(due - t_auto)} sec"]
+    assert [m.seq for m in log if m.get_type() == "MISSION_ITEM_REACHED"] == [gate]
 
 
 def _mission_seconds(ap: Autopilot) -> float:

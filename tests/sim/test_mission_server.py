@@ -158,4 +158,4 @@ def test_commands_without_a_position_come_back_in_frame_0():
     for k, it in enumerate(items):
         s.handle(wire(encode_item(it, target_system=1, target_component=1)), 0.01 * (k + 1))
     frames = {it.command: only(read(s, k)).frame for k, it in enumerate(items) if k}
-    assert frames == {22: 3, 178: 0, 16: 3, 20: 0}
+    assert frames == {22: 3, 93: 0, 178: 0, 16: 3, 20: 0}

@@ -8,7 +8,9 @@ DO_CHANGE_SPEED runs when reached in the mission (ModeAuto::do_change_speed ->
 AC_WPNav::set_speed_xy) or as a command; MAV_CMD_DO_PAUSE_CONTINUE pauses and resumes a
 leg (ModeAuto::pause / resume); MISSION_SET_CURRENT moves the current item
 (libraries/AP_Mission/AP_Mission.cpp ``set_current_cmd``). NAV_LAND flies to its point
-at the current altitude, then descends (:mod:`.land`).
+at the current altitude, then descends (:mod:`.land`). NAV_DELAY holds where the copter
+is until its time (ModeAuto::do_nav_delay / verify_nav_delay; the time by the vehicle's
+GPS clock, :func:`~ftlbo_mav.ardupilot.commands.nav_delay_ms`).
 """
 
 from __future__ import annotations
@@ -20,12 +22,15 @@ from ...ardupilot.commands import (
     FAILED_TO_PAUSE,
     FAILED_TO_RESUME,
     NAV_LAST,
+    delaying,
     mission_started,
+    nav_delay_ms,
     reached_command,
 )
 from ...mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_DO_SET_CAM_TRIGG_DIST,
+    CMD_NAV_DELAY,
     CMD_NAV_LAND,
     CMD_NAV_LOITER_UNLIM,
     CMD_NAV_RETURN_TO_LAUNCH,
@@ -43,7 +48,7 @@ class ModeAuto:
         """AP_Mission::starts_with_takeoff_cmd / is_takeoff_next: the first navigation
         command from the current one is a takeoff."""
         for item in self.mission[max(self.current, 1):]:
-            if item.command < NAV_LAST:
+            if item.command < NAV_LAST and item.command != CMD_NAV_DELAY:  # skippable
                 return item.command == CMD_NAV_TAKEOFF
         return False
 
@@ -162,6 +167,15 @@ class ModeAuto:
                 self._phase = "land_fly"
         elif item.command == CMD_NAV_RETURN_TO_LAUNCH:
             self._rtl_enter()
+        elif item.command == CMD_NAV_DELAY:
+            # ModeAuto::do_nav_delay: the submode is left as it was (ModeAuto::init's
+            # LOITER: AC_WPNav holds its stopping point; after a waypoint: that waypoint)
+            ms = nav_delay_ms(item, self.utc_ms())
+            self._pending.append(text(delaying(ms)))
+            if self.nav is None:
+                self._start_nav(self._takeoff_point())
+            self._wait_until = self.time + ms / 1000.0
+            self._phase = "nav_delay"
         else:  # commands the emulator does not fly are skipped, like unsupported ones
             self.current += 1
             self._start_item()
@@ -212,3 +226,5 @@ class ModeAuto:
                     self._reached(out)
         elif self._phase == "land_fly" and nav.reached:
             self._descend_enter()
+        elif self._phase == "nav_delay" and self.time > self._wait_until:
+            self._reached(out)  # verify_nav_delay: millis() - start > max
