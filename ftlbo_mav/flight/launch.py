@@ -27,8 +27,8 @@ from ..link.mission_protocol import MissionTransferError, Timing, read_items, wr
 from ..mission import items
 from ..mission.items import (
     CMD_DO_CHANGE_SPEED,
-    CMD_NAV_DELAY,
     CMD_DO_SET_CAM_TRIGG_DIST,
+    CMD_NAV_DELAY,
     CMD_NAV_TAKEOFF,
     CMD_NAV_WAYPOINT,
 )
@@ -241,6 +241,8 @@ START_LEAD_S = 0.5
 START_LEAD_RTTS = 6
 """... and round trips of the slowest vehicle (timed on its set-current): the gate's write
 and read-back (3), AUTO (1) and two to spare (a frame lost on the way)."""
+GATE_TIMING = Timing()
+RESTORE_TIMING = Timing(timeout_s=1.0, retries=3)  # after the flight: best effort
 START_ATTEMPTS = 3
 FIRST_RTT_MAX_S = 0.4
 CLOCKS_AGREE_S = 0.2
@@ -334,7 +336,7 @@ def gate_as_onboard(mission, onboard, frame: LocalFrame) -> list:
 
 def restore_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
                   which: Sequence[int], *,
-                  timing: Timing = Timing(timeout_s=1.0, retries=3)) -> list[str]:
+                  timing: Timing = RESTORE_TIMING) -> list[str]:
     """The start gates of vehicles ``which`` written back to the plan's placeholder (no
     time) after a flight, so that the mission flies in any ground station as planned;
     the vehicles it could not reach, with why."""
@@ -353,7 +355,7 @@ def restore_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
 
 def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                    say: Callable[[str], None] = lambda _s: None,
-                   poll: Callable[[], None] = lambda: None, timing: Timing = Timing()
+                   poll: Callable[[], None] = lambda: None, timing: Timing = GATE_TIMING
                    ) -> float:
     """Set every current item to where its legs begin (:func:`first_leg`), then AUTO in
     one burst. Returns the ground's monotonic time at which the legs began.
@@ -418,8 +420,8 @@ def _timed_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
         took = time.monotonic() - t
         left = chosen.ground_t - time.monotonic()
         if left >= max(START_LEAD_S / 2, took / 2):  # AUTO: one way, a resend to spare
-            say("the legs begin at second {:02d} of the minute, GPS time (in {:.1f} s)".format(
-                chosen.hms[2], left))
+            say(f"the legs begin at second {chosen.hms[2]:02d} of the minute, GPS time "
+                f"(in {left:.1f} s)")
             return chosen
         rtt_s = max(rtt_s, took / 3)  # the write and read-back: three round trips
         say(f"the start time took {took:.1f} s to write, {left:.1f} s before it: "

@@ -18,11 +18,11 @@ from ..link.codec import mission_differences
 from ..link.endpoints import is_ready, readiness_problems
 from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
-from .launch import gate_as_onboard
 from ..link.params import read_vehicle_params
 from ..link.transfer import Timing
 from .battery import preflight_problem as battery_preflight
 from .fleet import concurrently
+from .launch import gate_as_onboard
 from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
 from .vehicle import FlightVehicle
