@@ -161,16 +161,19 @@ def test_the_written_missions_photograph_the_whole_field(planned):
     doc = json.loads((out / "plan.json").read_text())
     photos = [mission_photos(u["name"], read_waypoints(out / u["mission_file"]),
                              frame=plan.scenario.frame, camera=sv.camera,
-                             heading_deg=sv.heading_deg) for u in doc["uavs"]]
+                             heading_deg=sv.heading_deg, nav=plan.scenario.vehicle)
+              for u in doc["uavs"]]
     lower, upper = plan.scenario.area_bounds_enu()
     assert coverage(photos, lower=lower, upper=upper) >= 0.98
     for p, u, cam in zip(photos, doc["uavs"], doc["survey"]["camera"]["uavs"]):
         assert p.count == u["photos"] == cam["photos"] > 0
-        # on the UAV's lanes, the trigger distance apart along each
+        # on the UAV's lanes as the copter flies them: on the line along the lane, off it
+        # only where the copter rounds the corner at a lane's end
         across = p.positions[:, 0] - u["offset"][0]
         lanes_x = np.array([plan.scenario.frame.to_enu(lat_deg=a[0], lon_deg=a[1])[0]
                             for a, _ in doc["survey"]["lanes"]])
-        assert np.abs(across[:, None] - lanes_x[None, :]).min(axis=1).max() < 0.01
+        off = np.abs(across[:, None] - lanes_x[None, :]).min(axis=1)
+        assert np.median(off) < 0.1 and off.max() < 1.0, off
     # each UAV's line in the summary, and the lanes
     assert "survey: 4 lanes 11.26 m apart (at most 11.40 m)" in result.stdout
     assert "laid 0.30 m further in, where the copters were predicted to swing out" in result.stdout

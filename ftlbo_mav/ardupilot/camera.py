@@ -22,7 +22,6 @@ pin) with the count of images so far in ``completed_captures``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -62,31 +61,47 @@ def trigger_item_params(distance_m: float, *, at_once: bool) -> tuple[float, flo
     return (float(distance_m), 0.0, 1.0 if at_once else 0.0, 0.0)
 
 
-def photo_positions(path: np.ndarray, distance_m: float) -> np.ndarray:
-    """Where distance triggering takes its photos as the vehicle flies the polyline
-    ``path (P, 2)`` (metres, flat): one at its start (param3 1), then one each time the
-    vehicle is ``distance_m`` from the last photo in a straight line. The 50 Hz updates
-    are taken as continuous (a photo at most one update's travel late: 6 cm at 3 m/s).
-    Returns ``(K, 2)``."""
-    path = np.asarray(path, float)
-    photos = [path[0]]
-    last = path[0]
-    for a, b in zip(path[:-1], path[1:]):
-        while True:  # the point of a->b beyond `a` at distance_m from `last`, if any
-            d, f = b - a, a - last
-            qa, qb, qc = d @ d, 2 * (f @ d), f @ f - distance_m**2
-            if qa < 1e-18:
-                break
-            disc = qb * qb - 4 * qa * qc
-            if disc < 0:
-                break
-            t = (-qb + math.sqrt(disc)) / (2 * qa)
-            if not 0.0 <= t <= 1.0:
-                break
-            last = a + t * d
-            photos.append(last)
-            a = last
-    return np.array(photos)
+def track_photos(times: np.ndarray, positions: np.ndarray,
+                 switches: list[tuple[float, float, bool]]) -> np.ndarray:
+    """Where distance triggering takes its photos on a track sampled at AP_Camera's rate
+    (``times (T,)`` seconds, ``positions (T, 3)`` metres, one row per 50 Hz update), with
+    the trigger set at ``switches``: ``(time, distance, at_once)`` in time order, each
+    applied before the update at or after its time (a DO_SET_CAM_TRIGG_DIST runs in the
+    mission's update, before the camera's). :class:`DistanceTrigger`'s rules, searched
+    in arrays: the first update after the distance is set remembers the position (or the
+    photo taken at once does), then a photo at each update at least the distance (flat,
+    straight line) from the last. Returns ``(K, 3)``."""
+    times, positions = np.asarray(times, float), np.asarray(positions, float)
+    photos: list[np.ndarray] = []
+    distance, last = 0.0, None
+    starts = np.searchsorted(times, [t - 1e-9 for t, _, _ in switches])
+    ends = [*starts[1:], len(times)]
+    for (_, dist, at_once), i, end in zip(switches, starts, ends):
+        distance = float(dist)
+        if not distance > 0:
+            last = None
+            continue
+        if i >= end:
+            continue
+        if at_once or last is None:  # this update only remembers where it is
+            if at_once:
+                photos.append(positions[i])
+            last = positions[i, :2]
+            i += 1
+        while i < end:
+            window = positions[i:min(i + _SEARCH, end), :2]
+            far = np.hypot(*(window - last).T) >= distance
+            if not far.any():
+                i += len(window)
+                continue
+            i += int(np.argmax(far))
+            photos.append(positions[i])
+            last = positions[i, :2]
+            i += 1
+    return np.array(photos).reshape(-1, 3)
+
+
+_SEARCH = 256  # updates searched at once for the next photo (a photo every ~50 at 5 m/s)
 
 
 @dataclass

@@ -1,9 +1,13 @@
 """Where a survey's missions take their photos, and what the photos cover.
 
-Read from the mission items alone (what goes to the vehicles): each
-DO_SET_CAM_TRIGG_DIST with a distance turns distance triggering on where the waypoint
-before it was reached, one with distance 0 turns it off; in between the photos are where
-ArduCopter's AP_Camera takes them (:func:`ftlbo_mav.ardupilot.camera.photo_positions`).
+Read from the mission items alone (what goes to the vehicles): the copter's path through
+them is predicted as ArduCopter flies it (:mod:`ftlbo_mav.ardupilot.flight_path`); each
+DO_SET_CAM_TRIGG_DIST with a distance turns distance triggering on when the waypoint
+before it is reached, one with distance 0 turns it off; in between the photos are where
+ArduCopter's AP_Camera takes them on that path
+(:func:`ftlbo_mav.ardupilot.camera.track_photos`). SITL's photos are within half a metre
+of these (``tests/ardupilot/test_camera.py``); on the planned straight lines they were up
+to 1.1 m off, most in the corners.
 Each photo's footprint is the camera's (:class:`~ftlbo_mav.planning.camera.Camera`) at
 the photo's altitude above home, its long side across the lane in landscape. Pure.
 """
@@ -15,11 +19,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..ardupilot.camera import photo_positions
+from ..ardupilot.camera import track_photos
+from ..ardupilot.flight_path import DEFAULT_NAV, fly_path
+from ..ardupilot.navigation import Navigation
 from ..geo import LocalFrame
 from ..planning.camera import Camera
 from ..planning.survey import directions
-from .items import CMD_DO_SET_CAM_TRIGG_DIST, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT, MissionItem
+from .items import CMD_DO_CHANGE_SPEED, CMD_DO_SET_CAM_TRIGG_DIST, CMD_NAV_WAYPOINT, MissionItem
 
 
 @dataclass(frozen=True)
@@ -36,65 +42,53 @@ class UavPhotos:
         return len(self.positions)
 
 
-def trigger_runs(items: Sequence[MissionItem], frame: LocalFrame) -> list[tuple[np.ndarray,
-                                                                                 float, bool]]:
-    """Each stretch flown with distance triggering on: ``(path (P, 3) metres ENU,
-    distance, at_once)``, from the waypoint after which it was turned on to the one
-    after which it was turned off (or the last waypoint)."""
-    runs, here, current = [], None, None
+def camera_switches(items: Sequence[MissionItem], frame: LocalFrame
+                    ) -> tuple[np.ndarray, np.ndarray, float | None, list]:
+    """What a mission asks of the copter and its camera, as :func:`mission_photos` flies
+    it: ``(points (P, 3) metres ENU, holds (P,) seconds, speed, switches)``, the points
+    every NAV_WAYPOINT after home (the first where the copter hovers when AUTO starts, as
+    ``fly`` starts a plan's legs), the speed of a DO_CHANGE_SPEED before the second,
+    and per DO_SET_CAM_TRIGG_DIST ``(k, distance, at_once)``: it runs once point ``k`` is
+    reached (AP_Mission runs DO commands when the navigation command before them is done;
+    -1 before the first)."""
+    points, holds, speed, switches = [], [], None, []
     for item in items[1:]:  # item 0 is home
-        if item.command == CMD_NAV_TAKEOFF and here is None:
-            home = items[0]
-            here = frame.to_enu(lat_deg=home.lat_deg, lon_deg=home.lon_deg, alt_m=item.alt_m)
-        elif item.command == CMD_NAV_WAYPOINT:
-            here = frame.to_enu(lat_deg=item.lat_deg, lon_deg=item.lon_deg, alt_m=item.alt_m)
-            if current is not None:
-                current[0].append(here)
+        if item.command == CMD_NAV_WAYPOINT:
+            points.append(frame.to_enu(lat_deg=item.lat_deg, lon_deg=item.lon_deg,
+                                       alt_m=item.alt_m))
+            holds.append(float(item.param1))
+        elif item.command == CMD_DO_CHANGE_SPEED and len(points) <= 1 and item.param2 > 0:
+            speed = float(item.param2)
         elif item.command == CMD_DO_SET_CAM_TRIGG_DIST:
-            if current is not None:
-                runs.append((np.array(current[0]), current[1], current[2]))
-                current = None
-            if item.param1 > 0 and here is not None:
-                current = ([here], float(item.param1), item.param3 == 1)
-    if current is not None:
-        runs.append((np.array(current[0]), current[1], current[2]))
-    return runs
+            switches.append((len(points) - 1, float(item.param1), item.param3 == 1))
+    return np.array(points).reshape(-1, 3), np.array(holds), speed, switches
 
 
 def mission_photos(name: str, items: Sequence[MissionItem], *, frame: LocalFrame,
-                   camera: Camera, heading_deg: float) -> UavPhotos:
-    """The photos ``items`` take (see the module) and their footprints."""
+                   camera: Camera, heading_deg: float, nav: Navigation = DEFAULT_NAV
+                   ) -> UavPhotos:
+    """The photos ``items`` take and their footprints: the copter's path through the
+    mission's waypoints predicted as ArduCopter flies it (:func:`.fly_path`, with ``nav``:
+    the plan's ``[vehicle]``), the trigger switched where each DO_SET_CAM_TRIGG_DIST runs
+    (when the waypoint before it is reached), the photos where AP_Camera takes them on that
+    path (:func:`.track_photos`): along the lanes behind its straight line by the copter's lag,
+    in the rounded corners where the lanes end."""
+    points, holds, speed, switches = camera_switches(items, frame)
+    if not any(d > 0 for _, d, _ in switches) or not len(points):
+        pos = np.zeros((0, 3))
+    elif len(points) == 1:
+        pos = points[:1] if any(d > 0 and once for _, d, once in switches) else np.zeros((0, 3))
+    else:
+        flown = fly_path(points, nav=nav, speed_m_s=speed, holds_s=holds)
+        at = [(float(flown.reached[max(k, 0)]), d, once) for k, d, once in switches]
+        pos = track_photos(flown.times, flown.positions, at)
     along, across = directions(heading_deg)
-    positions = []
-    for path, distance, at_once in trigger_runs(items, frame):
-        flat = photo_positions(path[:, :2], distance)
-        if not at_once:
-            flat = flat[1:]
-        if not len(flat):
-            continue
-        positions.append(np.column_stack([flat, _altitude_on(path, flat)]))
-    pos = np.concatenate(positions) if positions else np.zeros((0, 3))
     width, length = camera.footprint(np.maximum(pos[:, 2], 0.0))
     signs = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)  # (across, along) /2
     corners = (pos[:, None, :2]
                + signs[None, :, 0:1] * (width[:, None, None] / 2) * across
                + signs[None, :, 1:2] * (length[:, None, None] / 2) * along)
     return UavPhotos(name=name, positions=pos, corners=corners.reshape(-1, 4, 2))
-
-
-def _altitude_on(path: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """The altitude of ``path (P, 3)`` at each of ``points (K, 2)`` (which lie on it):
-    that of the nearest point of its segments."""
-    if len(path) == 1:
-        return np.full(len(points), path[0, 2])
-    a, b = path[:-1], path[1:]
-    d = b[:, :2] - a[:, :2]
-    rel = points[:, None, :] - a[None, :, :2]
-    t = np.clip((rel * d).sum(-1) / np.maximum((d * d).sum(-1), 1e-18), 0.0, 1.0)
-    gap = np.hypot(*(rel - t[..., None] * d).transpose(2, 0, 1))
-    k = np.argmin(gap, axis=1)
-    tk = t[np.arange(len(points)), k]
-    return a[k, 2] + tk * (b[k, 2] - a[k, 2])
 
 
 def coverage(photos: Sequence[UavPhotos], *, lower: np.ndarray, upper: np.ndarray,
@@ -121,7 +115,8 @@ def plan_photos(plan, missions: Sequence) -> list[UavPhotos]:
     if survey is None or survey.camera is None:
         return []
     return [mission_photos(m.name, m.items, frame=plan.scenario.frame, camera=survey.camera,
-                           heading_deg=survey.heading_deg) for m in missions]
+                           heading_deg=survey.heading_deg, nav=plan.scenario.vehicle)
+            for m in missions]
 
 
 def camera_document(plan, photos: Sequence[UavPhotos]) -> dict | None:

@@ -154,8 +154,10 @@ def test_the_rest_takes_every_photo_not_yet_taken_once(survey):
     for n in range(3):
         # what the first flight took and what the rest takes: the whole survey's photos
         assert before[n] + resumed[n].count == planned[n].count
-        # in the same places (within the 50 Hz trigger's step and the turn into the lane)
+        # in the same places, within the difference in the copter's lag behind its track:
+        # the rest starts from rest (its first photo, at once, where the copter stopped),
+        # the whole survey flew into the lane at speed (SITL: 0.4-0.7 m behind the line)
         want = planned[n].positions[before[n]:, :2]
         got = resumed[n].positions[:, :2]
         far = np.hypot(*(want[:, None, :] - got[None, :, :]).transpose(2, 0, 1)).min(axis=1)
-        assert far.max() < 0.5, far.max()
+        assert far[0] < 1.2 and far[1:].max() < 0.5, far
