@@ -18,7 +18,7 @@ from ftlbo_mav.sim.faults import Faults
 from ftlbo_mav.sim.mission_server import MissionServerOptions
 from ftlbo_mav.sim.vehicle import VehicleOptions
 from tests.integration.fleet import FAST, vehicles
-from tests.link.support import write_missions
+from tests.link.support import make_mission, write_missions
 
 pytestmark = pytest.mark.sitl
 
@@ -32,8 +32,12 @@ def connect(urls):
     return [x for u in urls for x in ("--connect", u)]
 
 
+ITEMS = len(make_mission(0))  # every mission write_missions writes has as many
+
+
 def verified_lines(output):
-    return [line for line in output.splitlines() if line.endswith("verified (15 items)")]
+    return [line for line in output.splitlines()
+            if line.endswith(f"verified ({ITEMS} items)")]
 
 
 def test_three_vehicles_three_missions_one_command(tmp_path):
@@ -100,7 +104,7 @@ def test_a_mission_longer_than_the_vehicle_holds_is_refused_at_once_with_the_cou
         assert fleet.missions()[1] == []
     assert code == 1
     assert ("uav2 -> sysid 2: FAILED: upload failed: the vehicle holds at most 10 mission "
-            "items and this mission has 15") in out
+            f"items and this mission has {ITEMS}") in out
     assert "its mission is unchanged" in out and len(verified_lines(out)) == 1
 
 
@@ -109,7 +113,7 @@ def test_capacity_given_by_the_user_is_checked_before_any_vehicle(tmp_path):
     code, out = run("upload", tmp_path, "--sysid", "1,2", "--capacity", "12",
                     "--connect", "tcp:127.0.0.1:9")
     assert code == 2
-    assert "uav1.waypoints has 15 items, more than --capacity 12" in out
+    assert f"uav1.waypoints has {ITEMS} items, more than --capacity 12" in out
     assert "no vehicle was contacted" in out
 
 
@@ -176,7 +180,7 @@ def test_nothing_goes_to_ids_not_asked_for(tmp_path):
         code, out = run("upload", tmp_path, "--sysid", "1,3", "--connect", fleet.udp_url)
         stored = fleet.missions()
     assert code == 0, out
-    assert len(stored[0]) == 15 and stored[1] == [] and len(stored[2]) == 15
+    assert len(stored[0]) == ITEMS and stored[1] == [] and len(stored[2]) == ITEMS
 
 
 @pytest.mark.parametrize("after", [0, 5])
