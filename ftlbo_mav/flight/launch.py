@@ -217,7 +217,11 @@ def start_gate(mission, frame: LocalFrame) -> int | None:
     """The seq of the mission's start gate (the NAV_DELAY right after its start point,
     where :func:`first_leg` starts AUTO), or None: a mission without one starts when its
     AUTO arrives."""
-    seq, _speeds = first_leg(mission, frame)
+    return _gate_at(mission, first_leg(mission, frame)[0])
+
+
+def _gate_at(mission, seq: int) -> int | None:
+    """``seq`` when the mission's item there is a start gate (a NAV_DELAY), else None."""
     item = next((it for it in mission if it.seq == seq), None)
     return seq if item is not None and item.command == CMD_NAV_DELAY else None
 
@@ -298,29 +302,30 @@ def choose_start(vehicles: Sequence[FlightVehicle], *, rtt_s: float, now: float
     return TimedStart(utc_s, float(np.mean(ground)))
 
 
-def _write_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], gates: list,
-                 start: TimedStart | None, timing: Timing,
-                 which: Sequence[int] | None = None) -> None:
-    """Each vehicle's start gate (vehicles ``which``, default all) set to ``start`` (None:
-    back to the plan's placeholder), written in place and read back."""
+def _write_gate(planned: PlannedFlight, vehicle: FlightVehicle, i: int, seq: int,
+                start: TimedStart | None, timing: Timing) -> None:
+    """Vehicle ``i``'s start gate (item ``seq``) set to ``start`` (None: back to the plan's
+    placeholder), written in place and read back."""
     fields = items.start_gate(None if start is None else start.hms)
+    planned_gate = next(it for it in planned.missions[i] if it.seq == seq)
+    gate = replace(planned_gate, **{k: fields[k] for k in ("param1", "param2", "param3",
+                                                           "param4")})
+    try:
+        with vehicle.link.channel(vehicle.sysid) as channel:
+            write_items(channel, [gate], timing=timing)
+            (back,) = read_items(channel, [seq], timing=timing)
+    except MissionTransferError as exc:
+        raise FlightError(vehicle.name, vehicle.sysid, "start time", str(exc)) from exc
+    if differences := item_differences(gate, back):
+        raise FlightError(vehicle.name, vehicle.sysid, "start time",
+                          f"item {seq} read back as {'; '.join(differences)}")
 
-    def one(i: int) -> None:
-        v, seq = vehicles[i], gates[i]
-        planned_gate = next(it for it in planned.missions[i] if it.seq == seq)
-        gate = replace(planned_gate, **{k: fields[k] for k in ("param1", "param2", "param3",
-                                                               "param4")})
-        try:
-            with v.link.channel(v.sysid) as channel:
-                write_items(channel, [gate], timing=timing)
-                (back,) = read_items(channel, [seq], timing=timing)
-        except MissionTransferError as exc:
-            raise FlightError(v.name, v.sysid, "start time", str(exc)) from exc
-        if differences := item_differences(gate, back):
-            raise FlightError(v.name, v.sysid, "start time",
-                              f"item {seq} read back as {'; '.join(differences)}")
 
-    concurrently(one, list(range(len(vehicles))) if which is None else list(which))
+def _write_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], gates: list,
+                 start: TimedStart | None, timing: Timing) -> None:
+    """Every vehicle's start gate set to ``start`` at once (:func:`_write_gate`)."""
+    concurrently(lambda i: _write_gate(planned, vehicles[i], i, gates[i], start, timing),
+                 list(range(len(vehicles))))
 
 
 def gate_as_onboard(mission, onboard, frame: LocalFrame) -> list:
@@ -345,7 +350,7 @@ def restore_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
 
     def one(i: int) -> None:
         try:
-            _write_gates(planned, vehicles, gates, None, timing, which=[i])
+            _write_gate(planned, vehicles[i], i, gates[i], None, timing)
         except (FtlboError, OSError) as exc:  # best effort: said, never raised
             failed.append(f"{vehicles[i].name}: {exc}")
 
@@ -370,7 +375,7 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     missed it (its AUTO came late: ArduCopter would wait for that time the next day) and
     is started at once. Otherwise the legs begin as the burst arrives."""
     starts = [first_leg(m, planned.frame) for m in planned.missions]
-    gates = [start_gate(m, planned.frame) for m in planned.missions]
+    gates = [_gate_at(m, seq) for m, (seq, _speeds) in zip(planned.missions, starts)]
 
     t = time.monotonic()
     concurrently(lambda pair: pair[0].set_current(pair[1][0]), list(zip(vehicles, starts)))
