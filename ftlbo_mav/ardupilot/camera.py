@@ -73,7 +73,7 @@ def track_photos(times: np.ndarray, positions: np.ndarray,
     straight line) from the last. Returns ``(K, 3)``."""
     times, positions = np.asarray(times, float), np.asarray(positions, float)
     photos: list[np.ndarray] = []
-    distance, last = 0.0, None
+    last = None
     starts = np.searchsorted(times, [t - 1e-9 for t, _, _ in switches])
     ends = [*starts[1:], len(times)]
     for (_, dist, at_once), i, end in zip(switches, starts, ends):

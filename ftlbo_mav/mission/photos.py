@@ -25,7 +25,7 @@ from ..ardupilot.navigation import Navigation
 from ..geo import LocalFrame
 from ..planning.camera import Camera
 from ..planning.survey import directions
-from .items import CMD_DO_CHANGE_SPEED, CMD_DO_SET_CAM_TRIGG_DIST, CMD_NAV_WAYPOINT, MissionItem
+from .items import CMD_DO_SET_CAM_TRIGG_DIST, CMD_NAV_WAYPOINT, MissionItem, mission_settings
 
 
 @dataclass(frozen=True)
@@ -47,20 +47,19 @@ def camera_switches(items: Sequence[MissionItem], frame: LocalFrame
     """What a mission asks of the copter and its camera, as :func:`mission_photos` flies
     it: ``(points (P, 3) metres ENU, holds (P,) seconds, speed, switches)``, the points
     every NAV_WAYPOINT after home (the first where the copter hovers when AUTO starts, as
-    ``fly`` starts a plan's legs), the speed of a DO_CHANGE_SPEED before the second,
-    and per DO_SET_CAM_TRIGG_DIST ``(k, distance, at_once)``: it runs once point ``k`` is
-    reached (AP_Mission runs DO commands when the navigation command before them is done;
-    -1 before the first)."""
-    points, holds, speed, switches = [], [], None, []
+    ``fly`` starts a plan's legs), the speed of its first DO_CHANGE_SPEED
+    (:func:`~.items.mission_settings`), and per DO_SET_CAM_TRIGG_DIST ``(k, distance,
+    at_once)``: it runs once point ``k`` is reached (AP_Mission runs DO commands when the
+    navigation command before them is done; -1 before the first)."""
+    points, holds, switches = [], [], []
     for item in items[1:]:  # item 0 is home
         if item.command == CMD_NAV_WAYPOINT:
             points.append(frame.to_enu(lat_deg=item.lat_deg, lon_deg=item.lon_deg,
                                        alt_m=item.alt_m))
             holds.append(float(item.param1))
-        elif item.command == CMD_DO_CHANGE_SPEED and len(points) <= 1 and item.param2 > 0:
-            speed = float(item.param2)
         elif item.command == CMD_DO_SET_CAM_TRIGG_DIST:
             switches.append((len(points) - 1, float(item.param1), item.param3 == 1))
+    _end, speed = mission_settings(items)
     return np.array(points).reshape(-1, 3), np.array(holds), speed, switches
 
 
