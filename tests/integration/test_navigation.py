@@ -99,7 +99,11 @@ def test_a_gps_glitch_mid_leg_is_a_departure_the_others_answer(plan_dir):
     # the GPS jumps by the glitch, less what the copter has flown out of it by the next
     # report; or ArduCopter rejects it and says so
     assert "GPS position jumped" in line or "GPS Glitch" in line, line
-    assert "uav2 (sysid 2): stopped on its track (pause)" in out
+    # the others pause (a copter starved of CPU time in a loaded run may also be past the
+    # formation's bound by then: a departure of its own before the pause, on the same line)
+    for other in ("uav2 (sysid 2):", "uav3 (sysid 3):"):
+        theirs = next(x for x in out.splitlines() if x.strip().startswith(other))
+        assert "stopped on its track (pause)" in theirs, theirs
     assert any("uav1 (sysid 1): navigation" in d for d in _summary(plan_dir)["departures"])
     assert took < 60.0
 
