@@ -223,7 +223,9 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
         # and the plan's [vehicle] parameters
         assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
                        enumerate(zip(planned.names, planned.missions, planned.fences))]
+        t0 = time.monotonic()
         results = upload_swarm(assignments, vehicles.urls, timing=Timing())
+        upload_s = time.monotonic() - t0
         failed = [r for r in results if not r.verified]
         if failed:
             raise UploadFailed("; ".join(f"upload failed: {r.name} -> sysid {r.sysid}: "
@@ -232,6 +234,7 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
                                                   else []))
         summary = fly_once(plan_dir, vehicles.urls, strategy, keep,
                            link_bytes_per_s=None if radio is None else radio.bytes_per_s)
+        summary["upload_s"] = round(upload_s, 2)  # the whole upload, verified (issue 28)
         if vehicles.radio is not None:
             c = vehicles.radio.counts
             summary["radio"] = {"sent": c.sent, "lost": c.lost, "full": c.full,
@@ -379,7 +382,8 @@ def main() -> int:
                       f"{summary['formation_error_max_legs_m']:.3f} m worst, legs "
                       f"{summary['leg_seconds']:.1f} s, clearance "
                       f"{summary['min_clearance_m']:.2f} m, landing error "
-                      f"{max(summary['final_distance_to_goal_m']):.2f} m"
+                      f"{max(summary['final_distance_to_goal_m']):.2f} m, upload "
+                      f"{summary['upload_s']:.1f} s"
                       + (f"; left the plan: {summary['left_plan']}" if summary["left_plan"]
                          else ""), flush=True)
     print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "

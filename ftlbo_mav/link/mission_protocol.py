@@ -189,6 +189,18 @@ class Upload(_Transfer):
         where = f" at item {self.highest}" if self.highest >= 0 else ""
         return self._fail(f"{describe_result(result)}{where}", result=result)
 
+    def _lost(self, seq: int, asked: float, now: float) -> list:
+        """Ask again at once for the items asked before ``seq`` (no later than ``asked``)
+        and not answered: ArduPilot answers requests in the order they come, and a link
+        keeps each direction's order (a radio, TCP), so an answer that overtook them
+        means they, or their requests, were lost (TCP's fast retransmit; otherwise each
+        waited out the resend timer, 2.5 round trips, and through a shared radio losing
+        3 % of frames nearly every read-back lost one). A link that reorders costs a
+        duplicate request, which the answer ignores."""
+        lost = [q for q, t in self.asked.items() if q < seq and t <= asked]
+        self.retried.update(lost)
+        return [self._request(q, now) for q in lost]
+
     def on_timeout(self, now: float) -> list:
         if self.waiting_ready:
             self.waiting_ready = False
@@ -309,7 +321,9 @@ class Download(_Transfer):
                 asked = self.asked.pop(seq, None)
                 rtt = (now - asked if asked is not None and seq not in self.retried
                        else None)
-                return self._progressed(now, rtt=rtt)
+                out = self._progressed(now, rtt=rtt)
+                return out if self.finished or asked is None else out + self._lost(seq, asked,
+                                                                                   now)
             return []  # a duplicate or stale answer
         if kind == "MISSION_ACK" and msg.type != R.MAV_MISSION_ACCEPTED:
             # A read is harmless to repeat, and an ACK here is often stale (ERROR or
@@ -321,6 +335,18 @@ class Download(_Transfer):
                 self.waiting_ready = True
                 self.deadline = now + self.timing.not_ready_poll_s
         return []
+
+    def _lost(self, seq: int, asked: float, now: float) -> list:
+        """Ask again at once for the items asked before ``seq`` (no later than ``asked``)
+        and not answered: ArduPilot answers requests in the order they come, and a link
+        keeps each direction's order (a radio, TCP), so an answer that overtook them
+        means they, or their requests, were lost (TCP's fast retransmit; otherwise each
+        waited out the resend timer, 2.5 round trips, and through a shared radio losing
+        3 % of frames nearly every read-back lost one). A link that reorders costs a
+        duplicate request, which the answer ignores."""
+        lost = [q for q, t in self.asked.items() if q < seq and t <= asked]
+        self.retried.update(lost)
+        return [self._request(q, now) for q in lost]
 
     def on_timeout(self, now: float) -> list:
         if self.waiting_ready:

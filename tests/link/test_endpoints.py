@@ -56,3 +56,43 @@ def test_signing_key_hex_or_passphrase(tmp_path):
         load_key(tmp_path / "empty")
     with pytest.raises(SigningKeyError, match="cannot read"):
         load_key(tmp_path / "nope")
+
+
+class _QuietLink:
+    """A link whose vehicles send no HEARTBEAT until asked (as between two of ArduPilot's
+    1 Hz ones): ``answers`` the ids that answer a REQUEST_MESSAGE for it."""
+
+    def __init__(self, heard=(), answers=()):
+        from ftlbo_mav.link.endpoints import Heartbeat
+
+        self.beat = Heartbeat(sysid=0, compid=1, vehicle_type=2, autopilot=3, custom_mode=0,
+                              base_mode=0, system_status=3, received_at=0.0)
+        self.heartbeats = {s: self.beat for s in heard}
+        self.answers, self.sent = set(answers), []
+
+    def send(self, msg):
+        self.sent.append((msg.target_system, msg.command, msg.param1))
+        if msg.target_system in self.answers:
+            self.heartbeats[msg.target_system] = self.beat
+
+
+def test_discover_asks_only_the_requested_vehicles_not_heard_yet_for_a_heartbeat():
+    from pymavlink.dialects.v20 import ardupilotmega as R
+
+    from ftlbo_mav.link.endpoints import discover
+
+    link = _QuietLink(heard=[1], answers=[2, 3])
+    found, missing = discover([link], [1, 2], timeout_s=5.0)
+    assert found == {1: link, 2: link} and missing == []
+    # REQUEST_MESSAGE for HEARTBEAT (GCS_Common.cpp handle_command_request_message), to 2
+    # only: 1 was heard, 3 was not asked for
+    assert link.sent == [(2, R.MAV_CMD_REQUEST_MESSAGE, R.MAVLINK_MSG_ID_HEARTBEAT)]
+
+
+def test_discover_asks_a_silent_vehicle_twice_then_waits_for_its_own_heartbeat():
+    from ftlbo_mav.link.endpoints import discover
+
+    link = _QuietLink()
+    found, missing = discover([link], [4], timeout_s=0.6)
+    assert found == {} and missing == [4]
+    assert [s for s, _c, _p in link.sent] == [4, 4]

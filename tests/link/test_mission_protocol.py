@@ -223,18 +223,31 @@ def test_download_asks_a_window_at_a_time_and_again_for_what_was_lost():
     dl.start(0.0)
     reqs = dl.on_message(R.MAVLink_mission_count_message(255, 190, count, 0), 0.1)
     assert [r.seq for r in reqs] == list(range(READ_WINDOW))
-    # answers out of order, one lost (seq 2): each answer lets one more be asked
+    # answers in order, one lost (seq 2): each answer lets one more be asked, and the
+    # answer that overtook the lost one has it asked again at once, not after the timer
     more = []
-    for seq in (1, 0, 3):
+    for seq in (0, 1, 3):
         more += dl.on_message(_item(seq), 0.2)
-    assert [r.seq for r in more] == [READ_WINDOW, READ_WINDOW + 1, READ_WINDOW + 2]
-    for seq in range(4, count):
-        dl.on_message(_item(seq), 0.25)
-    assert not dl.finished and [i.seq for i in dl.items] == [0, 1]
+    assert [r.seq for r in more] == [READ_WINDOW, READ_WINDOW + 1, READ_WINDOW + 2, 2]
+    for seq in [2, *range(4, count - 1)]:  # the last one lost: nothing overtakes it
+        assert dl.on_message(_item(seq), 0.25) == []
+    assert not dl.finished and len(dl.items) == count - 1
     again = dl.on_timeout(dl.deadline)
-    assert [r.seq for r in again] == [2]  # only the one not answered
-    (done,) = dl.on_message(_item(2), dl.deadline + 0.1)
+    assert [r.seq for r in again] == [count - 1]  # only the one not answered
+    (done,) = dl.on_message(_item(count - 1), dl.deadline + 0.1)
     assert done.type == R.MAV_MISSION_ACCEPTED and len(dl.items) == count
+
+
+def test_download_on_a_link_that_reorders_asks_once_more_and_keeps_one_copy():
+    dl = Download(sysid=1, compid=1, own=(255, 190), timing=Timing(), progress=None)
+    dl.start(0.0)
+    dl.on_message(R.MAVLink_mission_count_message(255, 190, 3, 0), 0.1)
+    (again,) = dl.on_message(_item(1), 0.2)  # 1 before 0: 0 taken for lost
+    assert again.get_type() == "MISSION_REQUEST_INT" and again.seq == 0
+    assert dl.on_message(_item(0), 0.21) == []  # it was late, not lost
+    assert dl.on_message(_item(0), 0.3) == []  # the answer to the second request
+    (done,) = dl.on_message(_item(2), 0.31)
+    assert done.type == R.MAV_MISSION_ACCEPTED and [i.seq for i in dl.items] == [0, 1, 2]
 
 
 # ----------------------------------------------------------------- against the emulator
