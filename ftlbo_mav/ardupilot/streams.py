@@ -213,6 +213,19 @@ class StreamRequests:
                 self.sysid, self.compid, group, max(1, round(hz)), 1))
         return out
 
+    def stop(self, msgids) -> list:
+        """Want these no more: the requests that stop them (SET_MESSAGE_INTERVAL with an
+        interval of -1, GCS_Common.cpp ``handle_command_set_message_interval``: the
+        message is no longer sent on that link; a fresh ArduCopter 4.5.6 sends neither
+        on SERIAL0 unasked, tests/data boot recording)."""
+        out = []
+        for msgid in msgids:
+            if self.wants.pop(msgid, None) is not None:
+                out.append(R.MAVLink_command_long_message(
+                    self.sysid, self.compid, R.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msgid, -1,
+                    0, 0, 0, 0, 0))
+        return out
+
     def missing(self, now: float) -> list[str]:
         """Names of the wanted messages not arriving, with how often each was asked."""
         return [f"{message_name(m)} (asked {w.asked}x"

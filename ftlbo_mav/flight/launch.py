@@ -145,31 +145,45 @@ def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], op
         f"{vehicles[i].name} {first[i]:.2f} m off" for i in moving))
     for i in moving:
         vehicles[i].goto(*starts[i])
-    deadline = time.monotonic() + options.align_timeout_s
-    resent = time.monotonic()
+    resent = [time.monotonic()]
 
-    def there(v, st) -> bool:
-        return away(v, st) <= tolerance and v.status.ground_speed_m_s <= options.settled_climb_m_s
+    def pending() -> list[int]:
+        return [i for i in moving if not (away(vehicles[i], starts[i]) <= tolerance and
+                vehicles[i].status.ground_speed_m_s <= options.settled_climb_m_s)]
 
+    def again(now: float, waiting: list[int]) -> None:
+        if now - resent[0] >= 2.0:  # SET_POSITION_TARGET is never acknowledged: say it again
+            resent[0] = now
+            for i in waiting:
+                vehicles[i].goto(*starts[i])
+
+    late = _wait_while(vehicles, pending, time.monotonic() + options.align_timeout_s, poll,
+                       each_turn=again, step_s=0.1)
+    if late:
+        say("not at the start point after {:g} s, starting anyway: {}".format(
+            options.align_timeout_s, ", ".join(
+                f"{vehicles[i].name} {away(vehicles[i], starts[i]):.2f} m off" for i in late)))
+
+
+def _wait_while(vehicles: Sequence[FlightVehicle], pending: Callable[[], list[int]],
+                deadline: float, poll: Callable[[], None], *,
+                each_turn: Callable[[float, list[int]], None] | None = None,
+                step_s: float) -> list[int]:
+    """Watch the vehicles until ``pending()`` (indices of the ones not there yet) is empty
+    or ``deadline`` (``time.monotonic()``) passes; the ones still pending then. An abort
+    raises :class:`FlightAborted`; ``each_turn(now, pending)`` runs every turn (a resend),
+    ``poll()`` too (the live view, the departure watch)."""
     while True:
         if aborted(vehicles):
             raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
-        pending = [i for i in moving if not there(vehicles[i], starts[i])]
-        if not pending:
-            return
+        waiting = pending()
         now = time.monotonic()
-        if now >= deadline:
-            say("not at the start point after {:g} s, starting anyway: {}".format(
-                options.align_timeout_s, ", ".join(
-                    f"{vehicles[i].name} {away(vehicles[i], starts[i]):.2f} m off"
-                    for i in pending)))
-            return
-        if now - resent >= 2.0:  # SET_POSITION_TARGET is never acknowledged: say it again
-            resent = now
-            for i in pending:
-                vehicles[i].goto(*starts[i])
+        if not waiting or now >= deadline:
+            return waiting
+        if each_turn is not None:
+            each_turn(now, waiting)
         poll()
-        vehicles[pending[0]].wait_for(lambda s: False, 0.1)
+        vehicles[waiting[0]].wait_for(lambda s: False, min(step_s, max(deadline - now, 0.0)))
 
 
 def first_leg(mission, frame: LocalFrame, *, hold_m: float = 0.5) -> tuple[int, list]:
@@ -441,17 +455,10 @@ def _start_late_ones(vehicles: Sequence[FlightVehicle], gates: list[int], start:
     """Wait until every vehicle's legs have begun (MISSION_CURRENT past its gate), at most
     ``LATE_AFTER_S`` after the start; a vehicle still at its gate then is started at once
     (its current item moved past the gate)."""
-    deadline = start.ground_t + LATE_AFTER_S
-    while True:
-        if aborted(vehicles):
-            raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
-        waiting = [i for i, v in enumerate(vehicles)
-                   if v.status.seq == gates[i] and v.status.ground_speed_m_s < MOVING_M_S]
-        now = time.monotonic()
-        if not waiting or now >= deadline:
-            break
-        poll()
-        vehicles[waiting[0]].wait_for(lambda s: False, min(0.05, max(deadline - now, 0.0)))
+    waiting = _wait_while(vehicles, lambda: [
+        i for i, v in enumerate(vehicles)
+        if v.status.seq == gates[i] and v.status.ground_speed_m_s < MOVING_M_S],
+        start.ground_t + LATE_AFTER_S, poll, step_s=0.05)
     for i in waiting:
         v = vehicles[i]
         say(f"{v.name} (sysid {v.sysid}): its legs had not begun {LATE_AFTER_S:g} s after "

@@ -323,8 +323,11 @@ class FlightVehicle:
 
     def request_version(self, *, timeout_s: float = 1.0, retries: int = 2) -> int | None:
         """Ask for AUTOPILOT_VERSION (MAV_CMD_REQUEST_MESSAGE 148); its
-        ``flight_sw_version``, or None when it is not answered."""
+        ``flight_sw_version``, or None when it is not answered. One the link heard
+        already (asked when the vehicles were found) is not asked again."""
         for attempt in range(retries + 1):
+            if self.sysid in self.link.versions:
+                return self.link.versions[self.sysid]
             self.send(version_request(self.sysid, attempt), step="firmware")
             if self.wait_for(lambda s: s.firmware_version is not None, timeout_s):
                 return self.status.firmware_version

@@ -21,12 +21,19 @@ def version_request(sysid: int, attempt: int = 0):
 
 def request_version(channel, *, timeout_s: float = 1.0, retries: int = 2) -> int | None:
     """The vehicle's AUTOPILOT_VERSION ``flight_sw_version``, or None when it does not
-    answer within ``retries + 1`` requests of ``timeout_s`` each."""
+    answer within ``retries + 1`` requests of ``timeout_s`` each. One its link heard
+    already (asked when the vehicles were found: :func:`.endpoints.discover`) is not
+    asked again; one on its way is taken when it comes."""
+    known = channel.link.versions
     for attempt in range(retries + 1):
+        if channel.sysid in known:
+            return known[channel.sysid]
         channel.send(version_request(channel.sysid, attempt))
         deadline = time.monotonic() + timeout_s
         while (left := deadline - time.monotonic()) > 0:
-            msg = channel.recv(left)
+            msg = channel.recv(min(left, 0.05))
             if msg is not None and msg.get_type() == "AUTOPILOT_VERSION":
                 return int(msg.flight_sw_version)
+            if channel.sysid in known:
+                return known[channel.sysid]
     return None

@@ -88,3 +88,14 @@ def test_a_stream_arriving_at_a_tenth_of_its_rate_is_asked_for_again():
     for k in range(30):  # 10 Hz from then on
         req.seen(pos, 3.7 + 0.1 * k)
     assert req.flowing(pos, 6.7) and req.due(6.7) == []
+
+
+def test_streams_asked_for_are_stopped_and_asked_for_no_more():
+    req = StreamRequests(sysid=3)
+    req.want(READINESS)
+    assert len(req.due(0.0)) == 2
+    stops = req.stop([*READINESS, R.MAVLINK_MSG_ID_ATTITUDE])  # ATTITUDE was never asked
+    # SET_MESSAGE_INTERVAL -1: GCS_Common.cpp, the message no longer sent on that link
+    assert sorted((m.target_system, m.command, int(m.param1), m.param2) for m in stops) == [
+        (3, R.MAV_CMD_SET_MESSAGE_INTERVAL, msgid, -1.0) for msgid in sorted(READINESS)]
+    assert req.due(100.0) == [] and req.missing(100.0) == []

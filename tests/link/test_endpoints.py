@@ -6,6 +6,7 @@ import hashlib
 
 import pytest
 
+from ftlbo_mav.ardupilot.firmware import AUTOPILOT_VERSION_ID
 from ftlbo_mav.link.commands import mission_files
 from ftlbo_mav.link.endpoints import BadInput, default_urls, default_urls_for, parse_sysids
 from ftlbo_mav.link.signing import SigningKeyError, key_from_text, load_key
@@ -68,6 +69,7 @@ class _QuietLink:
         self.beat = Heartbeat(sysid=0, compid=1, vehicle_type=2, autopilot=3, custom_mode=0,
                               base_mode=0, system_status=3, received_at=0.0)
         self.heartbeats = {s: self.beat for s in heard}
+        self.versions = {}
         self.answers, self.sent = set(answers), []
 
     def send(self, msg):
@@ -84,9 +86,25 @@ def test_discover_asks_only_the_requested_vehicles_not_heard_yet_for_a_heartbeat
     link = _QuietLink(heard=[1], answers=[2, 3])
     found, missing = discover([link], [1, 2], timeout_s=5.0)
     assert found == {1: link, 2: link} and missing == []
-    # REQUEST_MESSAGE for HEARTBEAT (GCS_Common.cpp handle_command_request_message), to 2
-    # only: 1 was heard, 3 was not asked for
-    assert link.sent == [(2, R.MAV_CMD_REQUEST_MESSAGE, R.MAVLINK_MSG_ID_HEARTBEAT)]
+    # REQUEST_MESSAGE (GCS_Common.cpp handle_command_request_message) for HEARTBEAT to 2
+    # only: 1 was heard, 3 was not asked for; AUTOPILOT_VERSION (the firmware check that
+    # follows) to both
+    ask = R.MAV_CMD_REQUEST_MESSAGE
+    assert link.sent == [(1, ask, AUTOPILOT_VERSION_ID), (2, ask, R.MAVLINK_MSG_ID_HEARTBEAT),
+                         (2, ask, AUTOPILOT_VERSION_ID)]
+
+
+def test_a_version_heard_when_the_vehicles_were_found_is_not_asked_again():
+    from ftlbo_mav.link.firmware import request_version
+
+    class Known:
+        sysid, link = 2, _QuietLink()
+
+        def send(self, msg):
+            raise AssertionError("asked again")
+
+    Known.link.versions[2] = 0x04050600
+    assert request_version(Known()) == 0x04050600
 
 
 def test_discover_asks_a_silent_vehicle_twice_then_waits_for_its_own_heartbeat():
@@ -95,4 +113,4 @@ def test_discover_asks_a_silent_vehicle_twice_then_waits_for_its_own_heartbeat()
     link = _QuietLink()
     found, missing = discover([link], [4], timeout_s=0.6)
     assert found == {} and missing == [4]
-    assert [s for s, _c, _p in link.sent] == [4, 4]
+    assert [s for s, _c, what in link.sent if what == 0] == [4, 4]  # HEARTBEAT asked twice
