@@ -43,12 +43,20 @@ PARAM_WINDOW = PARAM_REQUEST_QUEUE // 2 - 2
 """Parameter requests outstanding at once on one exchange: under half of what ArduPilot
 queues, so that two at once (``upload``: the fence's and the [vehicle] parameters) and
 another station's requests still fit."""
+PARAM_ON_LINK = 16
+"""Parameter requests outstanding at once on one link, divided among the vehicles that
+share it (at most :data:`PARAM_WINDOW` each): a shared radio's buffer is theirs
+together. Three copters ask 5 each, ten 1. Eight divided by the vehicles (three: 2 each)
+made the example's 18 [vehicle] parameters nine round trips, the last part of every
+upload through the good-day radio on SITL (1.5-3.5 s after the rest); ten copters asking
+2 each overflowed an emulated 2 KiB buffer at 3,000 B/s."""
 
 
 def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Timing
               ) -> dict[str, float | None]:
-    """Send every request (up to :data:`PARAM_WINDOW` unanswered at once, divided by the
-    channel's ``sharing``, a new one as each answer comes) and resend the unanswered ones
+    """Send every request (up to :data:`PARAM_WINDOW` unanswered at once, and
+    :data:`PARAM_ON_LINK` divided by the channel's ``sharing``, a new one as each answer
+    comes) and resend the unanswered ones
     when no answer came for a while:
     ``timing.timeout_s``, or once the link's round trip is known (``channel.srtt``, from
     the mission transfers before) :data:`~.transfer.RESEND_RTTS` round trips (at least
@@ -59,7 +67,7 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     telemetry radio (60 ms each way) 18 parameters took 18 round trips and a lost one
     1.5 s; now a round trip or two (docs/link.md)."""
     clock = getattr(channel, "clock", time.monotonic)
-    window = max(1, PARAM_WINDOW // getattr(channel, "sharing", 1))
+    window = max(1, min(PARAM_WINDOW, PARAM_ON_LINK // getattr(channel, "sharing", 1)))
     srtt = getattr(channel, "srtt", None)
     resend_s = timing.resend_after(srtt) if timing.adaptive and srtt else timing.timeout_s
     got: dict[str, float | None] = dict.fromkeys(requests)

@@ -72,7 +72,7 @@ def test_parameters_are_asked_a_window_at_a_time_not_one_round_trip_each():
 
 
 def test_a_shared_link_divides_the_window_among_its_vehicles():
-    from ftlbo_mav.link.params import PARAM_WINDOW, _exchange
+    from ftlbo_mav.link.params import PARAM_ON_LINK, _exchange
 
     class Shared(LoopbackChannel):
         sharing = 4  # four vehicles heard on the link
@@ -85,7 +85,7 @@ def test_a_shared_link_divides_the_window_among_its_vehicles():
         2, 1, n.encode(), -1)) for n in PLANNED}, TIMING)
     assert all(v is not None for v in got.values())
     at_start = [t for t, _m in sent if t == sent[0][0]]
-    assert len(at_start) == PARAM_WINDOW // 4  # then one more as each answer comes
+    assert len(at_start) == PARAM_ON_LINK // 4  # then one more as each answer comes
 
 
 class _StaleFirst:
