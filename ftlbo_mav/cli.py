@@ -35,6 +35,7 @@ LAZY_COMMANDS = {
     "fly": "ftlbo_mav.flight.commands:fly_command",
     "monitor": "ftlbo_mav.flight.commands:monitor",
     "abort": "ftlbo_mav.flight.commands:abort_command",
+    "risk": "ftlbo_mav.risk.commands:risk",
 }
 """The commands that talk MAVLink, imported only when one of them runs (or ``--help``
 lists them): ``plan`` starts without pymavlink's links and the emulator (click's

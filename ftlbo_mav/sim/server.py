@@ -80,6 +80,7 @@ class VehicleRunner:
         self.attachments: list[_Attachment] = []
         self.items_received = 0  # MISSION_ITEM_INTs, for Faults.close_after_items
         self.dead = False  # killed (Simulator.kill): no more flying, sending or answering
+        self.truth: list | None = None  # (t, lat, lon, alt AMSL) each tick, when recorded
 
     def attach(self, write: Callable[[bytes], None], link: Hashable = "SERIAL0", *,
                close: Callable[[], None] | None = None) -> _Attachment:
@@ -148,7 +149,10 @@ class VehicleRunner:
     def tick(self) -> None:
         if self.dead:
             return
-        out = self.vehicle.tick(self.clock())
+        now = self.clock()
+        out = self.vehicle.tick(now)
+        if self.truth is not None:
+            self.truth.append((now, *self.vehicle.true_position(now)))
         if self.faults.silent:
             return
         for att in list(self.attachments):

@@ -564,19 +564,25 @@ class Vehicle:
             int(b.current_a * 100), int(b.consumed_mah), int(b.consumed_wh * 36.0),
             b.remaining_pct(ap.params), 0, b.charge_state())
 
-    def sim_state(self, now: float):
-        """SIM_STATE (SITL's true state, libraries/SITL/SITL.cpp ``sim_state_send``): the
-        position the copter truly has, its estimate less the fused GPS error (``lat`` and
-        ``lon`` as SITL fills them: 1e-7 degrees in a float, as ``lat_int``)."""
+    def true_position(self, now: float) -> tuple[float, float, float]:
+        """Where the copter truly is (latitude, longitude degrees, altitude m AMSL): its
+        estimate less the fused GPS error (:mod:`.gps`)."""
         ap = self.autopilot
         t = now - self.boot_time
         de, dn = self.gps.transient(t) - self.gps.error(t)
         lat, lon = ap.tangent.to_latlon(ap.position[0] + de, ap.position[1] + dn)
-        v = ap.velocity
+        return lat, lon, float(self.state.alt_amsl_m)
+
+    def sim_state(self, now: float):
+        """SIM_STATE (SITL's true state, libraries/SITL/SITL.cpp ``sim_state_send``): the
+        position the copter truly has, its estimate less the fused GPS error (``lat`` and
+        ``lon`` as SITL fills them: 1e-7 degrees in a float, as ``lat_int``)."""
+        lat, lon, alt = self.true_position(now)
+        v = self.autopilot.velocity
         return R.MAVLink_sim_state_message(
             q1=1.0, q2=0.0, q3=0.0, q4=0.0, roll=0.0, pitch=0.0, yaw=0.0, xacc=0.0, yacc=0.0,
             zacc=0.0, xgyro=0.0, ygyro=0.0, zgyro=0.0, lat=lat * 1e7, lon=lon * 1e7,
-            alt=float(self.state.alt_amsl_m), std_dev_horz=0.0, std_dev_vert=0.0,
+            alt=alt, std_dev_horz=0.0, std_dev_vert=0.0,
             vn=float(v[1]), ve=float(v[0]), vd=float(-v[2]), lat_int=round(lat * 1e7),
             lon_int=round(lon * 1e7))
 

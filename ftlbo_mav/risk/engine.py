@@ -1,0 +1,120 @@
+"""The risk flights as Dask tasks: each flight one task, on a local cluster of this
+machine's cores (the default) or on a running Dask cluster (``--scheduler ADDRESS``).
+
+A task carries the plan folder's files (a few tens of kilobytes), so a worker on another
+machine needs nothing but ftlbo-mav installed; it writes them to a temporary folder, flies
+(:func:`.flight.fly_one`: its own emulated copters on ports the system chooses, so several
+flights share a worker) and removes everything. A worker that dies loses only the flights
+it was running, which Dask runs again elsewhere (its ``allowed-failures``); a flight that
+raises is tried again twice (``retries``), then recorded as failed with its error.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import BadInput
+from ..flight.planned import load_planned_flight
+from .conditions import Ranges, draw
+from .flight import TIME_SCALE, fly_one
+
+MAX_PLAN_BYTES = 50 * 1024 * 1024
+
+
+@dataclass(frozen=True)
+class Tally:
+    """Where a run stands: flights ``done`` of ``total``, ``running`` now, and the
+    running figures (the smallest true clearance so far, flights that left the plan)."""
+
+    done: int
+    total: int
+    running: int
+    least_clearance_m: float | None
+    left_plan: int
+    elapsed_s: float
+
+
+def pack_plan(plan_dir: Path) -> dict[str, bytes]:
+    """The plan folder's files (not its flight logs) by relative path."""
+    files = {}
+    for path in sorted(plan_dir.rglob("*")):
+        rel = path.relative_to(plan_dir)
+        if path.is_file() and rel.parts[0] not in ("flight", "risk"):
+            files[str(rel)] = path.read_bytes()
+    if sum(len(b) for b in files.values()) > MAX_PLAN_BYTES:
+        raise BadInput(f"{plan_dir}: more than {MAX_PLAN_BYTES >> 20} MiB of files to send "
+                       "with every flight")
+    return files
+
+
+def fly_packed(files: dict[str, bytes], ranges: Ranges, seed: int, copters: int,
+               time_scale: float) -> dict:
+    """One task: the plan written to a temporary folder, flown in flight ``seed``'s
+    conditions, the folder removed."""
+    with tempfile.TemporaryDirectory(prefix="ftlbo-risk-plan-") as tmp:
+        for rel, data in files.items():
+            path = Path(tmp) / rel
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
+        record = fly_one(tmp, draw(ranges, seed, copters), time_scale=time_scale)
+    record["worker_pid"] = os.getpid()
+    return record
+
+
+def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
+                scheduler: str | None = None, workers: int | None = None,
+                time_scale: float = TIME_SCALE,
+                on_progress: Callable[[Tally], None] | None = None) -> list[dict]:
+    """Fly ``plan_dir`` once per seed on Dask; the records in seed order."""
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    planned = load_planned_flight(plan_dir)
+    files = pack_plan(plan_dir)
+    started = time.monotonic()
+    cluster = None
+    if scheduler is None:
+        n = workers or os.cpu_count() or 1
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
+        client = Client(cluster)
+    else:
+        try:
+            client = Client(scheduler, timeout="10s")
+        except OSError as exc:
+            raise BadInput(f"--scheduler {scheduler}: no Dask scheduler answered ({exc})") \
+                from None
+    try:
+        slots = max(1, sum(client.nthreads().values()))
+        packed = client.scatter(files, broadcast=True)
+        futures = {client.submit(fly_packed, packed, ranges, s, planned.count, time_scale,
+                                 key=f"risk-flight-{s}-{os.getpid()}-{started}", pure=False,
+                                 retries=2): s for s in seeds}
+        records: dict[int, dict] = {}
+        least, left = None, 0
+        for future in as_completed(futures):
+            seed = futures[future]
+            try:
+                record = future.result()
+            except Exception as exc:  # noqa: BLE001 - a flight that kept failing is recorded
+                record = {"seed": seed, "outcome": f"failed: {type(exc).__name__}: {exc}",
+                          "exit_code": None, "departures": []}
+            records[seed] = record
+            c = record.get("true_min_clearance_m")
+            if c is not None:
+                least = c if least is None else min(least, c)
+            left += record.get("outcome") == "left the plan"
+            if on_progress is not None:
+                done = len(records)
+                on_progress(Tally(done, len(futures), min(slots, len(futures) - done), least,
+                                  left, time.monotonic() - started))
+        return [records[s] for s in seeds]
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

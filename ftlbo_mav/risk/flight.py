@@ -1,0 +1,215 @@
+"""One risk flight: the plan flown on the emulator as ``fly`` flies it, in the conditions
+of its seed, judged by where the copters truly were.
+
+Each flight starts its own emulated copters (:class:`~ftlbo_mav.sim.server.Simulator`,
+ports chosen by the system, so several flights run side by side on one machine), uploads
+the plan's missions as ``upload`` does, runs ``fly`` (pre-flight, take-off, the
+synchronized start, the keeper, the departure watch and its policy, landing) with its log
+in a temporary folder, and removes everything when it ends. The figures come from the
+copters' true positions (SIM_STATE's truth, recorded at every step of the emulator: its
+estimate less its fused GPS error), not from what they reported. Only the plan folder is
+read; nothing is written to it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..flight.metrics import min_clearance, min_separation
+from ..flight.planned import PlannedFlight, load_planned_flight
+from ..link.swarm import Assignment, upload_swarm
+from ..sim.gps import GpsErrorOptions
+from ..sim.server import Simulator
+from ..sim.vehicle import VehicleOptions
+from .conditions import Conditions
+
+TIME_SCALE = 4.0
+"""The emulator's time scale for a risk flight: the example's flight in some 15 s of wall
+time. The ground station's timing errors grow with the scale: two flights at a time on
+this 2-core machine at 12 (the integration tests' scale) left the plan in four of four
+(1.5-6 m from their slots), at 4 none did (0.06-0.12 m worst)."""
+AIRBORNE_M = 1.0  # above its home: separation counts only in the air (homes may be close)
+
+
+def homes_of(planned: PlannedFlight) -> list[tuple[float, float, float]]:
+    """Each copter's home: its mission's item 0, on the ground (0 m AMSL)."""
+    return [(m[0].lat_deg, m[0].lon_deg, 0.0) for m in planned.missions]
+
+
+def fly_one(plan_dir: str | Path, conditions: Conditions, *,
+            time_scale: float = TIME_SCALE, live: bool = False) -> dict:
+    """Fly ``plan_dir`` once in ``conditions``; the flight's record (:func:`judge`).
+    ``live``: fly's output (its live view) to this process's stderr, as ``fly`` shows it."""
+    planned = load_planned_flight(Path(plan_dir))
+    homes = homes_of(planned)
+    gps = [GpsErrorOptions(wander_m=conditions.gps_wander_m,
+                           correlation_s=conditions.gps_correlation_s, seed=s)
+           for s in conditions.gps_seeds[:len(homes)]]
+    started = time.monotonic()
+    with tempfile.TemporaryDirectory(prefix="ftlbo-risk-") as tmp, \
+            Simulator(homes=homes, base_port=0, seed=conditions.seed, time_scale=time_scale,
+                      vary=conditions.vary, wind=conditions.wind,
+                      options=[VehicleOptions(gps=g) for g in gps]) as sim:
+        assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
+                       enumerate(zip(planned.names, planned.missions, planned.fences))]
+        uploaded = upload_swarm(assignments, sim.urls)
+        failed = [r for r in uploaded if not r.verified]
+        if failed:
+            return _record(conditions, planned, None, exit_code=None, summary={},
+                           wall_s=time.monotonic() - started,
+                           problem="; ".join(f"{r.name}: {r.message}" for r in failed))
+        for r in sim.runners:
+            r.truth = []
+        killer = _schedule_loss(sim, conditions, time_scale)
+        code, output = _fly(Path(plan_dir), sim.urls, Path(tmp) / "flight", live=live)
+        if killer is not None:
+            killer.cancel()
+        summary_file = Path(tmp) / "flight" / "summary.json"
+        summary = json.loads(summary_file.read_text()) if summary_file.exists() else {}
+        truth = [list(r.truth or []) for r in sim.runners]
+    problem = None if summary else output.strip().splitlines()[-1:] or ["no summary"]
+    return _record(conditions, planned, truth, exit_code=code, summary=summary,
+                   wall_s=time.monotonic() - started,
+                   problem=problem if problem is None else problem[0])
+
+
+class _Loss:
+    def __init__(self, sim: Simulator, index: int, after_s: float, scale: float) -> None:
+        self.sim, self.index, self.after_s, self.scale = sim, index, after_s, scale
+        self._stop = threading.Event()
+        self.at: float | None = None  # the vehicles' seconds after their missions began
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        ap = self.sim.runners[self.index].vehicle.autopilot
+        while not self._stop.is_set() and ap.mode_name() != "AUTO":
+            self._stop.wait(0.01)
+        if self._stop.wait(self.after_s / self.scale):
+            return
+        self.sim.kill(self.index)
+        self.at = self.after_s
+
+    def cancel(self) -> None:
+        self._stop.set()
+        self.thread.join(timeout=5.0)
+
+
+def _schedule_loss(sim: Simulator, conditions: Conditions, scale: float) -> _Loss | None:
+    """The copter this flight loses, killed ``lost[1]`` seconds of its clock after its
+    missions start (AUTO), as a killed SITL process dies."""
+    if conditions.lost is None or conditions.lost[0] >= len(sim.runners):
+        return None
+    return _Loss(sim, conditions.lost[0], conditions.lost[1], scale)
+
+
+def _fly(plan_dir: Path, urls: list[str], log_dir: Path, *, live: bool) -> tuple[int, str]:
+    """``ftlbo-mav fly`` in this process: its exit code and what it printed."""
+    from ..cli import main  # the command as a user runs it (imported here: no cycle)
+
+    args = ["fly", str(plan_dir), "--sysid", f"1..{len(urls)}", "--control-port", "0",
+            "--connect", " ".join(urls), "--log-dir", str(log_dir)]
+    if live:
+        try:
+            main.main(args, standalone_mode=False)
+        except SystemExit as exc:
+            return int(exc.code or 0), ""
+        return 0, ""
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
+        try:
+            main.main(args, standalone_mode=False)
+            code = 0
+        except SystemExit as exc:
+            code = int(exc.code or 0)
+        except Exception as exc:  # noqa: BLE001 - a flight that breaks is a flight's outcome
+            print(f"{type(exc).__name__}: {exc}")
+            code = 2
+    return code, out.getvalue()
+
+
+def _true_enu(planned: PlannedFlight, truth: list[list[tuple]]) -> tuple[np.ndarray, np.ndarray]:
+    """Every copter's true positions on the first copter's times: ``(T,)`` seconds and
+    ``(T, N, 3)`` ENU metres in the plan's frame (a copter's last position held after it
+    died)."""
+    if not truth or not truth[0]:
+        return np.zeros(0), np.zeros((0, len(truth), 3))
+    times = np.array([row[0] for row in truth[0]])
+    out = np.empty((len(times), len(truth), 3))
+    for n, rows in enumerate(truth):
+        a = np.array(rows) if rows else np.array([[times[0], *truth[0][0][1:]]])
+        enu = planned.frame.to_enu(lat_deg=a[:, 1], lon_deg=a[:, 2], alt_m=a[:, 3])
+        for k in range(3):
+            out[:, n, k] = np.interp(times, a[:, 0], enu[:, k])
+    return times, out
+
+
+def judge(planned: PlannedFlight, truth) -> dict:
+    """The true figures of a flight, from the recorded true positions: the smallest
+    clearance from any obstacle (the whole flight), the smallest separation while every
+    copter is in the air, and the flight's time."""
+    times, pos = _true_enu(planned, truth)
+    if len(times) == 0:
+        return {}
+    ground = pos[0, :, 2]
+    airborne = np.all(pos[:, :, 2] - ground > AIRBORNE_M, axis=1)
+    clear = min_clearance(pos, planned.centres, planned.radii)
+    up = np.flatnonzero(np.any(pos[:, :, 2] - ground > AIRBORNE_M, axis=1))
+    return {"true_min_clearance_m": _num(clear.min()),
+            "true_min_separation_m": _num(min_separation(pos[airborne]).min())
+            if airborne.any() else None,
+            # the vehicles' seconds from the first copter leaving the ground to the last
+            # one landing
+            "flight_s": _num(times[up[-1]] - times[up[0]]) if len(up) else None}
+
+
+def _num(x) -> float | None:
+    x = float(x)
+    return round(x, 4) if math.isfinite(x) else None
+
+
+def _record(conditions: Conditions, planned: PlannedFlight, truth, *, exit_code, summary,
+            wall_s: float, problem: str | None) -> dict:
+    flown = judge(planned, truth) if truth is not None else {}
+    landing = summary.get("final_distance_to_goal_m") or []
+    record = {
+        "seed": conditions.seed,
+        "conditions": {"wind_m_s": conditions.wind[0], "wind_from_deg": conditions.wind[1],
+                       "turbulence_m_s": conditions.wind[2],
+                       "gps_wander_m": conditions.gps_wander_m, "vary": conditions.vary,
+                       "lost": None if conditions.lost is None else
+                       {"uav": planned.names[conditions.lost[0]],
+                        "after_s": round(conditions.lost[1], 2)}},
+        "exit_code": exit_code,
+        "outcome": _outcome(exit_code, summary, problem),
+        "departures": summary.get("departures", []),
+        **flown,
+        "formation_error_rms_m": summary.get("formation_error_rms_legs_m"),
+        "formation_error_max_m": summary.get("formation_error_max_legs_m"),
+        "landing_error_max_m": max(landing) if landing else None,
+        "planned_clearance_m": planned.clearance_m,
+        "min_separation_m": planned.min_separation_m,
+        "wall_s": round(wall_s, 2),
+    }
+    if problem:
+        record["problem"] = problem
+    return record
+
+
+def _outcome(code, summary: dict, problem: str | None) -> str:
+    if code is None:
+        return "not flown (upload failed)"
+    if code == 0:
+        return "completed"
+    if summary.get("departures"):
+        return "left the plan"
+    return f"failed (exit {code})" + (f": {problem}" if problem else "")
