@@ -327,7 +327,9 @@ class FlightVehicle:
         already (asked when the vehicles were found) is not asked again."""
         for attempt in range(retries + 1):
             if self.sysid in self.link.versions:
-                return self.link.versions[self.sysid]
+                with self._changed:
+                    self.status.firmware_version = self.link.versions[self.sysid]
+                return self.status.firmware_version
             self.send(version_request(self.sysid, attempt), step="firmware")
             if self.wait_for(lambda s: s.firmware_version is not None, timeout_s):
                 return self.status.firmware_version

@@ -1,0 +1,78 @@
+"""``ftlbo-mav risk`` flies the plan on a two-worker local Dask cluster, each flight as
+``fly`` flies it, and leaves nothing behind; one flight judged by the true positions.
+
+On the emulator (the flights of ``risk`` always are)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from ftlbo_mav.cli import main
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.risk.conditions import Ranges, draw
+from ftlbo_mav.risk.flight import fly_one
+
+from ..conftest import EXAMPLE
+
+
+@pytest.fixture(scope="module")
+def plan_dir(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("risk") / "plan"
+    shutil.copytree(EXAMPLE.with_suffix(""), folder)
+    return folder
+
+
+def _leftovers() -> set[str]:
+    return {p.name for p in Path(tempfile.gettempdir()).glob("ftlbo-risk-*")}
+
+
+def test_risk_flies_on_a_local_dask_cluster_and_reports_each_flight(plan_dir, tmp_path):
+    before = sorted(p.name for p in plan_dir.rglob("*"))
+    leftovers = _leftovers()
+    result = CliRunner().invoke(main, ["risk", str(plan_dir), "--flights", "2", "--workers",
+                                       "2", "--lost-rate", "1", "-o", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    doc = json.loads((tmp_path / "out" / "risk.json").read_text())
+    flights = doc["flights"]
+    assert [f["seed"] for f in flights] == [0, 1]
+    ranges = Ranges(lost_rate=1.0).with_budget(load_planned_flight(plan_dir).navigation
+                                               .horizontal_m)
+    for f in flights:
+        # the conditions are the seed's; each flight lost its copter and fly said so
+        c = draw(ranges, f["seed"], 3)
+        assert f["conditions"]["wind_m_s"] == c.wind[0]
+        assert f["conditions"]["lost"]["uav"] == f"uav{c.lost[0] + 1}"
+        assert f["outcome"] == "left the plan", f
+        assert any(f"{f['conditions']['lost']['uav']} (sysid" in d and "link lost" in d
+                   for d in f["departures"]), f["departures"]
+        assert f["true_min_clearance_m"] is not None
+    assert len({f["worker_pid"] for f in flights}) == 2  # one flight on each worker
+    left = next(p for p in doc["summary"]["probabilities"] if p["what"].startswith("left"))
+    assert left["events"] == 2 and left["ci95"][0] > 0.15
+    assert (tmp_path / "out" / "risk.png").exists() and "2 of 2 flights" in result.output
+    assert sorted(p.name for p in plan_dir.rglob("*")) == before  # the plan untouched
+    assert _leftovers() <= leftovers  # every flight's folders removed
+
+
+def test_one_flight_in_calm_air_completes_and_keeps_its_predicted_clearance(plan_dir):
+    planned = load_planned_flight(plan_dir)
+    calm = Ranges(wind_max_m_s=0.0, turbulence_max_m_s=0.0, gps_wander_m=0.0, vary=False)
+    record = fly_one(plan_dir, draw(calm, 5, planned.count))
+    assert record["outcome"] == "completed", record
+    predicted = min(planned.predicted_clearance)
+    # GPS exact: where the copters truly were is where they reported (flight/report.py)
+    assert record["true_min_clearance_m"] == pytest.approx(predicted, abs=0.1)
+    assert record["true_min_separation_m"] > planned.min_separation_m
+    assert record["formation_error_max_m"] < 0.3 and record["flight_s"] > 20
+
+
+def test_a_scheduler_and_local_workers_together_are_refused(plan_dir):
+    result = CliRunner().invoke(main, ["risk", str(plan_dir), "--scheduler",
+                                       "tcp://127.0.0.1:1", "--workers", "2"])
+    assert result.exit_code == 2 and "--workers is for the local cluster" in result.output
