@@ -42,6 +42,9 @@ def _progress(tally: Tally) -> None:
               help="Each copter differs as a real fleet does (start latency, jerk).")
 @click.option("--lost-rate", type=FiniteFloat(0, 1), default=0.0, show_default=True,
               help="Probability that a flight loses one copter (killed) on its legs.")
+@click.option("--takeover-rate", type=FiniteFloat(0, 1), default=0.0, show_default=True,
+              help="Probability that one copter's mode is taken over (BRAKE, from its "
+                   "second port) on its legs.")
 @click.option("--workers", type=click.IntRange(1, 256), default=None,
               help="Local Dask workers (default: one per core).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
@@ -55,17 +58,17 @@ def _progress(tally: Tally) -> None:
                                  "PLAN_DIR/risk).")
 @user_errors
 def risk(plan_dir, flights, seed, wind_max, turbulence_max, gps_wander, vary, lost_rate,
-         workers, scheduler, time_scale, replay, output):
+         takeover_rate, workers, scheduler, time_scale, replay, output):
     """Fly PLAN_DIR many times on the emulator, each flight as `fly` flies it, in
-    conditions drawn per flight (wind, gusts, GPS error, fleet variation, a lost copter),
-    and report the distributions: true clearance, separation, formation error, flight
-    time, landing error, departures, with 95 % intervals for the probabilities that
-    matter. Each flight is a Dask task: a local cluster by default, --scheduler for a
-    running one."""
+    conditions drawn per flight (wind, gusts, GPS error, fleet variation, a lost copter, a
+    mode taken over), and report the distributions: true clearance, separation,
+    formation error, flight time, landing error, departures, with 95 % intervals for the
+    probabilities that matter. Each flight is a Dask task: a local cluster by default,
+    --scheduler for a running one."""
     planned = load_planned_flight(plan_dir)
     ranges = Ranges(wind_max_m_s=wind_max, turbulence_max_m_s=turbulence_max,
-                    gps_wander_m=gps_wander, vary=vary, lost_rate=lost_rate
-                    ).with_budget(planned.navigation.horizontal_m)
+                    gps_wander_m=gps_wander, vary=vary, lost_rate=lost_rate,
+                    takeover_rate=takeover_rate).with_budget(planned.navigation.horizontal_m)
     if replay is not None:
         from .flight import fly_one
 

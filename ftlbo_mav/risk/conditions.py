@@ -15,7 +15,11 @@ SEED`` flies the same one again. Pure.
 - fleet variation (``vary``): each copter differs as a real fleet does
   (:func:`ftlbo_mav.sim.physics.varied`: start latency, jerk);
 - a vehicle lost (``lost_rate``): with that probability one copter, chosen uniformly, is
-  killed at a time uniform on ``lost_window_s`` seconds after its missions start.
+  killed at a time uniform on ``lost_window_s`` seconds after its missions start;
+- a mode taken over (``takeover_rate``): with that probability one copter, chosen
+  uniformly, is switched to BRAKE from its second port (a pilot's or another station's
+  MAV_CMD_DO_SET_MODE) at a time uniform on the same window; drawn after everything
+  above, so a seed's other conditions do not depend on it.
 """
 
 from __future__ import annotations
@@ -42,6 +46,7 @@ class Ranges:
     vary: bool = True
     lost_rate: float = 0.0
     lost_window_s: tuple[float, float] = (5.0, 20.0)
+    takeover_rate: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("wind_max_m_s", "turbulence_max_m_s"):
@@ -52,8 +57,10 @@ class Ranges:
             raise BadInput(f"gps wander: 0..10 m, got {self.gps_wander_m!r}")
         if not self.gps_correlation_s > 0:
             raise BadInput(f"gps correlation time must be > 0 s, got {self.gps_correlation_s!r}")
-        if not 0 <= self.lost_rate <= 1:
-            raise BadInput(f"lost rate: a probability 0..1, got {self.lost_rate!r}")
+        for name in ("lost_rate", "takeover_rate"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise BadInput(f"{name.replace('_', ' ')}: a probability 0..1, got "
+                               f"{getattr(self, name)!r}")
         lo, hi = self.lost_window_s
         if not 0 <= lo <= hi:
             raise BadInput(f"lost window: 0 <= from <= to, got {self.lost_window_s!r}")
@@ -67,9 +74,12 @@ class Ranges:
         return Ranges(**{**asdict(self), "gps_wander_m": round(wander, 4)})
 
     def describe(self) -> str:
-        lost = (f"; a vehicle lost in {self.lost_rate:.0%} of flights, "
-                f"{self.lost_window_s[0]:g}-{self.lost_window_s[1]:g} s into its missions"
+        window = f"{self.lost_window_s[0]:g}-{self.lost_window_s[1]:g} s into its missions"
+        lost = (f"; a vehicle lost in {self.lost_rate:.0%} of flights, {window}"
                 if self.lost_rate else "")
+        if self.takeover_rate:
+            lost += (f"; a vehicle's mode taken over (BRAKE) in {self.takeover_rate:.0%} of "
+                     f"flights, {window}")
         return (f"wind 0-{self.wind_max_m_s:g} m/s from any direction, turbulence "
                 f"0-{self.turbulence_max_m_s:g} m/s; GPS wander {self.gps_wander_m or 0:g} m "
                 f"per axis (1 sigma, {self.gps_correlation_s:g} s correlation); fleet "
@@ -79,8 +89,8 @@ class Ranges:
 @dataclass(frozen=True)
 class Conditions:
     """One flight's conditions: wind ``(speed, from_deg, turbulence)``, each copter's GPS
-    seed, fleet variation, and the copter lost (index) with when (seconds after the
-    missions start), or None."""
+    seed, fleet variation, and the copter lost and the one whose mode is taken over
+    (index, seconds after the missions start), or None."""
 
     seed: int
     wind: tuple[float, float, float]
@@ -89,10 +99,13 @@ class Conditions:
     gps_seeds: tuple[int, ...]
     vary: bool
     lost: tuple[int, float] | None
+    takeover: tuple[int, float] | None = None
 
     def describe(self) -> str:
         spd, frm, turb = self.wind
         lost = f"; uav{self.lost[0] + 1} lost at +{self.lost[1]:.1f} s" if self.lost else ""
+        if self.takeover:
+            lost += f"; uav{self.takeover[0] + 1} taken over at +{self.takeover[1]:.1f} s"
         return (f"seed {self.seed}: wind {spd:.1f} m/s from {frm:.0f} deg, turbulence "
                 f"{turb:.1f} m/s; GPS wander {self.gps_wander_m:g} m{lost}")
 
@@ -109,7 +122,10 @@ def draw(ranges: Ranges, seed: int, copters: int) -> Conditions:
     lost_draw, who, when = rng.random(), int(rng.integers(copters)), float(
         rng.uniform(*ranges.lost_window_s))
     lost = (who, when) if lost_draw < ranges.lost_rate else None
+    taken_draw, whose, at = rng.random(), int(rng.integers(copters)), float(
+        rng.uniform(*ranges.lost_window_s))
+    takeover = (whose, at) if taken_draw < ranges.takeover_rate else None
     return Conditions(seed=seed, wind=(round(spd, 3), round(frm, 1), round(turb, 3)),
                       gps_wander_m=float(ranges.gps_wander_m or 0.0),
                       gps_correlation_s=ranges.gps_correlation_s, gps_seeds=gps_seeds,
-                      vary=ranges.vary, lost=lost)
+                      vary=ranges.vary, lost=lost, takeover=takeover)

@@ -69,10 +69,10 @@ def fly_one(plan_dir: str | Path, conditions: Conditions, *,
                            problem="; ".join(f"{r.name}: {r.message}" for r in failed))
         for r in sim.runners:
             r.truth = []
-        killer = _schedule_loss(sim, conditions, time_scale)
+        faults = _schedule_faults(sim, conditions, time_scale)
         code, output = _fly(Path(plan_dir), sim.urls, Path(tmp) / "flight", live=live)
-        if killer is not None:
-            killer.cancel()
+        for fault in faults:
+            fault.cancel()
         summary_file = Path(tmp) / "flight" / "summary.json"
         summary = json.loads(summary_file.read_text()) if summary_file.exists() else {}
         truth = [list(r.truth or []) for r in sim.runners]
@@ -82,9 +82,16 @@ def fly_one(plan_dir: str | Path, conditions: Conditions, *,
                    problem=problem if problem is None else problem[0])
 
 
-class _Loss:
-    def __init__(self, sim: Simulator, index: int, after_s: float, scale: float) -> None:
-        self.sim, self.index, self.after_s, self.scale = sim, index, after_s, scale
+class _Fault:
+    """A fault ``after_s`` seconds of the vehicles' clock after copter ``index`` starts its
+    mission (AUTO): ``kill`` (its emulator gone, as a killed SITL process) or ``takeover``
+    (switched to BRAKE from its SERIAL1 port, as a pilot's or another station's
+    MAV_CMD_DO_SET_MODE)."""
+
+    def __init__(self, sim: Simulator, index: int, after_s: float, scale: float,
+                 kind: str) -> None:
+        self.sim, self.index, self.after_s, self.scale, self.kind = (
+            sim, index, after_s, scale, kind)
         self._stop = threading.Event()
         self.at: float | None = None  # the vehicles' seconds after their missions began
         self.thread = threading.Thread(target=self._run, daemon=True)
@@ -96,20 +103,43 @@ class _Loss:
             self._stop.wait(0.01)
         if self._stop.wait(self.after_s / self.scale):
             return
-        self.sim.kill(self.index)
+        if self.kind == "kill":
+            self.sim.kill(self.index)
+        else:
+            self._take_over()
         self.at = self.after_s
+
+    def _take_over(self) -> None:
+        from pymavlink import mavutil
+        from pymavlink.dialects.v20 import ardupilotmega as R
+
+        from ..ardupilot.modes import CopterMode
+
+        conn = mavutil.mavlink_connection(self.sim.serial1_urls[self.index],
+                                          source_system=246, dialect="ardupilotmega")
+        try:
+            sysid = self.index + 1
+            for _ in range(3):  # as a pilot's station: sent until the mode shows
+                conn.mav.command_long_send(sysid, 1, R.MAV_CMD_DO_SET_MODE, 0,
+                                           R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                                           CopterMode.BRAKE, 0, 0, 0, 0, 0)
+                if self._stop.wait(0.2 / self.scale) or (
+                        self.sim.runners[self.index].vehicle.autopilot.mode_name() == "BRAKE"):
+                    return
+        finally:
+            conn.close()
 
     def cancel(self) -> None:
         self._stop.set()
         self.thread.join(timeout=5.0)
 
 
-def _schedule_loss(sim: Simulator, conditions: Conditions, scale: float) -> _Loss | None:
-    """The copter this flight loses, killed ``lost[1]`` seconds of its clock after its
-    missions start (AUTO), as a killed SITL process dies."""
-    if conditions.lost is None or conditions.lost[0] >= len(sim.runners):
-        return None
-    return _Loss(sim, conditions.lost[0], conditions.lost[1], scale)
+def _schedule_faults(sim: Simulator, conditions: Conditions, scale: float) -> list[_Fault]:
+    """The copter this flight loses and the one whose mode is taken over (module notes of
+    :mod:`.conditions`), each at its time after its missions start."""
+    return [_Fault(sim, which[0], which[1], scale, kind)
+            for kind, which in (("kill", conditions.lost), ("takeover", conditions.takeover))
+            if which is not None and which[0] < len(sim.runners)]
 
 
 def _fly(plan_dir: Path, urls: list[str], log_dir: Path, *, live: bool) -> tuple[int, str]:
@@ -188,7 +218,10 @@ def _record(conditions: Conditions, planned: PlannedFlight, truth, *, exit_code,
                        "gps_wander_m": conditions.gps_wander_m, "vary": conditions.vary,
                        "lost": None if conditions.lost is None else
                        {"uav": planned.names[conditions.lost[0]],
-                        "after_s": round(conditions.lost[1], 2)}},
+                        "after_s": round(conditions.lost[1], 2)},
+                       "takeover": None if conditions.takeover is None else
+                       {"uav": planned.names[conditions.takeover[0]],
+                        "after_s": round(conditions.takeover[1], 2)}},
         "exit_code": exit_code,
         "outcome": _outcome(exit_code, summary, problem),
         "departures": summary.get("departures", []),

@@ -438,7 +438,7 @@ def test_monitor_lists_a_vehicle_that_leaves_its_mission(plan_dir):
             take_off(planned, flying.vehicles, FlyOptions(), say=lambda _t: None)
             thread = threading.Thread(target=lambda: holder.setdefault(
                 "result", CliRunner().invoke(main, [
-                    "monitor", str(plan_dir), "--sysid", "1..3", "--duration", "4",
+                    "monitor", str(plan_dir), "--sysid", "1..3", "--duration", "10",
                     "--log-dir", str(plan_dir / "watched"),
                     "--connect", " ".join(fleet.serial1_urls)])))
             thread.start()

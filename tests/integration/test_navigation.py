@@ -130,7 +130,13 @@ def test_a_gps_glitch_during_take_off_is_a_departure(plan_dir):
 def test_a_copter_whose_gps_puts_it_ahead_of_its_start_moves_there_before_the_legs(plan_dir):
     """Its estimate 1.2 m east of where it stands (the first leg runs east): it takes off
     where it believes it is, moves to its start point, and every copter leaves from its
-    own. Started where it hovered, it would fly the legs 1.2 m ahead of the others."""
+    own. Started where it hovered, it would fly the legs 1.2 m ahead of the others.
+
+    Without the keeper and with a loose formation bound: this is about where the legs
+    begin. On SITL the copter that moved gains 1.2 m on the others while the first leg
+    speeds up (SITL, two runs; with the keeper on it is paused back and the flight
+    passes the plan's bound), which the plan's 0.77 m bound would call a departure; the
+    emulator does not show that gain (docs/flight.md, "When a vehicle leaves the plan")."""
     ahead_m = 1.2
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
@@ -141,6 +147,7 @@ def test_a_copter_whose_gps_puts_it_ahead_of_its_start_moves_there_before_the_le
             time.sleep(10.0 / SPEEDUP)  # EKF3 takes a GPS step up over about 5 s
             result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
                                                "--control-port", "0", "--no-keeper",
+                                               "--formation-bound", "5",
                                                "--connect", " ".join(fleet.urls)])
         finally:
             station.close()

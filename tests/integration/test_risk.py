@@ -76,3 +76,17 @@ def test_a_scheduler_and_local_workers_together_are_refused(plan_dir):
     result = CliRunner().invoke(main, ["risk", str(plan_dir), "--scheduler",
                                        "tcp://127.0.0.1:1", "--workers", "2"])
     assert result.exit_code == 2 and "--workers is for the local cluster" in result.output
+
+
+def test_a_mode_taken_over_is_a_departure_and_that_copter_is_left_alone(plan_dir):
+    planned = load_planned_flight(plan_dir)
+    ranges = Ranges(wind_max_m_s=0.0, turbulence_max_m_s=0.0, gps_wander_m=0.0, vary=False,
+                    takeover_rate=1.0)
+    conditions = draw(ranges, 3, planned.count)
+    record = fly_one(plan_dir, conditions)
+    who = f"uav{conditions.takeover[0] + 1}"
+    assert record["conditions"]["takeover"]["uav"] == who
+    assert record["outcome"] == "left the plan", record
+    assert any(d.startswith(f"{who} (sysid") and "switched to BRAKE" in d
+               for d in record["departures"]), record["departures"]
+    assert record["true_min_clearance_m"] > 0

@@ -39,6 +39,17 @@ def test_a_copter_is_lost_at_the_rate_asked_within_its_window():
     assert 240 < some < 360
 
 
+def test_a_mode_is_taken_over_at_its_rate_without_changing_the_other_conditions():
+    plain = [draw(Ranges(lost_rate=0.3), s, 3) for s in range(300)]
+    taken = [draw(Ranges(lost_rate=0.3, takeover_rate=0.5), s, 3) for s in range(300)]
+    assert all(p.takeover is None for p in plain)
+    assert [(p.wind, p.gps_seeds, p.lost) for p in plain] == \
+        [(t.wind, t.gps_seeds, t.lost) for t in taken]
+    assert 110 < sum(t.takeover is not None for t in taken) < 190
+    assert {t.takeover[0] for t in taken if t.takeover} == {0, 1, 2}
+    assert "uav" in next(t for t in taken if t.takeover).describe()
+
+
 def test_the_gps_wander_defaults_to_the_plans_navigation_budget():
     assert Ranges().with_budget(0.49).gps_wander_m == pytest.approx(0.49 / R95_PER_SIGMA, abs=1e-4)
     assert Ranges(gps_wander_m=0.3).with_budget(0.49).gps_wander_m == 0.3  # given: kept
@@ -47,7 +58,8 @@ def test_the_gps_wander_defaults_to_the_plans_navigation_budget():
 
 @pytest.mark.parametrize("kw, problem", [
     ({"wind_max_m_s": -1.0}, "wind-max-m-s"), ({"turbulence_max_m_s": float("nan")}, "turb"),
-    ({"lost_rate": 1.5}, "probability"), ({"gps_wander_m": -0.1}, "gps wander"),
+    ({"lost_rate": 1.5}, "probability"), ({"takeover_rate": -0.1}, "takeover rate"),
+    ({"gps_wander_m": -0.1}, "gps wander"),
     ({"lost_window_s": (9.0, 4.0)}, "lost window"), ({"gps_correlation_s": 0.0}, "correlation")])
 def test_bad_ranges_are_refused_with_what_is_wrong(kw, problem):
     with pytest.raises(BadInput, match=problem):
