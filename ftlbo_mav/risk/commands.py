@@ -76,6 +76,9 @@ def risk(plan_dir, flights, seed, wind_max, turbulence_max, gps_wander, vary, lo
         click.echo(f"replaying {conditions.describe()}", err=True)
         record = fly_one(plan_dir, conditions, time_scale=time_scale, live=True)
         click.echo(json.dumps(record, indent=1))
+        code = record["exit_code"]
+        if code != 0:  # as fly ends; an upload that failed is 1, as upload's
+            sys.exit(1 if code is None else code)
         return
     if scheduler is not None and workers is not None:
         raise BadInput("--workers is for the local cluster; a --scheduler has its own")

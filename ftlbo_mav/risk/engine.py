@@ -70,8 +70,10 @@ def fly_packed(files: dict[str, bytes], ranges: Ranges, seed: int, copters: int,
 def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
                 scheduler: str | None = None, workers: int | None = None,
                 time_scale: float = TIME_SCALE,
-                on_progress: Callable[[Tally], None] | None = None) -> list[dict]:
-    """Fly ``plan_dir`` once per seed on Dask; the records in seed order."""
+                on_progress: Callable[[Tally], None] | None = None,
+                task: Callable[..., dict] = fly_packed) -> list[dict]:
+    """Fly ``plan_dir`` once per seed on Dask; the records in seed order. ``task``: one
+    flight, called as :func:`fly_packed` is (the tests give one that kills its worker)."""
     from dask.distributed import Client, LocalCluster, as_completed
 
     planned = load_planned_flight(plan_dir)
@@ -92,7 +94,7 @@ def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
     try:
         slots = max(1, sum(client.nthreads().values()))
         packed = client.scatter(files, broadcast=True)
-        futures = {client.submit(fly_packed, packed, ranges, s, planned.count, time_scale,
+        futures = {client.submit(task, packed, ranges, s, planned.count, time_scale,
                                  key=f"risk-flight-{s}-{os.getpid()}-{started}", pure=False,
                                  retries=2): s for s in seeds}
         records: dict[int, dict] = {}
