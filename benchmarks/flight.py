@@ -88,7 +88,7 @@ def set_params(urls, settings) -> None:
                 v.send(R.MAVLink_param_set_message(sysid, 1, name.encode(), value,
                                                    R.MAV_PARAM_TYPE_REAL32))
                 got = v.read_param(name)
-                if got is not None and abs(got - value) < 1e-6:
+                if got is not None and abs(got - value) <= 1e-6 * max(1.0, abs(value)):  # float32
                     break
             else:
                 raise SystemExit(f"could not set {name} = {value:g} on sysid {sysid}")
