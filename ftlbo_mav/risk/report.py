@@ -26,8 +26,10 @@ SIMULATOR_NOTE = (
     "vehicles' clock faster than the wall clock); the ground station's timing errors "
     "grow with it, so a flight is no more exact than at scale 1 and may be worse. A "
     "flight's conditions follow from its seed; its outcome also depends on the timing "
-    "of the run, as a real flight's does. Calibration against SITL on the same seeded "
-    "conditions is not done yet (issue 31).")
+    "of the run, as a real flight's does. Against ArduCopter 4.5.6 SITL on ten seeded "
+    "conditions of the example (docs/risk.md): clearance and separation agree within the "
+    "spread; the formation error's worst is about half of SITL's (0.086 against 0.155 m "
+    "median), so this report understates it; flights last about 3 s longer.")
 
 
 def _where(records, key):

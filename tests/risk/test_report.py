@@ -48,7 +48,7 @@ def test_the_report_is_written_as_json_markdown_and_figure(tmp_path):
     assert [p.name for p in paths] == ["risk.json", "risk.md", "risk.png"]
     doc = json.loads(paths[0].read_text())
     assert len(doc["flights"]) == 5 and doc["summary"]["flown"] == 4
-    assert "emulator" in doc["simulator"] and "Calibration against SITL" in doc["simulator"]
+    assert "emulator" in doc["simulator"] and "Against ArduCopter 4.5.6 SITL" in doc["simulator"]
     md = paths[1].read_text()
     assert "1 of 4 flights" in md and "--replay SEED" in md
     assert paths[2].stat().st_size > 10_000
