@@ -20,6 +20,8 @@ from ftlbo_mav.risk.flight import fly_one
 
 from ..conftest import EXAMPLE
 
+pytestmark = pytest.mark.solo  # two workers flying: run alone, after the rest (pyproject)
+
 
 @pytest.fixture(scope="module")
 def plan_dir(tmp_path_factory) -> Path:
