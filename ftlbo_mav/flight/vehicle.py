@@ -396,6 +396,8 @@ class FlightVehicle:
                 return
             if attempt + 1 < tries:
                 time.sleep(retry_s)
+                if not self.status.armed:  # disarmed on the ground meanwhile (DISARM_DELAY)
+                    self.arm(budget_s=2.0 * retry_s)
         raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
 
     def read_param(self, name: str, *, timeout_s: float = 1.0, retries: int = 2) -> float | None:
