@@ -48,7 +48,7 @@ from ftlbo_mav.flight.outcome import FlightLeftPlan
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.report import summarize
 from ftlbo_mav.link.budget import choose
-from ftlbo_mav.link.swarm import Assignment, upload_swarm
+from ftlbo_mav.link.swarm import upload_swarm
 from ftlbo_mav.link.transfer import Timing
 from ftlbo_mav.mission.export import write_plan
 from ftlbo_mav.planning.planner import plan
@@ -221,8 +221,7 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
             vehicles = _Urls([started.udp_url], started.radio)
         # as `ftlbo-mav upload` sends them: mission, the fence and rally points if any,
         # and the plan's [vehicle] parameters
-        assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
-                       enumerate(zip(planned.names, planned.missions, planned.fences))]
+        assignments = planned.assignments()
         t0 = time.monotonic()
         results = upload_swarm(assignments, vehicles.urls, timing=Timing())
         upload_s = time.monotonic() - t0

@@ -47,7 +47,7 @@ from ftlbo_mav.flight.planned import load_planned_flight  # noqa: E402
 from ftlbo_mav.flight.preflight import PreflightError  # noqa: E402
 from ftlbo_mav.flight.record import fitted_times  # noqa: E402
 from ftlbo_mav.link.rtcm import RtcmForwarder, frames_from, parse_source  # noqa: E402
-from ftlbo_mav.link.swarm import Assignment, upload_swarm  # noqa: E402
+from ftlbo_mav.link.swarm import upload_swarm  # noqa: E402
 from ftlbo_mav.link.transfer import Timing  # noqa: E402
 from ftlbo_mav.mission.export import write_plan  # noqa: E402
 from ftlbo_mav.planning.planner import plan  # noqa: E402
@@ -250,8 +250,7 @@ def one_flight(plan_dir: Path, homes, *, binary, speedup, seed, wander_m, tau_s,
 
         swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed)
     with swarm as vehicles:
-        assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
-                       enumerate(zip(planned.names, planned.missions, planned.fences))]
+        assignments = planned.assignments()
         results = upload_swarm(assignments, vehicles.urls, timing=Timing())
         if not all(r.verified for r in results):
             raise SystemExit("upload failed: " + "; ".join(r.message for r in results))

@@ -38,7 +38,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from ftlbo_mav.flight.planned import load_planned_flight  # noqa: E402
-from ftlbo_mav.link.swarm import Assignment, upload_swarm  # noqa: E402
+from ftlbo_mav.link.swarm import upload_swarm  # noqa: E402
 from ftlbo_mav.mission.export import write_plan  # noqa: E402
 from ftlbo_mav.planning.planner import plan  # noqa: E402
 from ftlbo_mav.risk.conditions import Conditions, Ranges, draw  # noqa: E402
@@ -104,8 +104,7 @@ def fly_sitl(plan_dir: Path, conditions: Conditions, binary: str) -> dict:
     with tempfile.TemporaryDirectory(prefix="ftlbo-risk-sitl-") as tmp, \
             SitlSwarm(binary=binary, homes=homes) as swarm:
         set_params(swarm.urls, wind_params(conditions.wind, planned.count))
-        assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
-                       enumerate(zip(planned.names, planned.missions, planned.fences))]
+        assignments = planned.assignments()
         uploaded = upload_swarm(assignments, swarm.urls)
         if not all(r.verified for r in uploaded):
             return _record(conditions, planned, None, exit_code=None, summary={},

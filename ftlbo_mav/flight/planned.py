@@ -65,6 +65,14 @@ class PlannedFlight:
     def count(self) -> int:
         return len(self.names)
 
+    def assignments(self) -> list:
+        """Each UAV's upload with system id i+1 (:class:`~ftlbo_mav.link.swarm.Assignment`:
+        its mission, fence and the plan's [vehicle] parameters), as ``upload`` sends it."""
+        from ..link.swarm import Assignment
+
+        return [Assignment(n, i + 1, m, f, self.vehicle or {}) for i, (n, m, f) in
+                enumerate(zip(self.names, self.missions, self.fences))]
+
 
 def load_planned_flight(folder: str | Path) -> PlannedFlight:
     """``folder``'s plan and its mission files, checked to belong together

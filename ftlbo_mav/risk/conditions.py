@@ -119,13 +119,17 @@ def draw(ranges: Ranges, seed: int, copters: int) -> Conditions:
     frm = float(rng.uniform(0.0, 360.0))
     turb = float(rng.uniform(0.0, ranges.turbulence_max_m_s))
     gps_seeds = tuple(int(s) for s in rng.integers(0, 2**31 - 1, copters))
-    lost_draw, who, when = rng.random(), int(rng.integers(copters)), float(
-        rng.uniform(*ranges.lost_window_s))
-    lost = (who, when) if lost_draw < ranges.lost_rate else None
-    taken_draw, whose, at = rng.random(), int(rng.integers(copters)), float(
-        rng.uniform(*ranges.lost_window_s))
-    takeover = (whose, at) if taken_draw < ranges.takeover_rate else None
+    lost = _fault(rng, ranges.lost_rate, copters, ranges.lost_window_s)
+    takeover = _fault(rng, ranges.takeover_rate, copters, ranges.lost_window_s)
     return Conditions(seed=seed, wind=(round(spd, 3), round(frm, 1), round(turb, 3)),
                       gps_wander_m=float(ranges.gps_wander_m or 0.0),
                       gps_correlation_s=ranges.gps_correlation_s, gps_seeds=gps_seeds,
                       vary=ranges.vary, lost=lost, takeover=takeover)
+
+
+def _fault(rng, rate: float, copters: int, window: tuple[float, float]
+           ) -> tuple[int, float] | None:
+    """One fault's draw: (copter, seconds into its missions) with probability ``rate``.
+    Three numbers are drawn whatever the rate, so the draws after it stay the seed's."""
+    happens, who, when = rng.random(), int(rng.integers(copters)), float(rng.uniform(*window))
+    return (who, when) if happens < rate else None

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..flight.metrics import min_clearance, min_separation
 from ..flight.planned import PlannedFlight, load_planned_flight
-from ..link.swarm import Assignment, upload_swarm
+from ..link.swarm import upload_swarm
 from ..sim.gps import GpsErrorOptions
 from ..sim.server import Simulator
 from ..sim.vehicle import VehicleOptions
@@ -59,8 +59,7 @@ def fly_one(plan_dir: str | Path, conditions: Conditions, *,
             Simulator(homes=homes, base_port=0, seed=conditions.seed, time_scale=time_scale,
                       vary=conditions.vary, wind=conditions.wind,
                       options=[VehicleOptions(gps=g) for g in gps]) as sim:
-        assignments = [Assignment(n, i + 1, m, f, planned.vehicle or {}) for i, (n, m, f) in
-                       enumerate(zip(planned.names, planned.missions, planned.fences))]
+        assignments = planned.assignments()
         uploaded = upload_swarm(assignments, sim.urls)
         failed = [r for r in uploaded if not r.verified]
         if failed:
@@ -216,12 +215,8 @@ def _record(conditions: Conditions, planned: PlannedFlight, truth, *, exit_code,
         "conditions": {"wind_m_s": conditions.wind[0], "wind_from_deg": conditions.wind[1],
                        "turbulence_m_s": conditions.wind[2],
                        "gps_wander_m": conditions.gps_wander_m, "vary": conditions.vary,
-                       "lost": None if conditions.lost is None else
-                       {"uav": planned.names[conditions.lost[0]],
-                        "after_s": round(conditions.lost[1], 2)},
-                       "takeover": None if conditions.takeover is None else
-                       {"uav": planned.names[conditions.takeover[0]],
-                        "after_s": round(conditions.takeover[1], 2)}},
+                       "lost": _fault_record(planned, conditions.lost),
+                       "takeover": _fault_record(planned, conditions.takeover)},
         "exit_code": exit_code,
         "outcome": _outcome(exit_code, summary, problem),
         "departures": summary.get("departures", []),
@@ -236,6 +231,11 @@ def _record(conditions: Conditions, planned: PlannedFlight, truth, *, exit_code,
     if problem:
         record["problem"] = problem
     return record
+
+
+def _fault_record(planned: PlannedFlight, fault: tuple[int, float] | None) -> dict | None:
+    return None if fault is None else {"uav": planned.names[fault[0]],
+                                       "after_s": round(fault[1], 2)}
 
 
 def _outcome(code, summary: dict, problem: str | None) -> str:
