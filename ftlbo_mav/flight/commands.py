@@ -8,12 +8,12 @@ from __future__ import annotations
 import contextlib
 import json
 import sys
-import time
 from dataclasses import replace
 from pathlib import Path
 
 import click
 
+from .. import clock
 from ..ardupilot.firmware import firmware_entry
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, PORT, SYSIDS, FiniteFloat
@@ -537,21 +537,21 @@ def monitor(plan_dir, sysid_text, connect, forward, duration, log_dir, rate, dis
                                     navigation=planned.navigation if planned else None,
                                     battery=battery_watch(planned))
         events: list[str] = []
-        end = time.monotonic() + duration if duration else float("inf")
+        end = clock.monotonic() + duration if duration else float("inf")
         flew = set()
         try:
-            while time.monotonic() < end:
+            while clock.monotonic() < end:
                 flew |= {v.sysid for v in fleet.vehicles if v.status.armed}
                 if flew and len(flew) == len(sysids) and not any(
                         v.status.armed for v in fleet.vehicles):
                     break  # every vehicle flew and has landed
                 watch_from_outside(departures, fleet.vehicles, planned)
                 seen = [observe(v, planned) for v in fleet.vehicles]
-                for e in departures.check(seen, time.monotonic()):
+                for e in departures.check(seen, clock.monotonic()):
                     events.append(describe(e, fleet.vehicles))
                     view.message(events[-1])
                 view.update()
-                time.sleep(0.1)
+                clock.sleep(0.1)
         except KeyboardInterrupt:
             pass
         view.update(force=True)

@@ -112,7 +112,7 @@ class Together:
 
 @dataclass(frozen=True)
 class Seen:
-    """One vehicle as the watch sees it at one instant (times are ``time.monotonic()``).
+    """One vehicle as the watch sees it at one instant (times are ``clock.monotonic()``).
     ``position``: ENU metres in the plan's frame, or None; ``seq``: its current item."""
 
     mode: str

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 
+from .. import clock
 from ..link.endpoints import LinkError, describe_missing, discover, open_links
 from .vehicle import FlightVehicle
 
@@ -54,7 +54,7 @@ class Fleet:
 def concurrently(fn: Callable, args: Sequence) -> list:
     """``fn(arg)`` for every arg at once (one thread each); after all have finished,
     re-raises the first error."""
-    with ThreadPoolExecutor(max_workers=max(1, len(args))) as pool:
+    with clock.Executor(max(1, len(args))) as pool:
         futures = [pool.submit(fn, a) for a in args]
         errors = [f.exception() for f in futures]
     for e in errors:

@@ -21,13 +21,12 @@ from __future__ import annotations
 
 import math
 import queue
-import threading
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 import numpy as np
 
+from .. import clock
 from ..ardupilot.navigation import vehicle_navigation
 from ..link.swarm import upload_and_verify
 from ..link.transfer import Timing
@@ -97,7 +96,7 @@ class GoingHome:
         self.timing = timing or Timing()
         self.plan: ReturnPlan | None = None  # every route home planned so far
         self.started_t: float | None = None  # when the first were planned
-        self._done: queue.SimpleQueue = queue.SimpleQueue()
+        self._done: queue.SimpleQueue = clock.SimpleQueue()
 
     def start(self, answered: Sequence[int], left: Sequence[int], now: float) -> dict[int, str]:
         """Plan the way home of the ``answered`` vehicles (stopped where they are), the
@@ -144,7 +143,7 @@ class GoingHome:
         for j in positions:
             if j not in plan.routes:
                 continue
-            threading.Thread(target=self._fly_home, args=(j,), daemon=True,
+            clock.Thread(target=self._fly_home, args=(j,), daemon=True,
                              name=f"{self.vehicles[j].name} home").start()
         return refused
 
@@ -165,7 +164,7 @@ class GoingHome:
 
     def _fly_home(self, j: int) -> None:
         v, route = self.vehicles[j], self.plan.routes[j]
-        t0 = time.monotonic()
+        t0 = clock.monotonic()
         try:
             items = self.mission(j)
             v.set_mode("BRAKE")  # holds where it stopped while its mission is replaced
@@ -188,7 +187,7 @@ class GoingHome:
             f"flying home on a planned route ({len(route.points) - 2} waypoint(s) at "
             f"{route.layer_m:.1f} m{wait}; predicted clearance {route.clearance_m:.2f} m, "
             f"{route.seconds:.0f} s to the ground; uploaded, verified and started in "
-            f"{time.monotonic() - t0:.1f} s)")))
+            f"{clock.monotonic() - t0:.1f} s)")))
 
     def _off_start(self, j: int) -> str | None:
         """Why vehicle j is not where its route home begins (a fresh report, within
@@ -200,7 +199,7 @@ class GoingHome:
                                                     alt_m=s.alt_m), float)
         start = np.asarray(self.plan.routes[j].points[0], float)
         off = float(np.linalg.norm(here[:2] - start[:2]))
-        age = time.monotonic() - s.position_t
+        age = clock.monotonic() - s.position_t
         if age > 1.0:
             return f"its last position is {age:.1f} s old"
         if off > ROUTE_START_M:

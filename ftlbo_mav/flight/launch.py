@@ -12,7 +12,6 @@ messages; only afterwards are the switches confirmed, so that the formation leav
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import NamedTuple
@@ -20,6 +19,7 @@ from typing import NamedTuple
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from .. import clock
 from ..errors import FtlboError
 from ..geo import LocalFrame
 from ..link.codec import item_differences
@@ -62,9 +62,9 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
             camera_off(v, say)
         # ArduCopter refuses GUIDED, then arming, until its EKF has a position estimate
         # (SITL: about 18 s after the pre-arm checks pass): both wait within the budget
-        deadline = time.monotonic() + options.arm_budget_s
+        deadline = clock.monotonic() + options.arm_budget_s
         v.set_mode("GUIDED", timeout_s=options.arm_budget_s)
-        v.arm(budget_s=max(0.0, deadline - time.monotonic()))
+        v.arm(budget_s=max(0.0, deadline - clock.monotonic()))
         v.takeoff(alt)
 
     say("arming and taking off")
@@ -79,14 +79,14 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
         return lambda s: (abs(s.alt_m - alt) <= options.takeoff_tolerance_m
                           and abs(s.climb_m_s) <= options.settled_climb_m_s)
 
-    deadline = time.monotonic() + options.takeoff_timeout_s
+    deadline = clock.monotonic() + options.takeoff_timeout_s
     while True:
         if aborted(vehicles):
             raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         pending = [v for v, alt in zip(vehicles, targets) if not hovering(alt)(v.status)]
         if not pending:
             return
-        if time.monotonic() >= deadline:
+        if clock.monotonic() >= deadline:
             abort(vehicles, mode="LAND")
             raise FlightError(pending[0].name, pending[0].sysid, "takeoff",
                               f"not hovering at its altitude after {options.takeoff_timeout_s:g}"
@@ -145,7 +145,7 @@ def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], op
         f"{vehicles[i].name} {first[i]:.2f} m off" for i in moving))
     for i in moving:
         vehicles[i].goto(*starts[i])
-    resent = [time.monotonic()]
+    resent = [clock.monotonic()]
 
     def pending() -> list[int]:
         return [i for i in moving if not (away(vehicles[i], starts[i]) <= tolerance and
@@ -157,7 +157,7 @@ def align_at_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], op
             for i in waiting:
                 vehicles[i].goto(*starts[i])
 
-    late = _wait_while(vehicles, pending, time.monotonic() + options.align_timeout_s, poll,
+    late = _wait_while(vehicles, pending, clock.monotonic() + options.align_timeout_s, poll,
                        each_turn=again, step_s=0.1)
     if late:
         say("not at the start point after {:g} s, starting anyway: {}".format(
@@ -170,14 +170,14 @@ def _wait_while(vehicles: Sequence[FlightVehicle], pending: Callable[[], list[in
                 each_turn: Callable[[float, list[int]], None] | None = None,
                 step_s: float) -> list[int]:
     """Watch the vehicles until ``pending()`` (indices of the ones not there yet) is empty
-    or ``deadline`` (``time.monotonic()``) passes; the ones still pending then. An abort
+    or ``deadline`` (``clock.monotonic()``) passes; the ones still pending then. An abort
     raises :class:`FlightAborted`; ``each_turn(now, pending)`` runs every turn (a resend),
     ``poll()`` too (the live view, the departure watch)."""
     while True:
         if aborted(vehicles):
             raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         waiting = pending()
-        now = time.monotonic()
+        now = clock.monotonic()
         if not waiting or now >= deadline:
             return waiting
         if each_turn is not None:
@@ -391,9 +391,9 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     starts = [first_leg(m, planned.frame) for m in planned.missions]
     gates = [_gate_at(m, seq) for m, (seq, _speeds) in zip(planned.missions, starts)]
 
-    t = time.monotonic()
+    t = clock.monotonic()
     concurrently(lambda pair: pair[0].set_current(pair[1][0]), list(zip(vehicles, starts)))
-    rtt = time.monotonic() - t
+    rtt = clock.monotonic() - t
     if aborted(vehicles):
         raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     # (a lost acknowledgement makes that seconds: a first guess, bounded; a start time
@@ -403,7 +403,7 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     if timed is None and all(g is not None for g in gates):
         # the radio's timing: AUTO starts past the gates (which may hold a time)
         concurrently(lambda pair: pair[0].set_current(pair[1] + 1), list(zip(vehicles, gates)))
-    t = time.monotonic()
+    t = clock.monotonic()
     for v in vehicles:
         v.send_mode("AUTO")
     concurrently(lambda v: v.set_mode("AUTO"), vehicles)
@@ -430,14 +430,14 @@ def _timed_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     if not all(g is not None for g in gates):
         return None
     for _attempt in range(START_ATTEMPTS):
-        chosen = choose_start(vehicles, rtt_s=rtt_s, now=time.monotonic())
+        chosen = choose_start(vehicles, rtt_s=rtt_s, now=clock.monotonic())
         if isinstance(chosen, str):
             say(f"starting on the radio's timing, not at one GPS time: {chosen}")
             return None
-        t = time.monotonic()
+        t = clock.monotonic()
         _write_gates(planned, vehicles, gates, chosen, timing)
-        took = time.monotonic() - t
-        left = chosen.ground_t - time.monotonic()
+        took = clock.monotonic() - t
+        left = chosen.ground_t - clock.monotonic()
         if left >= max(START_LEAD_S / 2, took / 2):  # AUTO: one way, a resend to spare
             say(f"the legs begin at second {chosen.hms[2]:02d} of the minute, GPS time "
                 f"(in {left:.1f} s)")

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import shutil
 import threading
-import time
 
 import numpy as np
 
+from .. import clock
 from .metrics import min_clearance, min_separation, slot_errors
 from .navigation import navigation_short
 from .planned import PlannedFlight
@@ -25,7 +25,7 @@ class Monitor:
     def __init__(self, planned: PlannedFlight | None = None) -> None:
         self.planned = planned
         self.record = FlightRecord()
-        self.t0 = time.monotonic()
+        self.t0 = clock.monotonic()
         self._lock = threading.Lock()
         self.vehicles: list = []
         self.link_bytes_per_s: float | None = None  # the link fly was told of (--link)
@@ -78,7 +78,7 @@ class Monitor:
         total = len(self.planned.missions[n]) - 1 if self.planned else None
         item = "-" if s.seq < 0 else f"{s.seq}/{total}" if total else str(s.seq)
         slot = f"slot {slots[n]:5.2f} m" if slots is not None else ""
-        age = time.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
+        age = clock.monotonic() - s.heartbeat_t if s.heartbeat_t else float("inf")
         stale = "  NO HEARTBEAT" if age > 3.0 else ""
         battery = f"  batt {s.battery_pct:3d} %" if s.battery_pct is not None else ""
         return (f"{v.name:>5} sysid {v.sysid:<3} {s.mode:<9} "
@@ -100,7 +100,7 @@ class Monitor:
                  if hasattr(k, "bytes_in")}.values()
         if not links:
             return ""
-        now = time.monotonic()
+        now = clock.monotonic()
         total = sum(sum(k.bytes_in.values()) + k.bytes_out for k in links)
         self._link_seen.append((now, total))
         while len(self._link_seen) > 2 and now - self._link_seen[0][0] > 5.0:
@@ -108,8 +108,8 @@ class Monitor:
         (t0, b0), (t1, b1) = self._link_seen[0], self._link_seen[-1]
         text = ""
         if t1 - t0 >= 1.0:
-            clock = self.vehicles[0].status.clock_rate if self.vehicles else 1.0
-            rate = (b1 - b0) / (t1 - t0) / max(clock, 1e-9)  # per second of their clock
+            clock_rate = self.vehicles[0].status.clock_rate if self.vehicles else 1.0
+            rate = (b1 - b0) / (t1 - t0) / max(clock_rate, 1e-9)  # per second of their clock
             text = f"   link {rate:,.0f} B/s"
             if self.link_bytes_per_s:
                 text += f" ({100 * rate / self.link_bytes_per_s:.0f} %)"
@@ -122,7 +122,7 @@ class Monitor:
     def _summary(self, pos, slots, max_lines: int) -> list[str]:
         """At most ``max_lines`` lines for a swarm too large for a line each."""
         st = [v.status for v in self.vehicles]
-        now = time.monotonic()
+        now = clock.monotonic()
         modes: dict[str, int] = {}
         for s in st:
             modes[s.mode] = modes.get(s.mode, 0) + 1
@@ -172,7 +172,7 @@ class LiveView:
         self._drawn = 0
 
     def update(self, *, force: bool = False) -> None:
-        now = time.monotonic()
+        now = clock.monotonic()
         if not force and now < self._next:
             return
         self._next = now + self.period_s

@@ -3,9 +3,9 @@ abort``, a timeout) and the error a flight that left its plan ends with."""
 
 from __future__ import annotations
 
-import time
 from collections.abc import Sequence
 
+from .. import clock
 from ..errors import FtlboError
 from .fleet import concurrently
 from .vehicle import FlightError, FlightVehicle
@@ -35,11 +35,11 @@ def abort(vehicles: Sequence[FlightVehicle], *, mode: str = "RTL",
             reachable.append(v)
         except FlightError:  # its link is down: nothing can reach it now
             pass
-    deadline = time.monotonic() + timeout_s
+    deadline = clock.monotonic() + timeout_s
 
     def confirm(v: FlightVehicle) -> str | None:
         try:
-            v.set_mode(mode, timeout_s=max(0.1, deadline - time.monotonic()))
+            v.set_mode(mode, timeout_s=max(0.1, deadline - clock.monotonic()))
         except FlightError:
             return v.name
         return None

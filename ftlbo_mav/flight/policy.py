@@ -30,10 +30,10 @@ writes, per vehicle, what happened and what was done.
 from __future__ import annotations
 
 import enum
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from .. import clock
 from .departures import LINK_BACK, LINK_LOST, DepartureWatch, Event
 from .vehicle import FlightError, FlightVehicle
 
@@ -86,7 +86,7 @@ class Response:
         self.route_check = route_check  # vehicle -> why RTL from here is not safe, or None
         self.stop_s, self.budget_s, self.confirm_tries = stop_s, budget_s, confirm_tries
         self.lost_wait_s = lost_wait_s  # how long a lost link is waited for
-        self.t0 = time.monotonic() if t0 is None else t0
+        self.t0 = clock.monotonic() if t0 is None else t0
         self.first_t: float | None = None
         self.left: dict[int, list[Event]] = {}  # vehicle -> its departures
         self.chose: set[int] = set()  # left by its own choice: never commanded
@@ -281,7 +281,7 @@ class Response:
                     what.append("left to what it chose: not commanded")
                 elif j in self.lost:
                     what.append(f"gone: not heard from again within "
-                                f"{time.monotonic() - self.left[j][0].t:.0f} s")
+                                f"{clock.monotonic() - self.left[j][0].t:.0f} s")
             what += self.history.get(j, [])
             if j in self.answers:
                 what += self.answers[j].done

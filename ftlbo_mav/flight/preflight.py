@@ -9,9 +9,9 @@ anything is armed."""
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Mapping, Sequence
 
+from .. import clock
 from ..ardupilot.firmware import any_firmware_warning, firmware_problem
 from ..errors import FtlboError
 from ..link.codec import mission_differences
@@ -124,22 +124,22 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
 
     fences = planned.fences or (None,) * len(planned.missions)
     onboard = concurrently(onboard_problems, list(zip(vehicles, planned.missions, fences)))
-    deadline = time.monotonic() + ready_timeout_s
+    deadline = clock.monotonic() + ready_timeout_s
 
     def reported(v: FlightVehicle) -> bool:
         return (v.status.gps_raw is not None and v.status.ekf_raw is not None
                 and (planned.battery is None or v.status.battery_pct is not None))
 
-    while time.monotonic() < deadline and not all(
+    while clock.monotonic() < deadline and not all(
             is_ready(v.link, v.sysid) and reported(v) for v in vehicles):
-        time.sleep(0.1)
+        clock.sleep(0.1)
     # an EKF that has not yet got its absolute position is waited for a few seconds more
     # (SITL through a radio: one copter's EKF_STATUS_REPORT lacked it at the first look
     # after the upload, and a flight was refused); a receiver short of the budget does
     # not come good by waiting, and is refused then
-    settle = min(deadline, time.monotonic() + NAVIGATION_SETTLE_S)
-    while time.monotonic() < settle and any(navigation_problems(planned, v) for v in vehicles):
-        time.sleep(0.1)
+    settle = min(deadline, clock.monotonic() + NAVIGATION_SETTLE_S)
+    while clock.monotonic() < settle and any(navigation_problems(planned, v) for v in vehicles):
+        clock.sleep(0.1)
     problems = []
     for i, (v, why, problem) in enumerate(zip(vehicles, onboard, firmware)):
         why = list(why)

@@ -10,8 +10,6 @@ naming the vehicle and the step.
 
 from __future__ import annotations
 
-import threading
-import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -19,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from .. import clock
 from ..ardupilot.modes import CopterMode, mode_name
 from ..ardupilot.streams import flight_streams
 from ..errors import FtlboError
@@ -64,7 +63,7 @@ POSITION_ONLY = (R.POSITION_TARGET_TYPEMASK_VX_IGNORE | R.POSITION_TARGET_TYPEMA
 
 @dataclass
 class Status:
-    """What the vehicle last said about itself; ``t`` values are ``time.monotonic()``."""
+    """What the vehicle last said about itself; ``t`` values are ``clock.monotonic()``."""
 
     mode: str = "?"
     armed: bool = False
@@ -157,7 +156,7 @@ class FlightVehicle:
     """``name`` (uav1...) at ``sysid`` on ``link``; ``on_position(vehicle)`` is called from
     the reader thread after every position report (the recorder hooks in there), and
     ``on_photo(vehicle, msg, arrival)`` after every CAMERA_FEEDBACK (``arrival``:
-    ``time.monotonic()``)."""
+    ``clock.monotonic()``)."""
 
     def __init__(self, name: str, sysid: int, link, *,
                  on_position: Callable[[FlightVehicle], None] | None = None,
@@ -166,12 +165,12 @@ class FlightVehicle:
                  position_hz: float = 10.0, status_hz: float = 2.0) -> None:
         self.name, self.sysid, self.link = name, sysid, link
         # found by its HEARTBEAT (Fleet's discovery) just now: heard from at creation
-        self.status = Status(heard_t=time.monotonic())
+        self.status = Status(heard_t=clock.monotonic())
         self.on_position = on_position
         self.on_photo = on_photo
         self.command_timeout_s = command_timeout_s
         self.command_retries = command_retries
-        self._changed = threading.Condition()
+        self._changed = clock.Condition()
         self._requested_mode: str | None = None
         # the mode this ground station last asked for, and when (a mode it did not ask
         # for is the pilot's, a failsafe's or another station's: flight/departures.py)
@@ -180,8 +179,8 @@ class FlightVehicle:
         # set by an abort: from then on only this mode may be asked for
         self.aborted_to: str | None = None
         self._channel = link.channel(sysid)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._pump, name=f"{name} status", daemon=True)
+        self._stop = clock.Event()
+        self._thread = clock.Thread(target=self._pump, name=f"{name} status", daemon=True)
         self._thread.start()
         self.request_streams(position_hz, status_hz)
 
@@ -198,7 +197,7 @@ class FlightVehicle:
                 self._update(msg)
 
     def _update(self, msg) -> None:
-        kind, s, now = msg.get_type(), self.status, time.monotonic()
+        kind, s, now = msg.get_type(), self.status, clock.monotonic()
         position, photo = False, None
         with self._changed:
             s.heard_t = now
@@ -277,10 +276,10 @@ class FlightVehicle:
 
     def wait_for(self, predicate: Callable[[Status], bool], timeout_s: float) -> bool:
         """Wait until ``predicate(status)`` holds, at most ``timeout_s``."""
-        deadline = time.monotonic() + timeout_s
+        deadline = clock.monotonic() + timeout_s
         with self._changed:
             while not predicate(self.status):
-                left = deadline - time.monotonic()
+                left = deadline - clock.monotonic()
                 if left <= 0:
                     return False
                 self._changed.wait(min(left, 0.1))
@@ -352,7 +351,7 @@ class FlightVehicle:
         if self.aborted_to is not None and mode != self.aborted_to:
             raise FlightAborted(self.name, self.sysid, self.aborted_to)
         self._requested_mode = mode
-        self.asked_mode, self.asked_t = mode, time.monotonic()
+        self.asked_mode, self.asked_t = mode, clock.monotonic()
         self.send(R.MAVLink_command_long_message(
             self.sysid, 1, R.MAV_CMD_DO_SET_MODE, 0, R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
             CopterMode[mode], 0, 0, 0, 0, 0), step=f"mode {mode}")
@@ -360,10 +359,10 @@ class FlightVehicle:
     def set_mode(self, mode: str, *, timeout_s: float = 5.0) -> None:
         """Switch to ``mode``; confirmed by its acknowledgement or the HEARTBEAT (resent
         each second until then)."""
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
+        deadline = clock.monotonic() + timeout_s
+        while clock.monotonic() < deadline:
             self.send_mode(mode)
-            if self.wait_for(lambda s: s.mode == mode, min(1.0, deadline - time.monotonic())):
+            if self.wait_for(lambda s: s.mode == mode, min(1.0, deadline - clock.monotonic())):
                 return
         raise FlightError(self.name, self.sysid, f"mode {mode}",
                           f"still in {self.status.mode} after {timeout_s:g} s")
@@ -371,16 +370,16 @@ class FlightVehicle:
     def arm(self, *, budget_s: float, retry_s: float = 2.0) -> None:
         """Arm, retrying while the autopilot refuses (ArduCopter refuses with "Arm: Need
         Position Estimate" for a while after its pre-arm checks already pass)."""
-        deadline = time.monotonic() + budget_s
+        deadline = clock.monotonic() + budget_s
         while True:
             result = self.command(R.MAV_CMD_COMPONENT_ARM_DISARM, 1, step="arm")
             if result == R.MAV_RESULT_ACCEPTED and self.wait_for(lambda s: s.armed, 3.0):
                 return
-            if time.monotonic() + retry_s > deadline:
+            if clock.monotonic() + retry_s > deadline:
                 why = self.status.texts[-1] if self.status.texts else f"MAV_RESULT {result}"
                 raise FlightError(self.name, self.sysid, "arm",
                                   f"refused for {budget_s:g} s (last: {why})")
-            time.sleep(retry_s)
+            clock.sleep(retry_s)
 
     def takeoff(self, alt_m: float, *, tries: int = 3, retry_s: float = 0.5) -> None:
         """NAV_TAKEOFF, tried again a few times when refused while still on the ground
@@ -395,7 +394,7 @@ class FlightVehicle:
                     lambda s: s.alt_m > 0.3 or s.climb_m_s > 0.2, 1.0):
                 return
             if attempt + 1 < tries:
-                time.sleep(retry_s)
+                clock.sleep(retry_s)
                 if not self.status.armed:  # disarmed on the ground meanwhile (DISARM_DELAY)
                     self.arm(budget_s=2.0 * retry_s)
         raise FlightError(self.name, self.sysid, "takeoff", f"refused (MAV_RESULT {result})")
@@ -445,10 +444,10 @@ class FlightVehicle:
             result = None
         if result == R.MAV_RESULT_ACCEPTED:
             return
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
+        deadline = clock.monotonic() + timeout_s
+        while clock.monotonic() < deadline:
             self.send(R.MAVLink_mission_set_current_message(self.sysid, 1, seq))
-            if self.wait_for(lambda s: s.seq == seq, min(1.0, deadline - time.monotonic())):
+            if self.wait_for(lambda s: s.seq == seq, min(1.0, deadline - clock.monotonic())):
                 return
         raise FlightError(self.name, self.sysid, "set current item",
                           f"vehicle reports item {self.status.seq}, asked for {seq}")

@@ -8,11 +8,11 @@ and has the policy answer them; :func:`watch` is the loop after the synchronized
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from .. import clock
 from ..ardupilot.fence import rtl_target
 from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
@@ -222,7 +222,7 @@ class FlightWatch:
     def poll(self) -> list[Event]:
         """Look once: new events are said, the keeper stands down at the first
         departure, and the policy answers."""
-        now = time.monotonic()
+        now = clock.monotonic()
         if self.started:
             self._legs()
         seen = [observe(v, self.planned) for v in self.vehicles]
@@ -274,10 +274,10 @@ class FlightWatch:
     def until_ended(self, *, tick: Callable[[], None]) -> FlightLeftPlan:
         """After a departure: answer until every vehicle has landed or the budget is
         spent; returns the error to end the flight with."""
-        while not self.response.ended(self.vehicles, time.monotonic()):
+        while not self.response.ended(self.vehicles, clock.monotonic()):
             self.poll()
             tick()
-            time.sleep(0.05)
+            clock.sleep(0.05)
         return self.left_plan()
 
 
@@ -314,7 +314,7 @@ def positions_now(planned: PlannedFlight, st: Sequence) -> tuple[np.ndarray, np.
                                      alt_m=[s.alt_m for s in st])
     # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
     # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
-    now = time.monotonic()
+    now = clock.monotonic()
     arrived = np.array([now - s.position_t for s in st])
     age = np.array([now - (s.clock_offset_s + s.position_boot_s / s.clock_rate)
                     if s.clock_offset_s is not None else a for s, a in zip(st, arrived)])
@@ -353,16 +353,16 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     speeds = np.array([s.ground_speed_m_s for s in st])
     trace = getattr(keeper, "trace", None)
     if trace is not None:
-        trace.append(("inputs", time.monotonic(), vehicle_now, arrived.tolist(), age.tolist(),
+        trace.append(("inputs", clock.monotonic(), vehicle_now, arrived.tolist(), age.tolist(),
                       [s.position_boot_s for s in st], positions.tolist()))
     jitters = [j for s in st if (j := s.jitter_s()) is not None]
-    now = time.monotonic()
+    now = clock.monotonic()
     gap = max(s.longest_gap_s(now, keeper.options.gap_memory_s) for s in st)
     sent = keeper.update(positions, speeds, vehicle_now, ages_s=arrived,
                          jitter_s=max(jitters) if len(jitters) == len(st) else None,
                          gap_s=gap)
     if trace is not None and sent:
-        trace.append(("sent", time.monotonic(), vehicle_now, {int(i): p for i, p in sent.items()}))
+        trace.append(("sent", clock.monotonic(), vehicle_now, {int(i): p for i, p in sent.items()}))
     for i, pause in sent.items():
         _send_pause(vehicles[i], pause)
     return True
@@ -385,9 +385,9 @@ def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_
     fw = flight_watch or FlightWatch(planned, vehicles)
     fw.keeper, fw.started = keeper, True
     fw.expect("AUTO")
-    deadline = time.monotonic() + timeout_s
+    deadline = clock.monotonic() + timeout_s
     next_tick = 0.0
-    while time.monotonic() < deadline:
+    while clock.monotonic() < deadline:
         if aborted(vehicles):
             raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         fw.poll()
@@ -400,12 +400,12 @@ def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_
             return True
         if fw.keeper is not None and not keep_formation(planned, vehicles, fw.keeper):
             fw.keeper = None
-        if time.monotonic() >= next_tick:
+        if clock.monotonic() >= next_tick:
             tick()
-            next_tick = time.monotonic() + 0.1
+            next_tick = clock.monotonic() + 0.1
         # a pause's continue is timed to the hundredth (an emulator's time scale makes a
         # 50 ms wait tenths of a second of the vehicles' time)
-        time.sleep(0.01 if fw.keeper is not None and fw.keeper.pausing else 0.05)
+        clock.sleep(0.01 if fw.keeper is not None and fw.keeper.pausing else 0.05)
     return False
 
 
@@ -413,10 +413,10 @@ def watch_abort(vehicles: Sequence[FlightVehicle], *, timeout_s: float,
                 tick: Callable[[], None]) -> bool:
     """After an abort: watch until every vehicle has landed (disarmed) or its link is
     down. False on timeout."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
+    deadline = clock.monotonic() + timeout_s
+    while clock.monotonic() < deadline:
         if not any(v.status.armed and v.link_up for v in vehicles):
             return True
         tick()
-        time.sleep(0.1)
+        clock.sleep(0.1)
     return False

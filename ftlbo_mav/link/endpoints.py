@@ -14,8 +14,7 @@ import os
 import queue
 import re
 import threading
-import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 # MAVLink 2 is chosen in ftlbo_mav/__init__.py, before pymavlink is imported.
@@ -24,6 +23,7 @@ from typing import Self
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from .. import clock
 from ..ardupilot.streams import READINESS, StreamRequests, radio_slowdown
 from ..errors import BadInput, FtlboError
 from .firmware import version_request
@@ -83,7 +83,10 @@ _NETWORK_URL = re.compile(r"(tcp|tcpin|udp|udpin|udpout|udpbcast|wsserver|ws):(.
 def check_url(url: str, *, option: str = "--connect") -> str:
     """A pymavlink connection string whose port (``tcp:HOST:PORT``, ``udpin:...``, ...) is
     a number 0..65535 (1..65535 where it is connected to); :class:`BadInput` otherwise.
-    Serial ports and files pass unchanged."""
+    Serial ports and files pass unchanged, as do the connection strings of an emulator
+    in this process (``emu:KEY/INDEX``, :mod:`ftlbo_mav.sim.inprocess`)."""
+    if _in_process(url.strip()) is not None:
+        return url.strip()
     m = _NETWORK_URL.fullmatch(url.strip())
     if not m:
         _check_other_url(url, option)
@@ -157,15 +160,28 @@ def _is_vehicle(msg) -> bool:
     return msg.type != mavlink2.MAV_TYPE_GCS and msg.autopilot != mavlink2.MAV_AUTOPILOT_INVALID
 
 
+IN_PROCESS: dict[str, Callable] = {}
+"""Emulators in this process (:mod:`ftlbo_mav.sim.inprocess`), by the start of their
+connection strings (``emu:KEY``): each opens a connection to one of its vehicles."""
+
+
+def _in_process(url: str) -> Callable | None:
+    return IN_PROCESS.get(url.split("/", 1)[0]) if url.startswith("emu:") else None
+
+
 def _open(url: str, *, timeout_s: float):
     """Open a pymavlink connection, retrying refused TCP connects until ``timeout_s``."""
-    deadline = time.monotonic() + timeout_s
+    deadline = clock.monotonic() + timeout_s
+    if url.startswith("emu:") and _in_process(url) is None:
+        raise LinkError(f"{url}: no emulator of that name in this process")
     device, baud = url, 115200
     serial = re.fullmatch(r"(/dev/[^,:]+|COM\d+),(\d+)", url)
     if serial:  # a serial port with its baud rate, as MAVProxy writes it: /dev/ttyUSB0,57600
         device, baud = serial.group(1), int(serial.group(2))
     while True:
         try:
+            if (connect := _in_process(url)) is not None:
+                return connect(url, source_system=GCS_SYSID, source_component=GCS_COMPID)
             return mavutil.mavlink_connection(
                 device,
                 baud=baud,
@@ -176,10 +192,10 @@ def _open(url: str, *, timeout_s: float):
                 autoreconnect=False,
             )
         except (TimeoutError, ConnectionRefusedError) as exc:
-            if time.monotonic() >= deadline:
+            if clock.monotonic() >= deadline:
                 raise LinkError(f"{url}: cannot connect ({exc.strerror or exc}); is the "
                                 "vehicle (SITL, `ftlbo-mav sim`) running?") from None
-            time.sleep(0.2)
+            clock.sleep(0.2)
         except OSError as exc:
             raise LinkError(f"{url}: cannot open: {exc.strerror or exc}") from None
         except ValueError as exc:
@@ -207,7 +223,7 @@ class Link:
         # a TCP peer that closes (a vehicle that reboots, a radio bridge that drops) is
         # connected to again every ``reconnect_every_s`` while the link is open; other
         # links (UDP, serial) simply resume when messages arrive again
-        self.reconnect = reconnect and url.startswith("tcp:")
+        self.reconnect = reconnect and url.startswith(("tcp:", "emu:"))
         self.reconnect_every_s = reconnect_every_s
         self.closed_by_peer = False
         self.down_since: float | None = None  # monotonic time the peer closed, while down
@@ -235,8 +251,8 @@ class Link:
         self.radio_status = None
         self.radio_status_t = 0.0
         self.slowdown_ms = 0
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name=f"link {url}", daemon=True)
+        self._stop = clock.Event()
+        self._thread = clock.Thread(target=self._run, name=f"link {url}", daemon=True)
         self._thread.start()
 
     def _prepare(self, conn):
@@ -314,7 +330,7 @@ class Link:
     def missing_streams(self, sysid: int) -> list[str]:
         with self._streams_lock:
             req = self.streams.get(sysid)
-            return req.missing(time.monotonic()) if req else []
+            return req.missing(clock.monotonic()) if req else []
 
     def _ask_streams(self, now: float) -> None:
         with self._streams_lock:
@@ -347,7 +363,7 @@ class Link:
                     return
                 self._connect_again()
                 continue
-            now = time.monotonic()
+            now = clock.monotonic()
             if now >= next_beat:
                 next_beat = now + 1.0 + self.slowdown_ms / 1000.0
                 try:
@@ -384,7 +400,7 @@ class Link:
 
     def _peer_closed(self) -> None:
         if not self.closed_by_peer:
-            self.closed_by_peer, self.down_since = True, time.monotonic()
+            self.closed_by_peer, self.down_since = True, clock.monotonic()
         raise ConnectionResetError(f"{self.url}: closed by the other end")
 
     def _dispatch(self, msg) -> None:
@@ -396,13 +412,13 @@ class Link:
         src = msg.get_srcSystem()
         self.bytes_in[src] = self.bytes_in.get(src, 0) + len(msg.get_msgbuf())
         if kind == "RADIO_STATUS":
-            self.radio_status, self.radio_status_t = msg, time.monotonic()
+            self.radio_status, self.radio_status_t = msg, clock.monotonic()
             self.slowdown_ms = radio_slowdown(self.slowdown_ms, int(msg.txbuf))
             return
         req = self.streams.get(src)
         if req is not None:
             with self._streams_lock:
-                req.seen(msg.get_msgId(), time.monotonic())
+                req.seen(msg.get_msgId(), clock.monotonic())
                 if (kind == "COMMAND_ACK"
                         and msg.command == mavlink2.MAV_CMD_SET_MESSAGE_INTERVAL):
                     req.on_ack(None, msg.result)
@@ -411,7 +427,7 @@ class Link:
                 sysid=src, compid=msg.get_srcComponent(), vehicle_type=msg.type,
                 autopilot=msg.autopilot, custom_mode=msg.custom_mode,
                 base_mode=msg.base_mode, system_status=msg.system_status,
-                received_at=time.monotonic())
+                received_at=clock.monotonic())
         elif kind == "AUTOPILOT_VERSION":
             self.versions[src] = int(msg.flight_sw_version)
         elif kind == "GPS_RAW_INT":
@@ -438,7 +454,7 @@ class Channel:
         self.own_sysid = GCS_SYSID
         self.own_compid = GCS_COMPID
         self.srtt: float | None = None  # round trip measured by the last transfer
-        self._q: queue.SimpleQueue = queue.SimpleQueue()
+        self._q: queue.SimpleQueue = clock.SimpleQueue()
         link._subscribe(sysid, self._q)
 
     def send(self, msg) -> None:
@@ -455,10 +471,10 @@ class Channel:
 
     def recv(self, timeout_s: float):
         """The next message for us from this vehicle, or ``None`` after ``timeout_s``."""
-        deadline = time.monotonic() + max(0.0, timeout_s)
+        deadline = clock.monotonic() + max(0.0, timeout_s)
         while True:
             try:
-                msg = self._q.get(timeout=max(0.0, deadline - time.monotonic()))
+                msg = self._q.get(timeout=max(0.0, deadline - clock.monotonic()))
             except queue.Empty:
                 return None
             target = getattr(msg, "target_system", 0)
@@ -521,7 +537,7 @@ def discover(links: Iterable[Link], sysids: Sequence[int], *,
     is ever sent to them.
     """
     links = list(links)
-    deadline = time.monotonic() + timeout_s
+    deadline = clock.monotonic() + timeout_s
     asks: dict[int, tuple[int, float, bool]] = {}  # id(link): (asks, when, it had heard)
     found: dict[int, Link] = {}
     while True:
@@ -532,7 +548,7 @@ def discover(links: Iterable[Link], sysids: Sequence[int], *,
                         found[sysid] = link
                         break
         missing = [s for s in sysids if s not in found]
-        now = time.monotonic()
+        now = clock.monotonic()
         if not missing or now >= deadline:
             return found, missing
         for link in links:
@@ -551,7 +567,7 @@ def discover(links: Iterable[Link], sysids: Sequence[int], *,
                     link.send(version_request(sysid, count))
             except LinkDown:
                 continue  # that link is gone: its vehicles stay missing
-        time.sleep(0.02)  # the links' reader threads fill in ``heartbeats``
+        clock.sleep(0.02)  # the links' reader threads fill in ``heartbeats``
 
 
 def is_ready(link: Link, sysid: int) -> bool:
@@ -594,16 +610,16 @@ def wait_ready(links: Sequence[Link], sysids: Sequence[int], *, timeout_s: float
 
 def _wait_ready(found: dict[int, Link], missing: list[int], sysids: Sequence[int], *,
                 timeout_s: float) -> None:
-    deadline = time.monotonic() + timeout_s
+    deadline = clock.monotonic() + timeout_s
     while True:
         waiting = [s for s in sysids if s not in missing and not is_ready(found[s], s)]
         if not waiting and not missing:
             return
-        if missing or time.monotonic() >= deadline:
+        if missing or clock.monotonic() >= deadline:
             what = [f"{s} (no HEARTBEAT)" for s in missing] + [
                 f"{s} ({'; '.join(readiness_problems(found[s], s))})" for s in waiting]
             raise LinkError(f"not ready after {timeout_s:g} s: system id {', '.join(what)}")
-        time.sleep(0.1)
+        clock.sleep(0.1)
 
 
 def describe_missing(sysid: int, links: Sequence[Link], timeout_s: float) -> str:

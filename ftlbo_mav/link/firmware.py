@@ -4,10 +4,9 @@ ACCEPTED, then the message), judged by :mod:`ftlbo_mav.ardupilot.firmware`."""
 
 from __future__ import annotations
 
-import time
-
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from .. import clock
 from ..ardupilot.firmware import AUTOPILOT_VERSION_ID
 
 
@@ -29,8 +28,8 @@ def request_version(channel, *, timeout_s: float = 1.0, retries: int = 2) -> int
         if channel.sysid in known:
             return known[channel.sysid]
         channel.send(version_request(channel.sysid, attempt))
-        deadline = time.monotonic() + timeout_s
-        while (left := deadline - time.monotonic()) > 0:
+        deadline = clock.monotonic() + timeout_s
+        while (left := deadline - clock.monotonic()) > 0:
             msg = channel.recv(min(left, 0.05))
             if msg is not None and msg.get_type() == "AUTOPILOT_VERSION":
                 return int(msg.flight_sw_version)

@@ -10,8 +10,8 @@ is compared in that form. The fence parameters are set and read back by
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 
+from .. import clock
 from ..mission.fence_files import FenceSet
 from .codec import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, mission_differences
 from .mission_protocol import (
@@ -108,7 +108,7 @@ def upload_fence_set(channel, fence_set: FenceSet, *, timing: Timing,
                         return f"fence parameters: {exc.name}: {exc.problem}"
                 return problem
 
-        with ThreadPoolExecutor(max_workers=1) as pool:
+        with clock.Executor(1) as pool:
             later = pool.submit(rally)
             problems = [part(channel, fence_label, fence_kind), later.result()]
     failed = [p for p in problems if p is not None]

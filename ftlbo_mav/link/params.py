@@ -11,11 +11,11 @@ parameters a plan predicted its flown path with (:func:`set_vehicle_params`,
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Iterable, Mapping
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from .. import clock as ground_clock
 from ..ardupilot.fence import FENCE_PARAM_DEFAULTS, param_equal
 from ..ardupilot.navigation import DEFAULTS as NAV_DEFAULTS
 from ..ardupilot.navigation import vehicle_param_differences
@@ -66,7 +66,7 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     One round trip for a window of parameters, not one for each: through a shared
     telemetry radio (60 ms each way) 18 parameters took 18 round trips and a lost one
     1.5 s; now a round trip or two (docs/link.md)."""
-    clock = getattr(channel, "clock", time.monotonic)
+    clock = getattr(channel, "clock", ground_clock.monotonic)
     window = max(1, min(PARAM_WINDOW, PARAM_ON_LINK // getattr(channel, "sharing", 1)))
     srtt = getattr(channel, "srtt", None)
     resend_s = timing.resend_after(srtt) if timing.adaptive and srtt else timing.timeout_s

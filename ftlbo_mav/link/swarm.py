@@ -8,13 +8,12 @@ missing or fails never stops the others; each gets a :class:`VehicleResult`.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from .. import clock
 from ..ardupilot.firmware import (
     SUPPORTED,
     UNANSWERED,
@@ -190,7 +189,7 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
     hears what is no longer promised for it and the upload goes on."""
     timing = timing or Timing()
     emit = on_progress or (lambda _e: None)
-    started = time.monotonic()
+    started = clock.monotonic()
     links = open_links(urls, signing_key=signing_key, connect_timeout_s=discover_timeout_s)
     try:
         for a in assignments:
@@ -202,11 +201,11 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
             if a.sysid in missing:
                 msg = describe_missing(a.sysid, links, discover_timeout_s)
                 results[a.sysid] = VehicleResult(a.name, a.sysid, False, msg,
-                                                 time.monotonic() - started)
+                                                 clock.monotonic() - started)
                 emit(ProgressEvent(a.name, a.sysid, "failed", message=msg))
 
         def one(a: Assignment) -> VehicleResult:
-            t0 = time.monotonic()
+            t0 = clock.monotonic()
 
             def progress(step: str, done: int, total: int) -> None:
                 emit(ProgressEvent(a.name, a.sysid, step, done, total))
@@ -245,7 +244,7 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                 with link.channel(a.sysid) as channel:
                     return _set_vehicle_params(channel, a, own_timing)
 
-            with ThreadPoolExecutor(max_workers=3) as parts:
+            with clock.Executor(3) as parts:
                 futures = [parts.submit(f) for f in (mission, fence, params)]
             (ok, msg), fenced, paramed = (f.result() for f in futures)
             for part in (fenced, paramed):
@@ -262,7 +261,7 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                 msg += f" ({link.url} was closed by the other end)"
             emit(ProgressEvent(a.name, a.sysid, "verified" if ok else "failed",
                                len(a.items), len(a.items), msg))
-            return VehicleResult(a.name, a.sysid, ok, msg, time.monotonic() - t0)
+            return VehicleResult(a.name, a.sysid, ok, msg, clock.monotonic() - t0)
 
         todo = [a for a in assignments if a.sysid in found]
 
@@ -277,7 +276,7 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
             return silent, firmware_problem(**kind, version=version)
 
         if todo:
-            with ThreadPoolExecutor(max_workers=len(todo)) as pool:
+            with clock.Executor(len(todo)) as pool:
                 answers = list(pool.map(firmware, todo))
             problems = [p for _silent, p in answers]
             # a vehicle silent to the request is not refused here: the upload finds out
@@ -299,7 +298,7 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                 if on_warning is not None:
                     on_warning(a.name, a.sysid, any_firmware_warning(p))
         if todo:
-            with ThreadPoolExecutor(max_workers=len(todo)) as pool:
+            with clock.Executor(len(todo)) as pool:
                 for r in pool.map(one, todo):
                     results[r.sysid] = r
         return [results[a.sysid] for a in assignments]

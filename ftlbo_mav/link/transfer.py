@@ -8,13 +8,13 @@ drives one over a channel until it finishes.
 from __future__ import annotations
 
 import statistics
-import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
+from .. import clock as ground_clock
 from ..errors import FtlboError
 from .codec import MISSION_TYPE_MISSION
 
@@ -190,9 +190,9 @@ def run_transfer(machine: _Transfer, channel):
     """Drive ``machine`` over ``channel`` until it finishes; raise its error if it failed.
 
     Time is the channel's ``clock()`` when it has one (virtual time in tests), else
-    :func:`time.monotonic`.
+    the ground clock (:func:`ftlbo_mav.clock.monotonic`).
     """
-    clock = getattr(channel, "clock", time.monotonic)
+    clock = getattr(channel, "clock", ground_clock.monotonic)
     for msg in machine.start(clock()):
         channel.send(msg)
     while not machine.finished:

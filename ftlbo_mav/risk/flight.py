@@ -18,25 +18,23 @@ import io
 import json
 import math
 import tempfile
-import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
+from .. import clock
+from ..clock import VirtualClock
 from ..flight.metrics import min_clearance, min_separation
 from ..flight.planned import PlannedFlight, load_planned_flight
+from ..link.endpoints import Link
 from ..link.swarm import upload_swarm
 from ..sim.gps import GpsErrorOptions
+from ..sim.inprocess import InProcessSimulator
 from ..sim.server import Simulator
 from ..sim.vehicle import VehicleOptions
 from .conditions import Conditions
 
-TIME_SCALE = 4.0
-"""The emulator's time scale for a risk flight: the example's flight in some 15 s of wall
-time. The ground station's timing errors grow with the scale: two flights at a time on
-this 2-core machine at 12 (the integration tests' scale) left the plan in four of four
-(1.5-6 m from their slots), at 4 none did (0.06-0.12 m worst)."""
 AIRBORNE_M = 1.0  # above its home: separation counts only in the air (homes may be close)
 
 
@@ -46,21 +44,46 @@ def homes_of(planned: PlannedFlight) -> list[tuple[float, float, float]]:
 
 
 def fly_one(plan_dir: str | Path, conditions: Conditions, *,
-            time_scale: float = TIME_SCALE, live: bool = False) -> dict:
+            time_scale: float | None = None, live: bool = False) -> dict:
     """Fly ``plan_dir`` once in ``conditions``; the flight's record (:func:`judge`).
-    ``live``: fly's output (its live view) to this process's stderr, as ``fly`` shows it."""
+
+    By default the ground station and the emulated copters run together on a virtual
+    clock (:mod:`ftlbo_mav.clock`, :mod:`ftlbo_mav.sim.inprocess`): the flight takes only
+    the computation it needs and the same seed flies the same flight. ``time_scale``: fly
+    instead on the wall clock against the emulator on TCP ports, its clock running that
+    many times faster (how risk flights ran before; a comparison). ``live``: fly's output
+    (its live view) to this process's stderr, as ``fly`` shows it."""
     planned = load_planned_flight(Path(plan_dir))
+    started = time.monotonic()
+    if time_scale is not None:
+        return _fly_one(plan_dir, planned, conditions, started, live=live,
+                        sim=_simulator(planned, conditions, time_scale=time_scale))
+    with VirtualClock(utc_s=time.time()) as vc:
+        record = _fly_one(plan_dir, planned, conditions, started, live=live,
+                          sim=_simulator(planned, conditions, time_scale=None))
+    if vc.stalled:
+        record["problem"] = "the simulation stalled (every thread waiting for nothing)"
+    return record
+
+
+def _simulator(planned: PlannedFlight, conditions: Conditions, *, time_scale: float | None):
+    """The emulated copters of one flight: in this process on the virtual clock, or
+    (``time_scale``) behind TCP ports the system chooses."""
     homes = homes_of(planned)
     gps = [GpsErrorOptions(wander_m=conditions.gps_wander_m,
                            correlation_s=conditions.gps_correlation_s, seed=s)
            for s in conditions.gps_seeds[:len(homes)]]
-    started = time.monotonic()
-    with tempfile.TemporaryDirectory(prefix="ftlbo-risk-") as tmp, \
-            Simulator(homes=homes, base_port=0, seed=conditions.seed, time_scale=time_scale,
-                      vary=conditions.vary, wind=conditions.wind,
-                      options=[VehicleOptions(gps=g) for g in gps]) as sim:
-        assignments = planned.assignments()
-        uploaded = upload_swarm(assignments, sim.urls)
+    settings = {"homes": homes, "seed": conditions.seed, "vary": conditions.vary,
+                "wind": conditions.wind, "options": [VehicleOptions(gps=g) for g in gps]}
+    if time_scale is None:
+        return InProcessSimulator(**settings)
+    return Simulator(base_port=0, time_scale=time_scale, **settings)
+
+
+def _fly_one(plan_dir, planned: PlannedFlight, conditions: Conditions, started: float, *,
+             live: bool, sim) -> dict:
+    with tempfile.TemporaryDirectory(prefix="ftlbo-risk-") as tmp, sim:
+        uploaded = upload_swarm(planned.assignments(), sim.urls)
         failed = [r for r in uploaded if not r.verified]
         if failed:
             return _record(conditions, planned, None, exit_code=None, summary={},
@@ -68,7 +91,8 @@ def fly_one(plan_dir: str | Path, conditions: Conditions, *,
                            problem="; ".join(f"{r.name}: {r.message}" for r in failed))
         for r in sim.runners:
             r.truth = []
-        faults = _schedule_faults(sim, conditions, time_scale)
+        scale = getattr(sim, "time_scale", 1.0)
+        faults = _schedule_faults(sim, conditions, scale)
         code, output = _fly(Path(plan_dir), sim.urls, Path(tmp) / "flight", live=live)
         for fault in faults:
             fault.cancel()
@@ -85,15 +109,14 @@ class _Fault:
     """A fault ``after_s`` seconds of the vehicles' clock after copter ``index`` starts its
     mission (AUTO): ``kill`` (its emulator gone, as a killed SITL process) or ``takeover``
     (switched to BRAKE from its SERIAL1 port, as a pilot's or another station's
-    MAV_CMD_DO_SET_MODE)."""
+    MAV_CMD_DO_SET_MODE). ``scale``: the vehicles' seconds per second of this clock."""
 
-    def __init__(self, sim: Simulator, index: int, after_s: float, scale: float,
-                 kind: str) -> None:
+    def __init__(self, sim, index: int, after_s: float, scale: float, kind: str) -> None:
         self.sim, self.index, self.after_s, self.scale, self.kind = (
             sim, index, after_s, scale, kind)
-        self._stop = threading.Event()
+        self._stop = clock.Event()
         self.at: float | None = None  # the vehicles' seconds after their missions began
-        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread = clock.Thread(self._run, name=f"{kind} uav{index + 1}")
         self.thread.start()
 
     def _run(self) -> None:
@@ -109,31 +132,26 @@ class _Fault:
         self.at = self.after_s
 
     def _take_over(self) -> None:
-        from pymavlink import mavutil
         from pymavlink.dialects.v20 import ardupilotmega as R
 
         from ..ardupilot.modes import CopterMode
 
-        conn = mavutil.mavlink_connection(self.sim.serial1_urls[self.index],
-                                          source_system=246, dialect="ardupilotmega")
-        try:
+        with Link(self.sim.serial1_urls[self.index]) as link:
             sysid = self.index + 1
             for _ in range(3):  # as a pilot's station: sent until the mode shows
-                conn.mav.command_long_send(sysid, 1, R.MAV_CMD_DO_SET_MODE, 0,
-                                           R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-                                           CopterMode.BRAKE, 0, 0, 0, 0, 0)
+                link.send(R.MAVLink_command_long_message(
+                    sysid, 1, R.MAV_CMD_DO_SET_MODE, 0, R.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                    CopterMode.BRAKE, 0, 0, 0, 0, 0))
                 if self._stop.wait(0.2 / self.scale) or (
                         self.sim.runners[self.index].vehicle.autopilot.mode_name() == "BRAKE"):
                     return
-        finally:
-            conn.close()
 
     def cancel(self) -> None:
         self._stop.set()
         self.thread.join(timeout=5.0)
 
 
-def _schedule_faults(sim: Simulator, conditions: Conditions, scale: float) -> list[_Fault]:
+def _schedule_faults(sim, conditions: Conditions, scale: float) -> list[_Fault]:
     """The copter this flight loses and the one whose mode is taken over (module notes of
     :mod:`.conditions`), each at its time after its missions start."""
     return [_Fault(sim, which[0], which[1], scale, kind)

@@ -315,21 +315,13 @@ class Simulator:
     async def _main(self, ready: Callable[[], None]) -> None:
         loop = asyncio.get_running_loop()
         self._stopping = asyncio.Event()
-        rngs = [np.random.default_rng([self.seed, i]) for i in range(len(self.homes))]
         start, scale = loop.time(), self.time_scale
 
         def clock() -> float:
             return start + (loop.time() - start) * scale
 
-        utc_offset = time.time() - start  # one GPS time for all: the wall clock at start
-        for i, home in enumerate(self.homes):
-            v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
-                        boot_time=start, utc_offset_s=utc_offset)
-            if self.wind is not None and not self.wind.calm:
-                v.autopilot.gusts = Gusts(self.wind, np.random.default_rng([self.seed, 0x57, i]),
-                                          nav=v.autopilot.nav_params())
-            self.runners.append(VehicleRunner(v, faults=self.faults[i], rng=rngs[i], loop=loop,
-                                              signing_key=self.signing_key, clock=clock))
+        # one GPS time for all: the wall clock at start
+        self.make_runners(loop, clock, start, utc_offset_s=time.time() - start)
         servers = []
         try:
             for i in range(len(self.runners)):
@@ -370,6 +362,21 @@ class Simulator:
             await asyncio.gather(*self._clients, return_exceptions=True)
             for s in servers:
                 await s.wait_closed()
+
+    def make_runners(self, loop, clock: Callable[[], float], start: float, *,
+                     utc_offset_s: float) -> None:
+        """The vehicles, booted at ``start`` of ``clock`` (GPS time ``utc_offset_s`` ahead of
+        it), each behind its :class:`VehicleRunner`; ``loop.call_later`` runs what a
+        fault delays."""
+        rngs = [np.random.default_rng([self.seed, i]) for i in range(len(self.homes))]
+        for i, home in enumerate(self.homes):
+            v = Vehicle(sysid=self.first_sysid + i, home=home, options=self.options[i],
+                        boot_time=start, utc_offset_s=utc_offset_s)
+            if self.wind is not None and not self.wind.calm:
+                v.autopilot.gusts = Gusts(self.wind, np.random.default_rng([self.seed, 0x57, i]),
+                                          nav=v.autopilot.nav_params())
+            self.runners.append(VehicleRunner(v, faults=self.faults[i], rng=rngs[i], loop=loop,
+                                              signing_key=self.signing_key, clock=clock))
 
     async def _listen(self, i: int, link: str, port: int):
         server = await asyncio.start_server(self._client_handler(self.runners[i], link, i),

@@ -1,0 +1,188 @@
+"""Emulated copters inside the ground station's process, on its virtual clock.
+
+:class:`InProcessSimulator` is :class:`~ftlbo_mav.sim.server.Simulator` without sockets:
+the same vehicles (:class:`~ftlbo_mav.sim.server.VehicleRunner`: the same faults,
+variation, wind, GPS error and truth record), stepped every 20 ms of a
+:class:`~ftlbo_mav.clock.VirtualClock` by one more thread on that clock. The ground
+station reaches vehicle i at ``emu:KEY/i`` (its SERIAL1 at ``emu:KEY/i/SERIAL1``), a
+connection string that :func:`~ftlbo_mav.link.endpoints.check_url` and
+:class:`~ftlbo_mav.link.endpoints.Link` take like ``tcp:HOST:PORT``: pymavlink's own
+parser reads the vehicles' bytes, so ``fly`` and ``upload`` run unchanged. A command is
+handled the moment it is written (the copters first stepped up to that instant, as
+over TCP to SITL, whose 400 Hz loop answers within 2.5 ms).
+
+A flight on it costs only its computation: ``ftlbo-mav risk`` flies each flight this way.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import threading
+from collections.abc import Callable, Sequence
+from typing import Self
+
+from pymavlink import mavutil
+
+from .. import clock
+from ..link import endpoints
+from .server import TICK_S, Simulator, VehicleRunner
+
+_keys = itertools.count(1)
+
+
+class _Connection(mavutil.mavfile):
+    """The ground station's end of one port of one emulated vehicle (a pymavlink
+    connection: the Link reads and writes it as a TCP one)."""
+
+    def __init__(self, sim: InProcessSimulator, runner: VehicleRunner, url: str, link: str,
+                 *, source_system: int, source_component: int) -> None:
+        super().__init__(None, url, source_system=source_system,
+                         source_component=source_component, use_native=False)
+        self._sim, self._runner = sim, runner
+        self._buf = bytearray()
+        self._data = clock.Event()
+        self.closed = False
+        self._att = runner.attach(self._incoming, link, close=self._dropped)
+
+    # the vehicle's side (the emulator thread, or whoever wrote to it)
+    def _incoming(self, data: bytes) -> None:
+        self._buf += data
+        self._data.set()
+
+    def _dropped(self) -> None:
+        self.closed = True
+        self._data.set()
+
+    # pymavlink's side
+    def select(self, timeout: float) -> bool:
+        return self._data.wait(timeout)
+
+    def recv(self, n: int | None = None) -> bytes:
+        if not self._buf:
+            self._data.clear()
+            if self.closed:
+                self.handle_disconnect()
+            return b""
+        out = bytes(self._buf)
+        self._buf.clear()
+        self._data.clear()
+        return out
+
+    def write(self, buf) -> None:
+        if self.closed:
+            raise ConnectionResetError(f"{self.address}: closed by the vehicle")
+        self._sim.feed(self._runner, self._att, bytes(buf))
+
+    def close(self) -> None:
+        if not self.closed:
+            self.closed = True
+            with self._sim.lock:
+                self._runner.detach(self._att)
+
+
+class InProcessSimulator:
+    """N emulated copters in this process, on the current :class:`VirtualClock`.
+
+    Takes :class:`~ftlbo_mav.sim.server.Simulator`'s vehicle settings (``homes``,
+    ``faults``, ``options``, ``seed``, ``vary``, ``wind``, ``first_sysid``). Use inside
+    ``with VirtualClock():`` as ``with InProcessSimulator(...) as sim:``; ``urls`` and
+    ``serial1_urls`` are its connection strings, :meth:`kill` ends a vehicle as a killed
+    SITL process ends."""
+
+    def __init__(self, *, homes: Sequence[tuple[float, float, float]], **settings) -> None:
+        self.config = Simulator(homes=homes, base_port=0, **settings)
+        self.key = f"emu:{next(_keys)}"
+        self.lock = threading.Lock()  # the vehicles: stepped by one thread, written by others
+        self._later: list = []
+        self._order = itertools.count()
+        self._stop: object | None = None
+        self._thread: clock.Thread | None = None
+        self._connections: list[_Connection] = []
+
+    @property
+    def runners(self) -> list[VehicleRunner]:
+        return self.config.runners
+
+    @property
+    def vehicles(self):
+        return [r.vehicle for r in self.runners]
+
+    @property
+    def urls(self) -> list[str]:
+        return [f"{self.key}/{i}" for i in range(len(self.runners))]
+
+    @property
+    def serial1_urls(self) -> list[str]:
+        return [f"{self.key}/{i}/SERIAL1" for i in range(len(self.runners))]
+
+    # -- lifetime
+    def __enter__(self) -> Self:
+        vc = clock.virtual()
+        if vc is None:
+            raise RuntimeError("InProcessSimulator runs on a virtual clock: use it inside "
+                               "`with VirtualClock():`")
+        self.config.make_runners(self, clock.monotonic, clock.monotonic(),
+                                 utc_offset_s=vc.utc_offset)
+        endpoints.IN_PROCESS[self.key] = self._connect
+        self._stop = clock.Event()
+        self._thread = clock.Thread(self._run, name=f"{self.key} emulator")
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        endpoints.IN_PROCESS.pop(self.key, None)
+        if self._stop is not None:
+            self._stop.set()
+            self._thread.join(5.0)
+        for c in list(self._connections):
+            c._dropped()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            now = clock.monotonic()
+            with self.lock:
+                while self._later and self._later[0][0] <= now:
+                    _t, _o, fn, args = heapq.heappop(self._later)
+                    fn(*args)
+                for r in self.runners:
+                    r.tick()
+            self._stop.wait(TICK_S)
+
+    # -- the runners' loop (VehicleRunner: what a fault delays)
+    def call_later(self, delay: float, fn: Callable, *args) -> None:
+        heapq.heappush(self._later, (clock.monotonic() + delay, next(self._order), fn, args))
+
+    # -- the ground station's side
+    def feed(self, runner: VehicleRunner, att, data: bytes) -> None:
+        with self.lock:
+            runner.feed(att, data)
+
+    def _connect(self, url: str, *, source_system: int, source_component: int) -> _Connection:
+        parts = url[len(self.key) + 1:].split("/")
+        try:
+            index = int(parts[0])
+            runner = self.runners[index]
+        except (ValueError, IndexError):
+            raise endpoints.LinkError(f"{url}: no such emulated vehicle "
+                                      f"({len(self.runners)} in {self.key})") from None
+        link = parts[1] if len(parts) > 1 else "SERIAL0"
+        if link not in ("SERIAL0", "SERIAL1") or len(parts) > 2:
+            raise endpoints.LinkError(f"{url}: expected {self.key}/INDEX[/SERIAL1]")
+        if runner.dead:
+            raise ConnectionRefusedError(f"{url}: the vehicle is gone")
+        with self.lock:
+            conn = _Connection(self, runner, url, link, source_system=source_system,
+                               source_component=source_component)
+        self._connections.append(conn)
+        return conn
+
+    # -- faults
+    def kill(self, index: int) -> None:
+        """Vehicle ``index`` dies as a killed SITL process does: its connections close, it
+        refuses new ones, it neither flies nor says anything again."""
+        with self.lock:
+            self.runners[index].dead = True
+        for c in self._connections:
+            if c._runner is self.runners[index]:
+                c._dropped()
