@@ -123,12 +123,12 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
                         sysids: list[int], *, keeper=None, outcome: list[str] | None = None,
                         events: list[str] | None = None, rtcm=None,
                         progress: bool = False, budget=None,
-                        told: tuple[float, str] | None = None) -> dict:
+                        told: tuple[float, str] | None = None, png: bool = True) -> dict:
     """flight.csv, summary.json and report.png in ``out_dir`` (photos.csv when a vehicle
     reported photos; with ``progress``, ``fly``'s progress.json: how far each UAV got
     along its plan, what ``fly --resume`` carries on from); returns the summary.
     ``events``: the departures seen, one line each; ``outcome``: per vehicle, what
-    happened and what was done when the flight left its plan."""
+    happened and what was done when the flight left its plan; ``png``: draw report.png."""
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)
     summary = summarize(planned, times, positions, seqs)
     summary["position_rate_hz"] = {str(s): round(monitor.record.rate_hz(s), 2) for s in sysids}
@@ -168,7 +168,7 @@ def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
         files[PROGRESS_FILE] = json.dumps(progress_document(planned, flown_now),
                                           indent=1) + "\n"
     files["summary.json"] = json.dumps(summary, indent=2) + "\n"
-    if len(times):
+    if len(times) and png:
         files["report.png"] = render_report_png(planned, times, positions, seqs, summary)
     with OutputFolder(out_dir, replaces=[r"report\.png", r"photos\.csv", r"progress\.json"]
                       ) as out:  # all, or none
@@ -348,13 +348,16 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
 @click.option("--progress", "progress_file", type=click.Path(dir_okay=False, path_type=Path),
               help="With --resume: the progress.json of the flight to carry on from "
                    "(default PLAN_DIR/flight/progress.json, the last flight's).")
+@click.option("--report-png/--no-report-png", "report_png", default=True, show_default=True,
+              help="Draw report.png at the end (flight.csv and summary.json are always "
+                   "written).")
 @timing_options
 @_rtcm_option
 @user_errors
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
                 on_departure, lost_wait, use_keeper, arm_budget, formation_bound,
                 preflight_timeout, flight_timeout,
-                any_firmware, link_text, resume, progress_file, timeout, retries,
+                any_firmware, link_text, resume, progress_file, report_png, timeout, retries,
                 ready_timeout, discover_timeout, signing_key, rtcm_source):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
@@ -408,7 +411,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
         def report(**extra) -> dict:
             return write_flight_report(planned, monitor, out_dir, sysids, keeper=keeper,
                                        events=events, rtcm=rtcm, progress=True,
-                                       budget=budget, told=told, **extra)
+                                       budget=budget, told=told, png=report_png, **extra)
 
         try:
             fly(planned, fleet.vehicles, options=options,

@@ -15,7 +15,7 @@ from ..errors import BadInput
 from ..flight.planned import load_planned_flight
 from .conditions import Ranges, draw
 from .engine import Tally, run_flights
-from .report import write_report
+from .report import clock_text, write_report
 
 
 def _progress(tally: Tally) -> None:
@@ -49,8 +49,10 @@ def _progress(tally: Tally) -> None:
               help="Local Dask workers (default: one per core).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Send the flights to a running Dask cluster (tcp://host:8786).")
-@click.option("--time-scale", type=FiniteFloat(1, 20), default=4.0, show_default=True,
-              help="The emulator's clock against the wall clock.")
+@click.option("--time-scale", type=FiniteFloat(1, 20), default=None,
+              help="Fly on the wall clock against the emulator on TCP ports, its clock "
+                   "this many times faster (default: the ground station and the emulator "
+                   "share one simulated clock: faster, and each seed flies one flight).")
 @click.option("--replay", type=click.IntRange(0, 2**31 - 1), default=None, metavar="SEED",
               help="Fly the flight of this seed once, here, with fly's live view.")
 @click.option("-o", "--output", type=click.Path(file_okay=False, path_type=Path),
@@ -84,7 +86,7 @@ def risk(plan_dir, flights, seed, wind_max, turbulence_max, gps_wander, vary, lo
         raise BadInput("--workers is for the local cluster; a --scheduler has its own")
     out_dir = output or plan_dir / "risk"
     click.echo(f"risk: {flights} flights of {plan_dir} ({planned.count} copters); "
-               f"{ranges.describe()}; time scale {time_scale:g}; "
+               f"{ranges.describe()}; {clock_text(time_scale)}; "
                + (f"Dask scheduler {scheduler}" if scheduler else
                   f"a local Dask cluster of {workers or 'one worker per core'}"), err=True)
     started = time.monotonic()

@@ -22,7 +22,7 @@ from pathlib import Path
 from ..errors import BadInput
 from ..flight.planned import load_planned_flight
 from .conditions import Ranges, draw
-from .flight import TIME_SCALE, fly_one
+from .flight import fly_one
 
 MAX_PLAN_BYTES = 50 * 1024 * 1024
 
@@ -54,7 +54,7 @@ def pack_plan(plan_dir: Path) -> dict[str, bytes]:
 
 
 def fly_packed(files: dict[str, bytes], ranges: Ranges, seed: int, copters: int,
-               time_scale: float) -> dict:
+               time_scale: float | None) -> dict:
     """One task: the plan written to a temporary folder, flown in flight ``seed``'s
     conditions, the folder removed."""
     with tempfile.TemporaryDirectory(prefix="ftlbo-risk-plan-") as tmp:
@@ -69,7 +69,7 @@ def fly_packed(files: dict[str, bytes], ranges: Ranges, seed: int, copters: int,
 
 def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
                 scheduler: str | None = None, workers: int | None = None,
-                time_scale: float = TIME_SCALE,
+                time_scale: float | None = None,
                 on_progress: Callable[[Tally], None] | None = None,
                 task: Callable[..., dict] = fly_packed) -> list[dict]:
     """Fly ``plan_dir`` once per seed on Dask; the records in seed order. ``task``: one

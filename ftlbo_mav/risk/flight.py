@@ -35,6 +35,9 @@ from ..sim.server import Simulator
 from ..sim.vehicle import VehicleOptions
 from .conditions import Conditions
 
+START_UTC_S = 1_767_225_600.0
+"""GPS time at a flight's start on the virtual clock (2026-01-01 00:00 UTC): the same for
+every flight, so that the start gate (a whole GPS second) waits as long each time."""
 AIRBORNE_M = 1.0  # above its home: separation counts only in the air (homes may be close)
 
 
@@ -58,7 +61,7 @@ def fly_one(plan_dir: str | Path, conditions: Conditions, *,
     if time_scale is not None:
         return _fly_one(plan_dir, planned, conditions, started, live=live,
                         sim=_simulator(planned, conditions, time_scale=time_scale))
-    with VirtualClock(utc_s=time.time()) as vc:
+    with VirtualClock(utc_s=START_UTC_S) as vc:
         record = _fly_one(plan_dir, planned, conditions, started, live=live,
                           sim=_simulator(planned, conditions, time_scale=None))
     if vc.stalled:
@@ -165,6 +168,8 @@ def _fly(plan_dir: Path, urls: list[str], log_dir: Path, *, live: bool) -> tuple
 
     args = ["fly", str(plan_dir), "--sysid", f"1..{len(urls)}", "--control-port", "0",
             "--connect", " ".join(urls), "--log-dir", str(log_dir)]
+    if not live:  # a replay draws it, as fly does; the runs need only the figures
+        args.append("--no-report-png")
     if live:
         try:
             main.main(args, standalone_mode=False)

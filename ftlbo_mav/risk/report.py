@@ -76,8 +76,15 @@ def summarize(records: Sequence[dict], *, planned_clearance_m: float,
     }
 
 
+def clock_text(time_scale: float | None) -> str:
+    """How the flights were timed, for the report."""
+    return ("one simulated clock for the ground station and the emulator"
+            if time_scale is None else f"wall clock, emulator time scale {time_scale:g}")
+
+
 def write_report(out_dir: Path, plan_dir: Path, records: Sequence[dict], ranges: Ranges, *,
-                 planned_clearance_m: float, min_separation_m: float, time_scale: float,
+                 planned_clearance_m: float, min_separation_m: float,
+                 time_scale: float | None,
                  engine: str, wall_s: float) -> list[Path]:
     """risk.json, risk.md and risk.png in ``out_dir``; the paths written."""
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -105,8 +112,8 @@ def _markdown(doc: dict, probs, ranges: Ranges, plan_dir: Path) -> str:
     s = doc["summary"]
     lines = [f"# Risk: {plan_dir.name}, {s['flights']} flights", "",
              f"Conditions drawn per flight: {ranges.describe()}.", "",
-             f"Flown {s['flown']} (not flown: {s['not_flown']}), time scale "
-             f"{doc['time_scale']:g}, {doc['engine']}, {doc['wall_s']:g} s.", "",
+             f"Flown {s['flown']} (not flown: {s['not_flown']}), "
+             f"{clock_text(doc['time_scale'])}, {doc['engine']}, {doc['wall_s']:g} s.", "",
              "| figure | min / 5 % / median / 95 % / max |", "|---|---|",
              f"| smallest true clearance | {_fmt(s['true_min_clearance_m'])} |",
              f"| smallest true separation in the air | {_fmt(s['true_min_separation_m'])} |",
