@@ -44,11 +44,25 @@ class LocalFrame:
 
     def to_enu(self, *, lat_deg, lon_deg, alt_m=0.0) -> np.ndarray:
         """Geodetic degrees and metres above home -> ENU metres, shape ``(..., 3)``."""
+        if isinstance(lat_deg, float) and isinstance(lon_deg, float):
+            return self._point_enu(lat_deg, lon_deg, float(alt_m))
         lat, lon, alt = np.broadcast_arrays(
             np.asarray(lat_deg, float), np.asarray(lon_deg, float), np.asarray(alt_m, float)
         )
         e, n, _ = self._transform(lon, lat, np.zeros_like(lat))
         return np.stack([e, n, alt.ravel()], axis=-1).reshape(*lat.shape, 3)
+
+    def _point_enu(self, lat: float, lon: float, alt: float) -> np.ndarray:
+        """One point, remembered: a flight asks for the same reported positions again and
+        again (every vehicle's last report, at each look of the watch)."""
+        memo = self.__dict__.setdefault("_memo", {})
+        en = memo.get((lat, lon))
+        if en is None:
+            if len(memo) >= 1024:
+                memo.clear()
+            e, n, _ = self._transformer.transform(lon, lat, 0.0)
+            en = memo[(lat, lon)] = (e, n)
+        return np.array([en[0], en[1], alt])
 
     def to_lla(self, enu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """ENU metres, shape ``(..., 3)`` -> ``(lat_deg, lon_deg, alt_m)`` arrays."""

@@ -291,12 +291,13 @@ def fence_geometry(items: Sequence[WireItem], to_en) -> FenceGeometry:
 
 def _inside_polygon(point: np.ndarray, polygon: np.ndarray) -> bool:
     """Polygon_outside's crossing test (libraries/AP_Math/polygon.cpp), negated."""
-    x, y = point
-    px, py = polygon[:, 0], polygon[:, 1]
-    qx, qy = np.roll(px, -1), np.roll(py, -1)
-    crosses = ((py > y) != (qy > y)) & (x < (qx - px) * (y - py) / np.where(qy == py, 1e-12,
-                                                                           qy - py) + px)
-    return bool(np.count_nonzero(crosses) % 2)
+    x, y = float(point[0]), float(point[1])
+    corners = polygon.tolist()  # a handful of corners: plain floats beat array set-up
+    crossings = 0
+    for (px, py), (qx, qy) in zip(corners, corners[1:] + corners[:1]):
+        if (py > y) != (qy > y) and x < (qx - px) * (y - py) / (qy - py) + px:
+            crossings += 1
+    return bool(crossings % 2)
 
 
 def breaches(geometry: FenceGeometry, *, east_north: np.ndarray, alt_m: float,

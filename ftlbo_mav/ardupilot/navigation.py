@@ -342,3 +342,5 @@ LAND_RATE_ACHIEVED = 0.95
 BRAKE_DECEL_MAX_M_S2 = 3.0
 BRAKE_TIME_CONSTANT_S = 1.6
 BRAKE_RAMP_S = 0.4
+NAV_PARAMS = tuple(name for name, _attr, _scale in _SCALES)
+"""The parameters :meth:`Navigation.with_params` reads."""

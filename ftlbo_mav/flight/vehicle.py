@@ -89,6 +89,7 @@ class Status:
     # vehicle's seconds), the last DELAY_REPORTS: how much a link's latency varies
     delays: deque = field(default_factory=lambda: deque(maxlen=DELAY_REPORTS))
     _rate_since: tuple[float, float] | None = None  # (ground, vehicle) seconds
+    _jitter: tuple | None = None  # ((report time, count), jitter_s) last computed
     # silences between position reports: (arrival, seconds since the one before, both
     # ground), the last GAP_REPORTS
     gaps: deque = field(default_factory=lambda: deque(maxlen=GAP_REPORTS))
@@ -144,7 +145,10 @@ class Status:
         (the vehicle's seconds); None before there are 20."""
         if len(self.delays) < 20:
             return None
-        return float(np.quantile(np.array(list(self.delays), float), 0.9))
+        key = (self.position_t, len(self.delays))  # a delay is added with each report
+        if self._jitter is None or self._jitter[0] != key:
+            self._jitter = (key, float(np.quantile(np.array(list(self.delays), float), 0.9)))
+        return self._jitter[1]
 
     @property
     def texts(self) -> list[str]:

@@ -31,6 +31,7 @@ from .firmware import version_request
 GCS_SYSID = 255
 GCS_COMPID = mavlink2.MAV_COMP_ID_MISSIONPLANNER  # 190
 FIRST_TCP_PORT = 5760  # SITL instance i listens on 5760 + 10 * i
+ASK_EVERY_S = 0.1  # how often the reader looks for telemetry to ask for (again)
 
 
 class LinkError(FtlboError):
@@ -373,7 +374,7 @@ class Link:
                 except LinkError:
                     pass
             if now >= next_ask:
-                next_ask = now + self.slowdown_ms / 1000.0
+                next_ask = now + max(ASK_EVERY_S, self.slowdown_ms / 1000.0)
                 self._ask_streams(now)
             try:
                 self._conn.select(0.05)

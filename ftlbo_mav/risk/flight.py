@@ -62,8 +62,11 @@ def fly_one(plan_dir: str | Path, conditions: Conditions, *,
         return _fly_one(plan_dir, planned, conditions, started, live=live,
                         sim=_simulator(planned, conditions, time_scale=time_scale))
     with VirtualClock(utc_s=START_UTC_S) as vc:
+        t0 = vc.monotonic()
         record = _fly_one(plan_dir, planned, conditions, started, live=live,
                           sim=_simulator(planned, conditions, time_scale=None))
+        # the whole run's simulated seconds: upload, pre-flight, the flight, the landing
+        record["simulated_s"] = round(vc.monotonic() - t0, 2)
     if vc.stalled:
         record["problem"] = "the simulation stalled (every thread waiting for nothing)"
     return record

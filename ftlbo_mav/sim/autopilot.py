@@ -57,6 +57,7 @@ from ..ardupilot.commands import (
 from ..ardupilot.modes import mode_name
 from ..ardupilot.navigation import DEFAULTS as NAV_DEFAULTS
 from ..ardupilot.navigation import (
+    NAV_PARAMS,
     REAL32,
     param_value,
 )
@@ -137,6 +138,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self.speed_m_s: float | None = None  # ModeAuto desired_speed_override.xy
         self.params = {name: d.value for name, d in PARAM_DEFAULTS.items()}
         self.params.update(options.limits.nav.to_params())
+        self._nav_params: tuple | None = None  # (the parameters' values, their Navigation)
         self._phase = ""  # what the current mode is doing (see _step)
         self._armed_on_ground_since: float | None = None
         self._announced_ready = False
@@ -376,11 +378,14 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
     def nav_params(self):
         """The navigation parameters now (the defaults, as set by PARAM_SET), as this
         airframe flies them (FlightLimits.jerk_factor: 1 but with ``--vary``)."""
-        limits = self.options.limits
-        nav = limits.nav.with_params(self.params)
-        if limits.jerk_factor != 1.0:
-            nav = replace(nav, wp_jerk=nav.wp_jerk * limits.jerk_factor)
-        return nav
+        key = tuple(map(self.params.get, NAV_PARAMS))  # made again only when one changed
+        if self._nav_params is None or self._nav_params[0] != key:
+            limits = self.options.limits
+            nav = limits.nav.with_params(self.params)
+            if limits.jerk_factor != 1.0:
+                nav = replace(nav, wp_jerk=nav.wp_jerk * limits.jerk_factor)
+            self._nav_params = (key, nav)
+        return self._nav_params[1]
 
     def get_param(self, name: str) -> tuple[float, int] | None:
         """``(value, MAV_PARAM_TYPE)`` of a parameter the emulator has, else None."""
