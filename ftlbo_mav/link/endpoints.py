@@ -265,6 +265,8 @@ class Link:
         # pymavlink prints and retries on a closed TCP peer; here the reader notes it
         # (and reconnects, see _run) instead
         conn.handle_eof = conn.handle_disconnect = self._peer_closed
+        if hasattr(conn, "on_data"):  # an emulator in this process hands its bytes over
+            conn.on_data = self._drain
         return conn
 
     @property
@@ -383,6 +385,14 @@ class Link:
             except (OSError, ValueError):
                 if not self.closed_by_peer and self._stop.wait(0.1):
                     return
+
+    def _drain(self) -> None:
+        """What has arrived, read and handed out now (by whoever brought it)."""
+        try:
+            while (msg := self._conn.recv_msg()) is not None:
+                self._dispatch(msg)
+        except (OSError, ValueError):
+            pass  # a link that broke: the reader thread finds out and reconnects
 
     def _connect_again(self) -> None:
         """One attempt to open the TCP connection again (the peer closed it)."""

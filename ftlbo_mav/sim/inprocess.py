@@ -43,12 +43,18 @@ class _Connection(mavutil.mavfile):
         self._buf = bytearray()
         self._data = clock.Event()
         self.closed = False
+        # set by the Link that reads this connection: it takes what arrives at once, in
+        # the emulator's turn (its reader thread is not woken for every tick's reports)
+        self.on_data: Callable[[], None] | None = None
         self._att = runner.attach(self._incoming, link, close=self._dropped)
 
     # the vehicle's side (the emulator thread, or whoever wrote to it)
     def _incoming(self, data: bytes) -> None:
         self._buf += data
-        self._data.set()
+        if self.on_data is not None:
+            self.on_data()
+        else:
+            self._data.set()
 
     def _dropped(self) -> None:
         self.closed = True
