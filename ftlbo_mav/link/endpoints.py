@@ -265,7 +265,8 @@ class Link:
         # pymavlink prints and retries on a closed TCP peer; here the reader notes it
         # (and reconnects, see _run) instead
         conn.handle_eof = conn.handle_disconnect = self._peer_closed
-        if hasattr(conn, "on_data"):  # an emulator in this process hands its bytes over
+        self._pushed = hasattr(conn, "on_data")
+        if self._pushed:  # an emulator in this process hands its bytes over
             conn.on_data = self._drain
         return conn
 
@@ -379,7 +380,10 @@ class Link:
                 next_ask = now + max(ASK_EVERY_S, self.slowdown_ms / 1000.0)
                 self._ask_streams(now)
             try:
-                self._conn.select(0.05)
+                # what arrives is handed over at once (_drain) on an in-process link:
+                # the reader wakes only for its own duties
+                self._conn.select(max(0.0, min(next_beat, next_ask) - now)
+                                  if self._pushed else 0.05)
                 while (msg := self._conn.recv_msg()) is not None:
                     self._dispatch(msg)
             except (OSError, ValueError):
