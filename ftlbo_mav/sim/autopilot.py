@@ -574,7 +574,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         nav = self.nav_params()
         wind = np.zeros(3) if self.gusts is None else self.gusts.wind.velocity_enu()
         follower = self._follower
-        if (follower is None or follower.nav != nav or self._followed_until is None
+        if (follower is None or (follower.nav is not nav and follower.nav != nav)
+                or self._followed_until is None
                 or abs(self._followed_until - (self.time - dt)) > 1e-9):
             follower = self._follower = PositionFollower(
                 self.position[:2], self.velocity[:2], nav=nav,
@@ -593,7 +594,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         nav.advance(dt, self.position, self.velocity)
         self._follow(dt, nav.target, nav.target_vel, nav.target_accel)
         if self.gusts is not None:  # the gusts push it off the path it follows
-            airspeed = float(np.linalg.norm(self.velocity - self.gusts.wind.velocity_enu()))
+            rel = self.velocity - self.gusts.wind.velocity_enu()
+            airspeed = math.sqrt(rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2])
             self.position += self.gusts.step(dt, airspeed)
             self.velocity += self.gusts.error_vel
         self.position[2] = max(self.position[2], 0.0)
