@@ -46,6 +46,11 @@ class LocalFrame:
         """Geodetic degrees and metres above home -> ENU metres, shape ``(..., 3)``."""
         if isinstance(lat_deg, float) and isinstance(lon_deg, float):
             return self._point_enu(lat_deg, lon_deg, float(alt_m))
+        if (isinstance(lat_deg, list) and len(lat_deg) <= 16 and isinstance(lon_deg, list)
+                and isinstance(alt_m, list) and all(
+                    type(x) is float for x in (*lat_deg, *lon_deg))):  # a few reports
+            return np.array([self._point_enu(la, lo, float(al))
+                             for la, lo, al in zip(lat_deg, lon_deg, alt_m, strict=True)])
         lat, lon, alt = np.broadcast_arrays(
             np.asarray(lat_deg, float), np.asarray(lon_deg, float), np.asarray(alt_m, float)
         )

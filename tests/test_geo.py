@@ -44,3 +44,18 @@ def test_vectorized_conversion_keeps_shape():
     enu = np.zeros((4, 5, 3))
     lat, lon, alt = frame.to_lla(enu)
     assert lat.shape == (4, 5) and np.allclose(lat, -33.9) and np.allclose(lon, 151.2)
+
+
+@settings(max_examples=50, deadline=None)
+@given(points=st.lists(st.tuples(st.floats(*LAT), st.floats(*LON), st.floats(0.0, 120.0)),
+                       min_size=1, max_size=5))
+def test_a_few_points_as_floats_convert_as_the_same_points_as_an_array(points):
+    """One report's or a few reports' floats take a remembered path (a flight asks for
+    the same positions many times); they convert exactly as an array does."""
+    frame = SCENARIO.frame
+    lat, lon, alt = (list(map(float, c)) for c in zip(*points))
+    as_array = frame.to_enu(lat_deg=np.array(lat), lon_deg=np.array(lon), alt_m=np.array(alt))
+    for _ in range(2):  # converted, then remembered
+        assert np.array_equal(frame.to_enu(lat_deg=lat, lon_deg=lon, alt_m=alt), as_array)
+        one = frame.to_enu(lat_deg=lat[0], lon_deg=lon[0], alt_m=alt[0])
+        assert one.shape == (3,) and np.array_equal(one, as_array[0])
