@@ -83,6 +83,9 @@ def speed(plan_dir: Path, ranges: Ranges, flights: int, seed: int,
             "mean_flight_wall_s": round(float(np.mean([r["wall_s"] for r in records
                                                        if "wall_s" in r])), 2)}
         figures[workers] = [{k: r.get(k) for k in FIGURES + ("outcome",)} for r in records]
+        for r in records:
+            if r.get("outcome") not in ("completed", "left the plan"):
+                print(f"  seed {r['seed']}: {r.get('outcome')}", flush=True)
         r = rows[workers]
         core = (f"; one flight {r['one_core_vs_real_time']:.1f}x real time on its core"
                 if r["one_core_vs_real_time"] else "")

@@ -36,6 +36,11 @@ __all__ = ["ClockStopped", "Condition", "Event", "Executor", "SimpleQueue", "Thr
            "VirtualClock", "monotonic", "sleep", "time", "virtual"]
 
 
+STALL_WALL_S = 60.0
+"""Wall seconds a virtual clock's turn may stay with one thread before the clock is
+stopped as stalled (a flight takes a few seconds of wall time, a turn milliseconds)."""
+
+
 class ClockStopped(SystemExit):
     """Raised in a thread still waiting on a virtual clock when the clock is closed (a
     :class:`SystemExit`: the thread ends quietly)."""
@@ -61,10 +66,6 @@ WALL = _Wall()
 _current: contextvars.ContextVar = contextvars.ContextVar("ftlbo_mav.clock", default=WALL)
 
 
-def _clock():
-    return _current.get()
-
-
 def virtual() -> VirtualClock | None:
     """The virtual clock this thread runs on, or None on the wall clock."""
     c = _current.get()
@@ -86,9 +87,10 @@ def sleep(seconds: float) -> None:
 
 
 class _Waiter:
-    __slots__ = ("gate", "released", "woken")
+    __slots__ = ("gate", "name", "released", "woken")
 
-    def __init__(self) -> None:
+    def __init__(self, name: str | None = None) -> None:
+        self.name = name or threading.current_thread().name  # the thread it lets run
         self.gate = threading.Lock()
         self.gate.acquire()
         self.woken = False     # queued for the turn
@@ -119,6 +121,9 @@ class VirtualClock:
         self._running = False         # one thread holds the turn
         self._stopped = False
         self.stalled = False          # every thread waited with no deadline: closed
+        self.stall_reason: str | None = None
+        self._holder = "the thread that opened it"  # who has the turn (what a stall names)
+        self._turns = 0               # turns passed so far (the watchdog's sign of life)
         self._token = None
 
     # -- time
@@ -174,8 +179,7 @@ class VirtualClock:
             while self._timers and self._timers[0][2].woken:
                 heapq.heappop(self._timers)
             if not self._timers:
-                self.stalled = True
-                self._stop()
+                self._stall("every thread waits for something no thread will do")
                 return
             t = self._timers[0][0]
             self._now = max(self._now, t)
@@ -183,8 +187,13 @@ class VirtualClock:
                 self._wake(heapq.heappop(self._timers)[2])
         w = self._ready.popleft()
         self._parked.discard(w)
-        self._running = True
+        self._running, self._holder = True, w.name
+        self._turns += 1
         w.release()
+
+    def _stall(self, why: str) -> None:
+        self.stalled, self.stall_reason = True, why
+        self._stop()
 
     def _stop(self) -> None:
         self._stopped = True
@@ -194,9 +203,9 @@ class VirtualClock:
         self._ready.clear()
         self._timers.clear()
 
-    def _enroll(self) -> _Waiter:
+    def _enroll(self, name: str) -> _Waiter:
         """A thread about to start: queued for the turn now, in its starter's order."""
-        w = _Waiter()
+        w = _Waiter(name)
         with self._lock:
             if not self._stopped:
                 self._parked.add(w)
@@ -220,7 +229,25 @@ class VirtualClock:
         with self._lock:
             self._running = True  # the thread that opened it has the turn
         self._token = _current.set(self)
+        threading.Thread(target=self._watch, name="virtual clock watchdog", daemon=True).start()
         return self
+
+    def _watch(self) -> None:
+        """A safety net on the wall clock: a turn held for :data:`STALL_WALL_S` without
+        any thread running on (a thread blocked on something this module does not know)
+        stops the clock, so a run of many flights records a stalled one instead of
+        hanging; its threads end with :class:`ClockStopped`."""
+        last, since = -1, _time.monotonic()
+        while not self._stopped:
+            _time.sleep(1.0)
+            if self._turns != last:
+                last, since = self._turns, _time.monotonic()
+            elif _time.monotonic() - since >= STALL_WALL_S:
+                with self._lock:
+                    if not self._stopped and self._turns == last:
+                        self._stall(f"no turn passed for {STALL_WALL_S:g} s of wall time "
+                                    f"(the turn with {self._holder!r}, "
+                                    f"{len(self._parked)} threads waiting)")
 
     def __exit__(self, *exc) -> None:
         _current.reset(self._token)
@@ -362,7 +389,7 @@ class Thread:
 
     def start(self) -> None:
         self._context = contextvars.copy_context()
-        self._turn = None if self._clock is None else self._clock._enroll()
+        self._turn = None if self._clock is None else self._clock._enroll(self.name)
         self._thread.start()
 
     def _run(self) -> None:

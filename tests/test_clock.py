@@ -133,3 +133,18 @@ def test_threads_still_waiting_when_the_clock_closes_end_quietly():
         clock.Thread(forever).start()
         clock.sleep(10.0)
     assert ended.wait(5.0)  # ClockStopped unwound it (a SystemExit: no traceback)
+
+
+def test_a_turn_held_on_something_the_clock_does_not_know_stops_it_as_stalled(monkeypatch):
+    """The safety net: a thread that blocks with the turn on a primitive of the standard
+    library (not this module's) holds every other up; after STALL_WALL_S of wall time
+    the clock stops, names the thread, and the others end."""
+    monkeypatch.setattr(clock, "STALL_WALL_S", 1.5)
+    outside = threading.Event()
+    with VirtualClock() as vc:
+        t = clock.Thread(lambda: outside.wait(), name="blocked elsewhere")
+        t.start()
+        with pytest.raises(ClockStopped):
+            clock.sleep(1.0)  # hands the turn to the thread that never gives it back
+    outside.set()
+    assert vc.stalled and "'blocked elsewhere'" in vc.stall_reason

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import clock
-from ..clock import VirtualClock
+from ..clock import ClockStopped, VirtualClock
 from ..flight.metrics import min_clearance, min_separation
 from ..flight.planned import PlannedFlight, load_planned_flight
 from ..link.endpoints import Link
@@ -63,12 +63,17 @@ def fly_one(plan_dir: str | Path, conditions: Conditions, *,
                         sim=_simulator(planned, conditions, time_scale=time_scale))
     with VirtualClock(utc_s=START_UTC_S) as vc:
         t0 = vc.monotonic()
-        record = _fly_one(plan_dir, planned, conditions, started, live=live,
-                          sim=_simulator(planned, conditions, time_scale=None))
+        try:
+            record = _fly_one(plan_dir, planned, conditions, started, live=live,
+                              sim=_simulator(planned, conditions, time_scale=None))
+        except ClockStopped:  # stalled (clock.VirtualClock._watch): a failed flight
+            record = _record(conditions, planned, None, exit_code=2, summary={},
+                             wall_s=time.monotonic() - started, problem="stalled")
         # the whole run's simulated seconds: upload, pre-flight, the flight, the landing
         record["simulated_s"] = round(vc.monotonic() - t0, 2)
     if vc.stalled:
-        record["problem"] = "the simulation stalled (every thread waiting for nothing)"
+        record["problem"] = f"the simulation stalled: {vc.stall_reason}"
+        record["outcome"] = f"failed: {record['problem']}"
     return record
 
 
@@ -176,6 +181,8 @@ def _fly(plan_dir: Path, urls: list[str], log_dir: Path, *, live: bool) -> tuple
     if live:
         try:
             main.main(args, standalone_mode=False)
+        except ClockStopped:
+            raise
         except SystemExit as exc:
             return int(exc.code or 0), ""
         return 0, ""
@@ -184,6 +191,8 @@ def _fly(plan_dir: Path, urls: list[str], log_dir: Path, *, live: bool) -> tuple
         try:
             main.main(args, standalone_mode=False)
             code = 0
+        except ClockStopped:
+            raise
         except SystemExit as exc:
             code = int(exc.code or 0)
         except Exception as exc:  # noqa: BLE001 - a flight that breaks is a flight's outcome
