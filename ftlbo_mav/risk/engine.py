@@ -25,6 +25,12 @@ from .conditions import Ranges, draw
 from .flight import fly_one
 
 MAX_PLAN_BYTES = 50 * 1024 * 1024
+NO_PROFILER = {"distributed.worker.profile.enabled": False}
+"""Dask's worker samples every thread's stack (``sys._current_frames``) every 10 ms; a
+flight starts and ends a dozen threads, and CPython before 3.12 can deadlock there (the
+interpreter's thread-list lock against the GIL, python/cpython#106883: two runs of 100
+flights hung, the worker's event loop in ``Worker.trigger_profile``). The workers fly
+without it."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +63,7 @@ def fly_packed(files: dict[str, bytes], ranges: Ranges, seed: int, copters: int,
                time_scale: float | None) -> dict:
     """One task: the plan written to a temporary folder, flown in flight ``seed``'s
     conditions, the folder removed."""
+    _stop_profiler()  # a worker of a cluster started elsewhere, or started again
     with tempfile.TemporaryDirectory(prefix="ftlbo-risk-plan-") as tmp:
         for rel, data in files.items():
             path = Path(tmp) / rel
@@ -65,6 +72,26 @@ def fly_packed(files: dict[str, bytes], ranges: Ranges, seed: int, copters: int,
         record = fly_one(tmp, draw(ranges, seed, copters), time_scale=time_scale)
     record["worker_pid"] = os.getpid()
     return record
+
+
+def _stop_profiler(dask_worker=None) -> None:
+    """This worker's stack sampling stopped (:data:`NO_PROFILER`): from its event loop
+    (``client.run``) or from a task (scheduled on that loop)."""
+    worker = dask_worker
+    if worker is None:
+        try:
+            from distributed import get_worker
+
+            worker = get_worker()
+        except (ImportError, ValueError):  # not in a Dask worker
+            return
+    callbacks = [pc for name, pc in worker.periodic_callbacks.items()
+                 if name in ("profile", "profile-cycle") and pc.is_running()]
+    for pc in callbacks:
+        if dask_worker is not None:
+            pc.stop()
+        else:
+            worker.loop.add_callback(pc.stop)
 
 
 def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
@@ -82,8 +109,11 @@ def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
     cluster = None
     if scheduler is None:
         n = workers or os.cpu_count() or 1
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+        import dask
+
+        with dask.config.set(NO_PROFILER):  # the workers (their nannies) take it along
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
         client = Client(cluster)
     else:
         try:
@@ -92,6 +122,7 @@ def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
             raise BadInput(f"--scheduler {scheduler}: no Dask scheduler answered ({exc})") \
                 from None
     try:
+        client.run(_stop_profiler)
         slots = max(1, sum(client.nthreads().values()))
         packed = client.scatter(files, broadcast=True)
         futures = {client.submit(task, packed, ranges, s, planned.count, time_scale,
