@@ -10,11 +10,11 @@ naming the vehicle and the step.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from .. import clock
@@ -59,6 +59,19 @@ POSITION_ONLY = (R.POSITION_TARGET_TYPEMASK_VX_IGNORE | R.POSITION_TARGET_TYPEMA
                  | R.POSITION_TARGET_TYPEMASK_YAW_IGNORE
                  | R.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE)
 """SET_POSITION_TARGET_*'s type_mask for a position alone."""
+
+
+def quantile(values, q: float) -> float:
+    """``numpy.quantile(values, q)`` (its default, linear method) on a few plain floats,
+    without numpy's set-up: the same number, computed as numpy computes it."""
+    a = sorted(float(v) for v in values)
+    n = len(a)
+    index = (n - 1) * q  # numpy's "linear" virtual index
+    lo = min(max(math.floor(index), 0), n - 1)
+    hi = min(lo + 1, n - 1)
+    t = index - math.floor(index)
+    diff = a[hi] - a[lo]
+    return a[hi] - diff * (1.0 - t) if t >= 0.5 else a[lo] + diff * t  # numpy's _lerp
 
 
 @dataclass
@@ -136,9 +149,12 @@ class Status:
         vehicle's seconds (and the one going on now), in its seconds."""
         rate = self.clock_rate
         since = now - window_s / rate
-        past = [gap for t, gap in self.gaps if t >= since]
-        current = now - self.position_t if self.position_t else 0.0
-        return max([current, *past]) * rate
+        longest = now - self.position_t if self.position_t else 0.0
+        for t, gap in reversed(self.gaps):  # the newest first: stop at the window's start
+            if t < since:
+                break
+            longest = max(longest, gap)
+        return longest * rate
 
     def jitter_s(self) -> float | None:
         """The 90th percentile of the recent reports' delays beyond the least delayed
@@ -147,7 +163,7 @@ class Status:
             return None
         key = (self.position_t, len(self.delays))  # a delay is added with each report
         if self._jitter is None or self._jitter[0] != key:
-            self._jitter = (key, float(np.quantile(np.array(list(self.delays), float), 0.9)))
+            self._jitter = (key, quantile(self.delays, 0.9))
         return self._jitter[1]
 
     @property
