@@ -26,6 +26,7 @@ Pure data and arithmetic.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,6 +74,8 @@ class Battery:
     def current_a(self, horizontal_m_s, vertical_m_s) -> np.ndarray:
         """The current drawn at these speeds (arrays of one shape; metres per second,
         ``vertical`` positive up)."""
+        if isinstance(horizontal_m_s, float) and isinstance(vertical_m_s, float):
+            return self._current_a(horizontal_m_s, vertical_m_s)
         v = np.abs(np.asarray(horizontal_m_s, float))
         vz = np.asarray(vertical_m_s, float)
         cruise = self.hover_current_a if self.cruise_current_a is None else self.cruise_current_a
@@ -80,6 +83,16 @@ class Battery:
         forward = self.hover_current_a + (cruise - self.hover_current_a) * fraction
         w = np.maximum(vz, -0.5 * self.induced_velocity_m_s) / (2.0 * self.induced_velocity_m_s)
         return forward * (w + np.sqrt(w * w + 1.0))
+
+    def _current_a(self, horizontal_m_s: float, vertical_m_s: float) -> float:
+        """:meth:`current_a` of two floats, in plain floats (the emulator asks at every
+        step): the same arithmetic."""
+        cruise = self.hover_current_a if self.cruise_current_a is None else self.cruise_current_a
+        fraction = min(abs(horizontal_m_s) / self.cruise_speed_m_s, 1.0) ** 2
+        forward = self.hover_current_a + (cruise - self.hover_current_a) * fraction
+        w = max(vertical_m_s, -0.5 * self.induced_velocity_m_s) / (
+            2.0 * self.induced_velocity_m_s)
+        return forward * (w + math.sqrt(w * w + 1.0))
 
     def mah(self, seconds: float, horizontal_m_s: float = 0.0, vertical_m_s: float = 0.0
             ) -> float:

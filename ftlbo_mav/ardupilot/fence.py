@@ -37,6 +37,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as R
@@ -270,6 +271,14 @@ class FenceGeometry:
     def empty(self) -> bool:
         return not self.inclusion and len(self.exclusion_circles) == 0
 
+    @cached_property
+    def plain(self) -> tuple[list[list], list[tuple[float, float, float]]]:
+        """The polygons' corners and the circles as plain floats: a copter's fence is
+        checked 25 times a second, on a handful of corners and circles, where numpy's
+        set-up would cost more than the test."""
+        return ([poly.tolist() for poly in self.inclusion],
+                [tuple(row) for row in np.asarray(self.exclusion_circles, float).tolist()])
+
 
 def fence_geometry(items: Sequence[WireItem], to_en) -> FenceGeometry:
     """The stored fence items -> :class:`FenceGeometry`; ``to_en(lat_deg, lon_deg) ->
@@ -289,10 +298,11 @@ def fence_geometry(items: Sequence[WireItem], to_en) -> FenceGeometry:
     return FenceGeometry(tuple(polygons), np.array(circles, float).reshape(-1, 3))
 
 
-def _inside_polygon(point: np.ndarray, polygon: np.ndarray) -> bool:
-    """Polygon_outside's crossing test (libraries/AP_Math/polygon.cpp), negated."""
+def _inside_polygon(point: np.ndarray, polygon) -> bool:
+    """Polygon_outside's crossing test (libraries/AP_Math/polygon.cpp), negated;
+    ``polygon`` ``(n, 2)``, an array or a list of corners."""
     x, y = float(point[0]), float(point[1])
-    corners = polygon.tolist()  # a handful of corners: plain floats beat array set-up
+    corners = polygon.tolist() if isinstance(polygon, np.ndarray) else polygon
     crossings = 0
     for (px, py), (qx, qy) in zip(corners, corners[1:] + corners[:1]):
         if (py > y) != (qy > y) and x < (qx - px) * (y - py) / (qy - py) + px:
@@ -310,11 +320,10 @@ def breaches(geometry: FenceGeometry, *, east_north: np.ndarray, alt_m: float,
     if fence_type & TYPE_ALT_MAX and alt_m > alt_max_m:
         out |= TYPE_ALT_MAX
     if fence_type & TYPE_POLYGON and not geometry.empty:
-        p = np.asarray(east_north, float)
-        outside = any(not _inside_polygon(p, poly) for poly in geometry.inclusion)
-        c = geometry.exclusion_circles
-        inside_circle = bool(len(c)) and bool(np.any(np.hypot(c[:, 0] - p[0], c[:, 1] - p[1])
-                                                     < c[:, 2]))
+        x, y = float(east_north[0]), float(east_north[1])
+        polygons, circles = geometry.plain
+        outside = any(not _inside_polygon((x, y), poly) for poly in polygons)
+        inside_circle = any(math.hypot(cx - x, cy - y) < r for cx, cy, r in circles)
         if outside or inside_circle:
             out |= TYPE_POLYGON
     return out

@@ -176,9 +176,16 @@ class SCurve:
         self.snap = self.jerk = self.accel_max = self.vel_max = 0.0
         self.time = 0.0
         self.position_sq = 0.0
-        self.track = np.zeros(3)
-        self.unit = np.zeros(3)
+        self._set_track(np.zeros(3), np.zeros(3))
         self.p: list[Piece] = [Piece(0.0, FLAT, 0.0, 0.0, 0.0, 0.0)]
+
+    def _set_track(self, track: np.ndarray, unit: np.ndarray) -> None:
+        """The leg's track and its direction, also as plain floats (a step of the target
+        along the track is scalar arithmetic: numpy's per-call cost on three numbers
+        would be most of it)."""
+        self.track, self.unit = track, unit
+        self._track_xyz, self._unit_xyz = tuple(track.tolist()), tuple(unit.tolist())
+        self._track_sq = float(track @ track)
 
     def copy(self) -> SCurve:
         other = SCurve()
@@ -250,9 +257,8 @@ class SCurve:
         self.accel_max = kinematic_limit(track, accel_xy, accel_z, accel_z)
         if not (_pos(snap) and _pos(jerk) and _pos(self.accel_max) and _pos(self.vel_max)):
             return
-        self.track = track
         length = float(np.linalg.norm(track))
-        self.unit = track / length
+        self._set_track(track, track / length)
         self._add_rest_to_rest(length)
         if not self.valid():
             self.init()
@@ -444,7 +450,11 @@ class SCurve:
         if not self.planned:
             return 0.0, 0.0, 0.0, 0.0
         p = self.p
-        i = next((k for k in range(PIECES) if t < p[k].end_time), PIECES)
+        i = PIECES
+        for k in range(PIECES):
+            if t < p[k].end_time:
+                i = k
+                break
         if i == 0:
             q = p[0]
             j, a, v, x = _along(FLAT, 0.0, 0.0, t - q.end_time, q.accel, q.vel, q.pos)
@@ -474,18 +484,14 @@ class SCurve:
 
     def finished(self) -> bool:
         """SCurve::finished: the time is up or the distance travelled."""
-        return self.time >= self.time_end() or self.position_sq >= float(self.track @ self.track)
+        return self.time >= self.time_end() or self.position_sq >= self._track_sq
 
-    def _advance(self, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Move the time on by ``dt``: position (from the origin), velocity, acceleration."""
+    def _advance(self, dt: float) -> tuple[float, float, float]:
+        """Move the time on by ``dt``: distance, speed and acceleration along the track."""
         self.time = min(self.time + dt, self.time_end())
         _j, a, v, x = self.state_at(self.time)
         self.position_sq = x * x
-        return self.unit * x, self.unit * v, self.unit * a
-
-    def _at(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        _j, a, v, x = self.state_at(t)
-        return self.unit * x, self.unit * v, self.unit * a
+        return x, v, a
 
     def advance_target_along_track(self, prev: SCurve, nxt: SCurve, wp_radius: float,
                                    accel_corner: float, fast: bool, dt: float,
@@ -496,30 +502,45 @@ class SCurve:
         turn-out time less the next one's turn-in time and a quarter of the way, if the
         point half-way between now and the end of this leg is within ``wp_radius`` of
         the waypoint, below both legs' speeds and within ``accel_corner``. Returns
-        ``(finished, position, velocity, acceleration)``: finished once this leg is
-        done, or once the next leg has run as long as this one has left."""
-        p1, v1, a1 = prev._advance(dt)
-        pos = origin + p1 - prev.track
-        vel, acc = v1.copy(), a1.copy()
-        p2, v2, a2 = self._advance(dt)
-        pos, vel, acc = pos + p2, vel + v2, acc + a2
+        ``(finished, position, velocity, acceleration)`` (three floats each, ENU):
+        finished once this leg is done, or once the next leg has run as long as this
+        one has left. (Each leg's vector is its unit vector times a distance, speed or
+        acceleration along it, in plain floats: the same arithmetic, element by element,
+        as on numpy's arrays.)"""
+        x1, v1, a1 = prev._advance(dt)
+        (ux, uy, uz), (kx, ky, kz) = prev._unit_xyz, prev._track_xyz
+        ox, oy, oz = origin.tolist()
+        px, py, pz = ox + ux * x1 - kx, oy + uy * x1 - ky, oz + uz * x1 - kz
+        vx, vy, vz = ux * v1, uy * v1, uz * v1
+        ax, ay, az = ux * a1, uy * a1, uz * a1
+        x2, v2, a2 = self._advance(dt)
+        ux, uy, uz = self._unit_xyz
+        px, py, pz = px + ux * x2, py + uy * x2, pz + uz * x2
+        vx, vy, vz = vx + ux * v2, vy + uy * v2, vz + uz * v2
+        ax, ay, az = ax + ux * a2, ay + uy * a2, az + uz * a2
         done = self.finished()
         left = self.time_remaining()
         if (fast and _zero(nxt.time) and self.time >= self.time_turn_out() - nxt.time_turn_in()
-                and self.position_sq >= 0.25 * float(self.track @ self.track)):
-            tp, tv, ta = self._at(self.time + left / 2)
-            tp = tp - self.track
-            np_, nv, na = nxt._at(left / 2)
-            tp, tv, ta = tp + np_, tv + nv, ta + na
+                and self.position_sq >= 0.25 * self._track_sq):
+            _j, ta, tv, tx = self.state_at(self.time + left / 2)
+            _j, na, nv, nx = nxt.state_at(left / 2)
+            (kx, ky, kz), (wx, wy, wz) = self._track_xyz, nxt._unit_xyz
+            tp = np.array([ux * tx - kx + wx * nx, uy * tx - ky + wy * nx,
+                           uz * tx - kz + wz * nx])
             speed_min = min(self.vel_max, nxt.vel_max)
             if (self.time_remaining() < nxt.time_end() / 2 and np.linalg.norm(tp) < wp_radius
-                    and math.hypot(tv[0], tv[1]) < speed_min
-                    and math.hypot(ta[0], ta[1]) < accel_corner):
-                p3, v3, a3 = nxt._advance(dt)
-                pos, vel, acc = pos + p3, vel + v3, acc + a3
+                    and math.hypot(ux * tv + wx * nv, uy * tv + wy * nv) < speed_min
+                    and math.hypot(ux * ta + wx * na, uy * ta + wy * na) < accel_corner):
+                x3, v3, a3 = nxt._advance(dt)
+                px, py, pz = px + wx * x3, py + wy * x3, pz + wz * x3
+                vx, vy, vz = vx + wx * v3, vy + wy * v3, vz + wz * v3
+                ax, ay, az = ax + wx * a3, ay + wy * a3, az + wz * a3
         elif not _zero(nxt.time):
-            p3, v3, a3 = nxt._advance(dt)
-            pos, vel, acc = pos + p3, vel + v3, acc + a3
+            x3, v3, a3 = nxt._advance(dt)
+            wx, wy, wz = nxt._unit_xyz
+            px, py, pz = px + wx * x3, py + wy * x3, pz + wz * x3
+            vx, vy, vz = vx + wx * v3, vy + wy * v3, vz + wz * v3
+            ax, ay, az = ax + wx * a3, ay + wy * a3, az + wz * a3
             if nxt.time >= self.time_remaining():
                 done = True
-        return done, pos, vel, acc
+        return done, (px, py, pz), (vx, vy, vz), (ax, ay, az)

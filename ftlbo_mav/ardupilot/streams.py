@@ -135,11 +135,19 @@ class _Want:
         """Arriving, for long enough to tell, at less than half the rate asked."""
         if self.since is None or now - self.since < RATE_WINDOW_S:
             return False
-        recent = sum(1 for t in self.arrivals if now - t <= RATE_WINDOW_S)
-        return recent < 0.5 * self.hz * RATE_WINDOW_S
+        return self._recent(now) < 0.5 * self.hz * RATE_WINDOW_S
 
     def rate(self, now: float) -> float:
-        return sum(1 for t in self.arrivals if now - t <= RATE_WINDOW_S) / RATE_WINDOW_S
+        return self._recent(now) / RATE_WINDOW_S
+
+    def _recent(self, now: float) -> int:
+        """How many arrived within the window before ``now`` (in order: the old ones lead)."""
+        n = len(self.arrivals)
+        for t in self.arrivals:
+            if now - t <= RATE_WINDOW_S:
+                break
+            n -= 1
+        return n
 
 
 @dataclass

@@ -145,12 +145,18 @@ class WaypointNav:
         (the emulated copter without wind) it stays 1."""
         if velocity is None:
             return self.track_scaler
-        speed = float(np.linalg.norm(self.target_vel))
+        # in plain floats: numpy's per-call cost on three numbers would be most of it
+        tvx, tvy, tvz = self.target_vel.tolist()
+        speed = math.sqrt(tvx * tvx + tvy * tvy + tvz * tvz)
         wanted = 1.0
         if speed > 0:
-            direction = self.target_vel / speed
-            track_error = float((self.target - position) @ direction)
-            track_velocity = float(np.asarray(velocity) @ direction)
+            dx, dy, dz = tvx / speed, tvy / speed, tvz / speed
+            tx, ty, tz = self.target.tolist()
+            px, py, pz = position.tolist()
+            vx, vy, vz = (velocity.tolist() if isinstance(velocity, np.ndarray)
+                          else map(float, velocity))
+            track_error = (tx - px) * dx + (ty - py) * dy + (tz - pz) * dz
+            track_velocity = vx * dx + vy * dy + vz * dz
             wanted = min(max(0.05 + (track_velocity - self.nav.psc_posxy_p * track_error)
                              / speed, 0.1), 1.0)
         tc = self.nav.wp_accel / self.nav.wp_jerk if self.nav.wp_jerk > 0 else 1.0
@@ -164,9 +170,12 @@ class WaypointNav:
             self.prev, self.next, self.radius, self.nav.corner_accel(), self.fast,
             dt * scale * self._track_scale(dt, position, velocity), self.origin)
         # accel_offset: track direction x _offset_accel x |target_vel| / desired speed
-        offset = vel * (self.offset_accel / self.desired_speed)
-        vel, acc = vel * scale, acc * scale * scale + offset
-        self.target, self.target_vel, self.target_accel = pos, vel, acc
+        k = self.offset_accel / self.desired_speed
+        self.target = np.array(pos)
+        self.target_vel = np.array([vel[0] * scale, vel[1] * scale, vel[2] * scale])
+        self.target_accel = np.array([acc[0] * scale * scale + vel[0] * k,
+                                      acc[1] * scale * scale + vel[1] * k,
+                                      acc[2] * scale * scale + vel[2] * k])
         if not self.reached and done:
             if self.fast or float(np.linalg.norm(position - self.destination)) <= self.radius:
                 self.reached = True

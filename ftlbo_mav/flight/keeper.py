@@ -174,16 +174,16 @@ def _segments(path: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def progress_along(path: np.ndarray, point: np.ndarray, *, start_segment: int = 0,
-                   window: int = 4, within: tuple[float, float] | None = None
-                   ) -> tuple[float, int]:
+                   window: int = 4, within: tuple[float, float] | None = None,
+                   segments: tuple | None = None) -> tuple[float, int]:
     """Distance along ``path`` ``(P, 3)`` of the point nearest ``point`` ``(3,)``, searching
     the segments ``start_segment .. start_segment + window`` (progress never jumps back to
     an earlier leg nor ahead to a far one when a path passes near itself) and, with
     ``within`` ``(lowest, highest)`` metres, among the points of those whose progress lies
     there if any does (where a path comes back along itself, as out to a lane's end and
     back, the nearest point can be on the way back before the copter has turned). Returns
-    ``(metres, segment)``."""
-    a, b, cum = _segments(path)
+    ``(metres, segment)``. ``segments``: ``_segments(path)``, if known already."""
+    a, b, cum = _segments(path) if segments is None else segments
     lo, hi = start_segment, min(len(a), start_segment + window + 1)
     d = b[lo:hi] - a[lo:hi]
     dd = np.einsum("ij,ij->i", d, d)
@@ -222,6 +222,7 @@ class FormationKeeper:
     _progress: list = field(default_factory=list)  # the last progress measured, per UAV
     _resend: list[list[float]] = field(default_factory=list)  # when to repeat continues
     _resumed_at: list[float] = field(default_factory=list)
+    _segments: list = field(default_factory=list)  # _segments of each path, once used
     _last_t: float | None = None
     _standing_aside: bool = False
     log: KeeperLog | None = None
@@ -260,8 +261,11 @@ class FormationKeeper:
             # first is at the start (fly starts AUTO there)
             last = self._progress[i]
             within = (last - MAX_BACK_M, last + MAX_AHEAD_M)
+            if len(self._segments) != len(self.paths):  # each path's segments, once
+                self._segments = [_segments(np.asarray(q)) for q in self.paths]
             out[i], self._segment[i] = progress_along(path, p, start_segment=self._segment[i],
-                                                      within=within)
+                                                      within=within,
+                                                      segments=self._segments[i])
         self._progress = out.tolist()
         return out
 

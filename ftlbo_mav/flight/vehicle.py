@@ -74,6 +74,49 @@ def quantile(values, q: float) -> float:
     return a[hi] - diff * (1.0 - t) if t >= 0.5 else a[lo] + diff * t  # numpy's _lerp
 
 
+class GapLog:
+    """The silences between position reports: ``(arrival, seconds since the one before)``
+    of the last ``maxlen`` reports (arrivals in order), and the longest since a time
+    without a scan (the keeper asks 20 times a second over 200 reports): a queue of the
+    reports that no later one matches, longest first."""
+
+    def __init__(self, maxlen: int) -> None:
+        self._all: deque = deque(maxlen=maxlen)
+        self._peaks: deque = deque()  # (count, arrival, gap), gaps strictly decreasing
+        self._count = 0
+
+    def append(self, item: tuple[float, float]) -> None:
+        t, gap = item
+        self._all.append(item)
+        self._count += 1
+        while self._peaks and self._peaks[-1][2] <= gap:
+            self._peaks.pop()
+        self._peaks.append((self._count, t, gap))
+        oldest = self._count - len(self._all) + 1  # the reports still kept
+        while self._peaks[0][0] < oldest:
+            self._peaks.popleft()
+
+    def extend(self, items) -> None:
+        for item in items:
+            self.append(item)
+
+    def longest_since(self, since: float) -> float | None:
+        """The longest gap that arrived at ``since`` or later (None: none did)."""
+        for _n, t, gap in self._peaks:
+            if t >= since:
+                return gap
+        return None
+
+    def __iter__(self):
+        return iter(self._all)
+
+    def __reversed__(self):
+        return reversed(self._all)
+
+    def __len__(self) -> int:
+        return len(self._all)
+
+
 @dataclass
 class Status:
     """What the vehicle last said about itself; ``t`` values are ``clock.monotonic()``."""
@@ -105,7 +148,7 @@ class Status:
     _jitter: tuple | None = None  # ((report time, count), jitter_s) last computed
     # silences between position reports: (arrival, seconds since the one before, both
     # ground), the last GAP_REPORTS
-    gaps: deque = field(default_factory=lambda: deque(maxlen=GAP_REPORTS))
+    gaps: GapLog = field(default_factory=lambda: GapLog(GAP_REPORTS))
     heartbeat_t: float = 0.0
     heard_t: float = 0.0  # the last message of any kind from the vehicle
     # every STATUSTEXT as (arrival time, severity, text), the last 50; text_count counts
@@ -150,10 +193,9 @@ class Status:
         rate = self.clock_rate
         since = now - window_s / rate
         longest = now - self.position_t if self.position_t else 0.0
-        for t, gap in reversed(self.gaps):  # the newest first: stop at the window's start
-            if t < since:
-                break
-            longest = max(longest, gap)
+        recent = self.gaps.longest_since(since)
+        if recent is not None:
+            longest = max(longest, recent)
         return longest * rate
 
     def jitter_s(self) -> float | None:
@@ -198,15 +240,22 @@ class FlightVehicle:
         self.asked_t = 0.0
         # set by an abort: from then on only this mode may be asked for
         self.aborted_to: str | None = None
-        self._channel = link.channel(sysid)
         self._stop = clock.Event()
-        self._thread = clock.Thread(target=self._pump, name=f"{name} status", daemon=True)
-        self._thread.start()
+        if clock.virtual() is not None:
+            # on a simulated clock the status is updated by whoever read the message:
+            # a thread only waiting for them would cost a turn for every few
+            self._channel = link.channel(sysid, on_message=self._update)
+            self._thread = None
+        else:
+            self._channel = link.channel(sysid)
+            self._thread = clock.Thread(target=self._pump, name=f"{name} status", daemon=True)
+            self._thread.start()
         self.request_streams(position_hz, status_hz)
 
     def close(self) -> None:
         self._stop.set()
-        self._thread.join(timeout=2.0)
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
         self._channel.close()
 
     # -- status

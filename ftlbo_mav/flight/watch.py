@@ -157,15 +157,15 @@ def formation_bound(planned: PlannedFlight) -> FormationBound | None:
                           planned.min_separation_m, names=planned.names)
 
 
-def together_now(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]
-                 ) -> Together | None:
+def together_now(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
+                 memo: dict | None = None) -> Together | None:
     """Every vehicle's position at one instant (:func:`positions_now`), or None while a
     report is older than :data:`FRESH_S` (a link's gap is no formation's fault) or
     missing."""
     st = [v.status for v in vehicles]
     if any(s.lat_deg is None for s in st):
         return None
-    positions, arrived, _age, t = positions_now(planned, st)
+    positions, arrived, _age, t = positions_now(planned, st, memo=memo)
     return Together(positions, t) if float(np.max(arrived)) <= FRESH_S else None
 
 
@@ -196,6 +196,7 @@ class FlightWatch:
                                  homeward=GoingHome(planned, vehicles, say=say))
         self.keeper: FormationKeeper | None = None
         self.started = False
+        self.memo: dict = {}  # positions_now's last answer (the keeper asks it again)
 
     def landing(self, j: int) -> bool:
         """Vehicle j flies its mission's final NAV_LAND."""
@@ -227,7 +228,7 @@ class FlightWatch:
             self._legs()
         seen = [observe(v, self.planned) for v in self.vehicles]
         together = None if not self.started or self.response.active else \
-            together_now(self.planned, self.vehicles)
+            together_now(self.planned, self.vehicles, memo=self.memo)
         events = self.departures.check(seen, now, together)
         for e in events:
             line = describe(e, self.vehicles)
@@ -303,12 +304,24 @@ def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                if i not in skip)
 
 
-def positions_now(planned: PlannedFlight, st: Sequence) -> tuple[np.ndarray, np.ndarray,
-                                                                   np.ndarray, float]:
+def positions_now(planned: PlannedFlight, st: Sequence, *, memo: dict | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Every vehicle's position (``(N, 3)`` ENU) brought to one instant from its last
     report (:class:`~.vehicle.Status` each, every one with a position), how long ago each
     report arrived and how old it is (``(N,)`` seconds, ours), and that instant on the
-    vehicles' clock."""
+    vehicles' clock. ``memo``: a dict that keeps the last answer, given again while the
+    time and every report are the same (the watch and the keeper ask at one instant)."""
+    if memo is not None:
+        key = (clock.monotonic(), tuple(
+            (s.lat_deg, s.lon_deg, s.alt_m, s.velocity_enu, s.position_t, s.position_boot_s,
+             s.clock_offset_s, s.clock_rate) for s in st))
+        if memo.get("key") == key:
+            positions, arrived, age, vehicle_now = memo["value"]
+            return positions.copy(), arrived.copy(), age.copy(), vehicle_now
+        memo["value"] = positions_now(planned, st)
+        memo["key"] = key
+        positions, arrived, age, vehicle_now = memo["value"]
+        return positions.copy(), arrived.copy(), age.copy(), vehicle_now
     positions = planned.frame.to_enu(lat_deg=[s.lat_deg for s in st],
                                      lon_deg=[s.lon_deg for s in st],
                                      alt_m=[s.alt_m for s in st])
@@ -337,9 +350,9 @@ def positions_now(planned: PlannedFlight, st: Sequence) -> tuple[np.ndarray, np.
 
 
 def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
-                   keeper: FormationKeeper) -> bool:
+                   keeper: FormationKeeper, *, memo: dict | None = None) -> bool:
     """One step of the formation keeper; False once the legs are over (every pause
-    continued)."""
+    continued). ``memo``: :func:`positions_now`'s."""
     st = [v.status for v in vehicles]
     last_leg = [last_leg_seq(m) for m in planned.missions]
     if any(s.seq > last for s, last in zip(st, last_leg)) or any(
@@ -349,7 +362,7 @@ def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
         return False
     if any(s.lat_deg is None for s in st):
         return True
-    positions, arrived, age, vehicle_now = positions_now(planned, st)
+    positions, arrived, age, vehicle_now = positions_now(planned, st, memo=memo)
     speeds = np.array([s.ground_speed_m_s for s in st])
     trace = getattr(keeper, "trace", None)
     if trace is not None:
@@ -398,7 +411,8 @@ def watch(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, timeout_
             if response.active:
                 raise fw.left_plan()
             return True
-        if fw.keeper is not None and not keep_formation(planned, vehicles, fw.keeper):
+        if fw.keeper is not None and not keep_formation(planned, vehicles, fw.keeper,
+                                                        memo=fw.memo):
             fw.keeper = None
         if clock.monotonic() >= next_tick:
             tick()

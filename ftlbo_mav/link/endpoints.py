@@ -345,9 +345,11 @@ class Link:
             except LinkError:
                 return
 
-    def channel(self, sysid: int) -> Channel:
-        """The messages of vehicle ``sysid`` on this link, from now on."""
-        return Channel(self, sysid)
+    def channel(self, sysid: int, *,
+                on_message: Callable[[object], None] | None = None) -> Channel:
+        """The messages of vehicle ``sysid`` on this link, from now on (handed to
+        ``on_message`` as they are read, if given)."""
+        return Channel(self, sysid, on_message=on_message)
 
     def _subscribe(self, sysid: int, q: queue.SimpleQueue) -> None:
         with self._subs_lock:
@@ -463,13 +465,18 @@ class Channel:
     everyone); ``send`` sends on the link. Close it (or use ``with``) to unsubscribe.
     """
 
-    def __init__(self, link: Link, sysid: int):
+    def __init__(self, link: Link, sysid: int, *,
+                 on_message: Callable[[object], None] | None = None):
         self.link = link
         self.sysid = sysid
         self.own_sysid = GCS_SYSID
         self.own_compid = GCS_COMPID
         self.srtt: float | None = None  # round trip measured by the last transfer
-        self._q: queue.SimpleQueue = clock.SimpleQueue()
+        # with ``on_message``, each message for us is handed to it by whoever read it
+        # (nothing to ``recv``): on a virtual clock a thread per vehicle only waiting for
+        # its messages would cost a turn for every few
+        self._q = clock.SimpleQueue() if on_message is None else _Handed(on_message,
+                                                                         self.own_sysid)
         link._subscribe(sysid, self._q)
 
     def send(self, msg) -> None:
@@ -504,6 +511,19 @@ class Channel:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+class _Handed:
+    """A :class:`Channel`'s subscription that hands each message for us to a function."""
+
+    __slots__ = ("fn", "own_sysid")
+
+    def __init__(self, fn: Callable[[object], None], own_sysid: int) -> None:
+        self.fn, self.own_sysid = fn, own_sysid
+
+    def put(self, msg) -> None:
+        if getattr(msg, "target_system", 0) in (0, self.own_sysid):
+            self.fn(msg)
 
 
 def open_links(urls: Sequence[str], *, signing_key: bytes | None = None,

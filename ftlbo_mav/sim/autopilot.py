@@ -472,7 +472,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         action: disarm on the ground, else BATT_FS_*_ACT's mode."""
         in_air = self.armed and not self.landed
         v = self.velocity
-        amps = (float(self.options.limits.power.current_a(math.hypot(v[0], v[1]), v[2]))
+        amps = (float(self.options.limits.power.current_a(math.hypot(v[0], v[1]), float(v[2])))
                 if in_air else 0.0)
         self.battery.draw(amps, dt)
         if self.time < self._battery_check:
@@ -572,7 +572,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         AC_PosControl::init_xy_controller, when the last step did not follow one or
         the parameters changed); vertically it is on the target."""
         nav = self.nav_params()
-        wind = np.zeros(3) if self.gusts is None else self.gusts.wind.velocity_enu()
+        wind = (0.0, 0.0, 0.0) if self.gusts is None else self.gusts.wind.velocity_xyz
         follower = self._follower
         if (follower is None or (follower.nav is not nav and follower.nav != nav)
                 or self._followed_until is None
@@ -580,9 +580,9 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             follower = self._follower = PositionFollower(
                 self.position[:2], self.velocity[:2], nav=nav,
                 airframe=self.options.limits.airframe, wind=wind[:2])
-        east, north = follower.step(dt, target, target_vel, target_accel)
+        follower.step(dt, target, target_vel, target_accel)
         self._followed_until = self.time
-        self.position = np.array([east, north, target[2]])
+        self.position = np.array([follower.px, follower.py, target[2]])
         self.velocity = np.array([follower.vx, follower.vy, target_vel[2]])
 
     def _nav_step(self, dt: float, out: list) -> None:
@@ -594,8 +594,9 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         nav.advance(dt, self.position, self.velocity)
         self._follow(dt, nav.target, nav.target_vel, nav.target_accel)
         if self.gusts is not None:  # the gusts push it off the path it follows
-            rel = self.velocity - self.gusts.wind.velocity_enu()
-            airspeed = math.sqrt(rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2])
+            (vx, vy, vz), (wx, wy, wz) = self.velocity.tolist(), self.gusts.wind.velocity_xyz
+            rx, ry, rz = vx - wx, vy - wy, vz - wz
+            airspeed = math.sqrt(rx * rx + ry * ry + rz * rz)
             self.position += self.gusts.step(dt, airspeed)
             self.velocity += self.gusts.error_vel
         self.position[2] = max(self.position[2], 0.0)

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -85,8 +86,13 @@ class Wind:
 
     def velocity_enu(self) -> np.ndarray:
         """The steady wind's velocity (where the air goes), ENU m/s."""
+        return np.array(self.velocity_xyz)
+
+    @cached_property
+    def velocity_xyz(self) -> tuple[float, float, float]:
+        """:meth:`velocity_enu` as three floats (read at every step of the emulator)."""
         d = math.radians(self.direction_deg)
-        return -self.speed_m_s * np.array([math.sin(d), math.cos(d), 0.0])
+        return tuple((-self.speed_m_s * np.array([math.sin(d), math.cos(d), 0.0])).tolist())
 
 
 @dataclass
@@ -107,6 +113,11 @@ class Gusts:
     _accel: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def _draw(self, dt: float) -> np.ndarray:
+        """The turbulence averaged over ``dt`` (:meth:`_draw_xyz`), ENU m/s."""
+        self._draw_xyz(dt)
+        return self.gust
+
+    def _draw_xyz(self, dt: float) -> tuple[float, float, float]:
         """The turbulence averaged over ``dt``, as SITL's 1200 Hz steps sum up: the
         vertical speed an Ornstein-Uhlenbeck process (41 ms), the horizontal one at a
         new azimuth every SITL step (its mean over ``dt`` per axis: the step's variance
@@ -114,20 +125,43 @@ class Gusts:
         sigma = TURB_STD * self.wind.turbulence_m_s
         if sigma <= 0 or dt <= 0:
             self.gust = np.zeros(3)
-            return self.gust
+            return 0.0, 0.0, 0.0
         a = math.exp(-dt / TURB_TAU_S)
         steps = max(dt * SITL_RATE_HZ, 1.0)
-        horizontal = self.rng.normal(0.0, sigma / math.sqrt(2 * steps), 2)
-        vertical = a * self.gust[2] + sigma * math.sqrt(1 - a * a) * self.rng.normal()
-        self.gust = np.array([horizontal[0], horizontal[1], vertical])
-        return self.gust
+        h0, h1 = self.rng.normal(0.0, sigma / math.sqrt(2 * steps), 2).tolist()
+        vertical = a * float(self.gust[2]) + sigma * math.sqrt(1 - a * a) * self.rng.normal()
+        self.gust = np.array([h0, h1, vertical])
+        return h0, h1, vertical
 
     def step(self, dt: float, airspeed_m_s: float) -> np.ndarray:
         """Advance ``dt`` seconds with the copter ``airspeed_m_s`` through the air; the
         error (ENU metres from the target)."""
         if dt <= 0:
             return self.error
-        gust = self._draw(dt)
+        gust = self._draw_xyz(dt)
+        slope = self.drag_scale * 2 * G * max(airspeed_m_s, 1.0) / REF_SPEED ** 2
+        n = self.nav  # PSC_POSXY_P / PSC_POSZ_P, PSC_VELXY_P / PSC_VELZ_P, PSC_VELXY_I
+        pos_p = (n.psc_posxy_p, n.psc_posxy_p, n.psc_posz_p)
+        vel_p = (n.psc_velxy_p, n.psc_velxy_p, n.psc_velz_p)
+        vel_i = (n.psc_velxy_i, n.psc_velxy_i, 0.0)  # the z loop's I is on accel
+        # what the controller asks reaches the airframe through attitude and thrust
+        lag = min(dt / max(self.response_s, 1e-3), 1.0)
+        # per axis in plain floats (numpy's per-call cost on three numbers would be most
+        # of a step): the same arithmetic, element by element
+        integral, accel_now = self._integral.tolist(), self._accel.tolist()
+        error, error_vel = self.error.tolist(), self.error_vel.tolist()
+        for k in range(3):
+            vel_err = -(error_vel[k] + pos_p[k] * error[k])
+            integral[k] += vel_err * dt
+            wanted = vel_p[k] * vel_err + vel_i[k] * integral[k]
+            accel_now[k] += (wanted - accel_now[k]) * lag
+            accel = accel_now[k] + slope * gust[k]
+            error_vel[k] = error_vel[k] + accel * dt
+            error[k] = error[k] + error_vel[k] * dt
+        self._integral, self._accel = np.array(integral), np.array(accel_now)
+        self.error_vel, self.error = np.array(error_vel), np.array(error)
+        return self.error
+        gust = self._draw_xyz(dt)
         slope = self.drag_scale * 2 * G * max(airspeed_m_s, 1.0) / REF_SPEED ** 2
         disturbance = slope * gust
         n = self.nav  # PSC_POSXY_P / PSC_POSZ_P, PSC_VELXY_P / PSC_VELZ_P, PSC_VELXY_I
