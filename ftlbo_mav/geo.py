@@ -49,7 +49,7 @@ class LocalFrame:
         if (isinstance(lat_deg, list) and len(lat_deg) <= 16 and isinstance(lon_deg, list)
                 and isinstance(alt_m, list) and all(
                     type(x) is float for x in (*lat_deg, *lon_deg))):  # a few reports
-            return np.array([self._point_enu(la, lo, float(al))
+            return np.array([(*self._point_en(la, lo), float(al))
                              for la, lo, al in zip(lat_deg, lon_deg, alt_m, strict=True)])
         lat, lon, alt = np.broadcast_arrays(
             np.asarray(lat_deg, float), np.asarray(lon_deg, float), np.asarray(alt_m, float)
@@ -58,8 +58,13 @@ class LocalFrame:
         return np.stack([e, n, alt.ravel()], axis=-1).reshape(*lat.shape, 3)
 
     def _point_enu(self, lat: float, lon: float, alt: float) -> np.ndarray:
-        """One point, remembered: a flight asks for the same reported positions again and
-        again (every vehicle's last report, at each look of the watch)."""
+        e, n = self._point_en(lat, lon)
+        return np.array([e, n, alt])
+
+    def _point_en(self, lat: float, lon: float) -> tuple[float, float]:
+        """One point's east and north, remembered: a flight asks for the same reported
+        positions again and again (every vehicle's last report, at each look of the
+        watch)."""
         memo = self.__dict__.setdefault("_memo", {})
         en = memo.get((lat, lon))
         if en is None:
@@ -67,7 +72,7 @@ class LocalFrame:
                 memo.clear()
             e, n, _ = self._transformer.transform(lon, lat, 0.0)
             en = memo[(lat, lon)] = (e, n)
-        return np.array([en[0], en[1], alt])
+        return en
 
     def to_lla(self, enu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """ENU metres, shape ``(..., 3)`` -> ``(lat_deg, lon_deg, alt_m)`` arrays."""

@@ -182,10 +182,10 @@ def _advance_curve(pieces, planned, unit, leg, time, dt, out):
 
 
 @njit(cache=True)
-def _follow(f, prm, dt, tx, ty, tvx, tvy, tax, tay):
+def _follow(f, prm, dt, tx, ty, tvx, tvy, tax, tay, wx, wy):
     """PositionFollower.step with its state in ``f``: px, py, vx, vy, ex, ey, dx, dy, ix,
-    iy, lx, ly, carry, limit_x, limit_y (no wind: the planner's copters fly in still
-    air)."""
+    iy, lx, ly, carry, limit_x, limit_y; the wind ``(wx, wy)`` (the planner's copters fly
+    in still air: 0, 0)."""
     kp, kvp, kvi, kvd = prm[2], prm[7], prm[8], prm[9]
     imax, accel_max, lean = prm[10], prm[13], prm[14]
     alpha_e, alpha_d, quad, mom = prm[11], prm[12], prm[15], prm[16]
@@ -228,7 +228,7 @@ def _follow(f, prm, dt, tx, ty, tvx, tvy, tax, tay):
             ax, ay = _limit_accel(tvx, tvy, ax, ay, accel_max)
         lx += (ax - lx) * lean
         ly += (ay - ly) * lean
-        rx, ry = vx, vy
+        rx, ry = vx - wx, vy - wy
         speed = math.hypot(rx, ry)
         d = quad * speed + mom
         vx += (lx - rx * d) * h
@@ -432,7 +432,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
             # the copter follows (fly_path_stepwise)
             if follow:
                 _follow(f, prm, dt, target[0], target[1], target_vel[0], target_vel[1],
-                        target_accel[0], target_accel[1])
+                        target_accel[0], target_accel[1], 0.0, 0.0)
                 here[0], here[1], here[2] = f[0], f[1], target[2]
                 velocity[0], velocity[1], velocity[2] = f[2], f[3], target_vel[2]
             else:
@@ -467,7 +467,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
                     and math.hypot(f[2], f[3]) < settled_m_s):
                 break
             t += dt
-            _follow(f, prm, dt, gx, gy, 0.0, 0.0, 0.0, 0.0)
+            _follow(f, prm, dt, gx, gy, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
             here[0], here[1], here[2] = f[0], f[1], gz
             times[n] = t
             positions[n] = here

@@ -36,6 +36,7 @@ time is given.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -151,6 +152,10 @@ class Event:
         return self.kind in VEHICLE_CHOSE
 
 
+FEW_UAVS = 8
+"""Up to this many UAVs the formation is judged in plain floats (more: numpy's arrays)."""
+
+
 @dataclass
 class _Track:
     reported: set = field(default_factory=set)
@@ -180,6 +185,7 @@ class DepartureWatch:
                  formation: FormationBound | None = None) -> None:
         self.options = options
         self.formation = formation
+        self._slots: list | None = None  # each slot's offset from the formation's centre
         # FORMATION / SEPARATION: past the bound since (vehicles' clock), looks in a row
         self._past: dict[str, tuple[float, int]] = {}
         self.battery = battery
@@ -220,11 +226,14 @@ class DepartureWatch:
     def _formation(self, positions: np.ndarray, t: float, now: float) -> list[Event]:
         """The formation at ``t`` (the vehicles' clock); events are stamped ``now``."""
         f, out = self.formation, []
-        err = slot_errors(positions, f.offsets)
-        worst = int(np.argmax(err))
-        d = np.linalg.norm(positions[:, None] - positions[None], axis=-1)
-        d[np.diag_indices(len(d))] = np.inf
-        i, j = (int(k) for k in np.unravel_index(int(np.argmin(d)), d.shape))
+        if len(positions) <= FEW_UAVS:
+            err, worst, d, i, j = self._formation_few(positions)
+        else:
+            err = slot_errors(positions, f.offsets)
+            worst = int(np.argmax(err))
+            d = np.linalg.norm(positions[:, None] - positions[None], axis=-1)
+            d[np.diag_indices(len(d))] = np.inf
+            i, j = (int(k) for k in np.unravel_index(int(np.argmin(d)), d.shape))
         for kind, past, hold in (
                 (FORMATION, err[worst] > f.bound_m,
                  0.0 if err[worst] > f.at_once * f.bound_m else f.hold_s),
@@ -247,6 +256,35 @@ class DepartureWatch:
                           f"closer than min_separation {f.min_separation_m:g} m")
                 out += self._once(k, SEPARATION, detail, now)
         return out
+
+    def _formation_few(self, positions: np.ndarray) -> tuple:
+        """:meth:`_formation`'s slot errors, the worst, the distances and the closest pair
+        of a few UAVs in plain floats (looked at 20 times a second: numpy's per-call cost
+        would be most of it), summed in the order numpy sums them."""
+        if self._slots is None:
+            offsets = np.asarray(self.formation.offsets, float)
+            self._slots = (offsets - offsets.mean(axis=0)).tolist()
+        p = positions.tolist()
+        n = len(p)
+        mean = [0.0, 0.0, 0.0]
+        for row in p:
+            mean = [mean[0] + row[0], mean[1] + row[1], mean[2] + row[2]]
+        mean = [m / n for m in mean]
+        err = []
+        for (x, y, z), (ox, oy, oz) in zip(p, self._slots):
+            ex, ey, ez = x - mean[0] - ox, y - mean[1] - oy, z - mean[2] - oz
+            err.append(math.sqrt(ex * ex + ey * ey + ez * ez))
+        worst = max(range(n), key=err.__getitem__)
+        d = [[math.inf] * n for _ in range(n)]
+        best, i, j = math.inf, 0, 0
+        for a in range(n):
+            for b in range(n):
+                if a != b:
+                    dx, dy, dz = p[a][0] - p[b][0], p[a][1] - p[b][1], p[a][2] - p[b][2]
+                    d[a][b] = math.sqrt(dx * dx + dy * dy + dz * dz)
+                    if d[a][b] < best:
+                        best, i, j = d[a][b], a, b
+        return err, worst, np.array(d), i, j
 
     # -- one vehicle
     def _once(self, i: int, kind: str, detail: str, now: float) -> list[Event]:

@@ -8,6 +8,7 @@ and has the policy answer them; :func:`watch` is the loop after the synchronized
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -121,14 +122,25 @@ def battery_watch(planned: PlannedFlight | None) -> BatteryWatch | None:
     return BatteryWatch(planned.battery, planned.missions)
 
 
-def observe(v: FlightVehicle, planned: PlannedFlight | None) -> Seen:
-    """A snapshot of ``v`` for the departure watch (no position without a plan)."""
+def observe(v: FlightVehicle, planned: PlannedFlight | None, *,
+            memo: dict | None = None) -> Seen:
+    """A snapshot of ``v`` for the departure watch (no position without a plan).
+    ``memo``: a dict that keeps each vehicle's last GPS report (its GPS_RAW_INT comes at
+    2 Hz, the watch looks at 20)."""
     s = v.status
     position = None
     if s.lat_deg is not None and planned is not None:
         position = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
-    gps = (None if planned is None else
-           gps_report(s.gps_raw, planned.frame, fallback_velocity=s.velocity_enu[:2]))
+    gps = None
+    if planned is not None:
+        fallback = s.velocity_enu[:2]
+        known = memo.get(v) if memo is not None else None
+        if known is not None and known[0] is s.gps_raw and known[1] == fallback:
+            gps = known[2]
+        else:
+            gps = gps_report(s.gps_raw, planned.frame, fallback_velocity=fallback)
+            if memo is not None:
+                memo[v] = (s.gps_raw, fallback, gps)
     return Seen(mode=s.mode, armed=s.armed, alt_m=s.alt_m, heard_t=s.heard_t,
                 link_up=v.link_up, asked_mode=v.asked_mode, asked_t=v.asked_t,
                 texts=tuple(s.text_log), text_count=s.text_count, position=position,
@@ -197,6 +209,7 @@ class FlightWatch:
         self.keeper: FormationKeeper | None = None
         self.started = False
         self.memo: dict = {}  # positions_now's last answer (the keeper asks it again)
+        self._gps_memo: dict = {}  # each vehicle's last GPS report (observe)
 
     def landing(self, j: int) -> bool:
         """Vehicle j flies its mission's final NAV_LAND."""
@@ -226,7 +239,7 @@ class FlightWatch:
         now = clock.monotonic()
         if self.started:
             self._legs()
-        seen = [observe(v, self.planned) for v in self.vehicles]
+        seen = [observe(v, self.planned, memo=self._gps_memo) for v in self.vehicles]
         together = None if not self.started or self.response.active else \
             together_now(self.planned, self.vehicles, memo=self.memo)
         events = self.departures.check(seen, now, together)
@@ -322,31 +335,37 @@ def positions_now(planned: PlannedFlight, st: Sequence, *, memo: dict | None = N
         memo["key"] = key
         positions, arrived, age, vehicle_now = memo["value"]
         return positions.copy(), arrived.copy(), age.copy(), vehicle_now
-    positions = planned.frame.to_enu(lat_deg=[s.lat_deg for s in st],
-                                     lon_deg=[s.lon_deg for s in st],
-                                     alt_m=[s.alt_m for s in st])
-    # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
-    # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
+    enu = planned.frame.to_enu(lat_deg=[s.lat_deg for s in st],
+                               lon_deg=[s.lon_deg for s in st],
+                               alt_m=[s.alt_m for s in st]).tolist()
+    # per vehicle in plain floats (a few vehicles, looked at 20 times a second: numpy's
+    # per-call cost would be most of it)
     now = clock.monotonic()
-    arrived = np.array([now - s.position_t for s in st])
-    age = np.array([now - (s.clock_offset_s + s.position_boot_s / s.clock_rate)
-                    if s.clock_offset_s is not None else a for s, a in zip(st, arrived)])
-    # a report is no fresher than its arrival, and no older than its arrival plus a link's
-    # delay: beyond that the clock offset (the least-delayed report's) has gone stale, the
-    # vehicle's clock running slower than ours (SITL on a loaded machine: a copter seen
-    # 1.6 m behind that was 0.4 m behind, and pauses for all three)
-    age = np.clip(age, arrived, arrived + MAX_REPORT_DELAY_S)
-    # the velocity is per second of the vehicle's clock, the age on ours
-    rate = np.array([s.clock_rate for s in st])
-    positions = positions + (np.array([s.velocity_enu for s in st])
-                             * np.clip(age * rate, 0, 0.5)[:, None])
-    # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
-    # with a time scale runs faster than ours), carried on between reports (10 Hz) for
-    # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
-    # last report on our clock
-    vehicle_now = max(s.position_boot_s + min(a, 0.1) * s.clock_rate
-                      for s, a in zip(st, arrived))
-    return positions, arrived, age, vehicle_now
+    positions, arrived, age = [], [], []
+    vehicle_now = -math.inf
+    for s, (e, n, u) in zip(st, enu):
+        a = now - s.position_t
+        # reports arrive up to 1/rate apart: bring each to the same instant, or a vehicle
+        # reported 0.1 s earlier looks 0.3 m behind at 3 m/s
+        old = (now - (s.clock_offset_s + s.position_boot_s / s.clock_rate)
+               if s.clock_offset_s is not None else a)
+        # a report is no fresher than its arrival, and no older than its arrival plus a
+        # link's delay: beyond that the clock offset (the least-delayed report's) has gone
+        # stale, the vehicle's clock running slower than ours (SITL on a loaded machine: a
+        # copter seen 1.6 m behind that was 0.4 m behind, and pauses for all three)
+        old = min(max(old, a), a + MAX_REPORT_DELAY_S)
+        # the velocity is per second of the vehicle's clock, the age on ours
+        lead = min(max(old * s.clock_rate, 0.0), 0.5)
+        ve, vn, vu = s.velocity_enu
+        positions.append((e + ve * lead, n + vn * lead, u + vu * lead))
+        arrived.append(a)
+        age.append(old)
+        # the keeper's periods run on the vehicles' clock (time_boot_ms, which an emulator
+        # with a time scale runs faster than ours), carried on between reports (10 Hz) for
+        # pauses timed to the hundredth; a vehicle whose reports stopped is as old as its
+        # last report on our clock
+        vehicle_now = max(vehicle_now, s.position_boot_s + min(a, 0.1) * s.clock_rate)
+    return np.array(positions), np.array(arrived), np.array(age), vehicle_now
 
 
 def keep_formation(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],

@@ -579,7 +579,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
                 or abs(self._followed_until - (self.time - dt)) > 1e-9):
             follower = self._follower = PositionFollower(
                 self.position[:2], self.velocity[:2], nav=nav,
-                airframe=self.options.limits.airframe, wind=wind[:2])
+                airframe=self.options.limits.airframe, wind=wind[:2], compiled=True)
         follower.step(dt, target, target_vel, target_accel)
         self._followed_until = self.time
         self.position = np.array([follower.px, follower.py, target[2]])

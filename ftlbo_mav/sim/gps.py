@@ -88,6 +88,7 @@ class GpsError:
     _rng: np.random.Generator | None = None
     _steps: list = field(default_factory=list)  # (t, east, north) of parameter steps
     _param_offset: tuple[float, float] = (0.0, 0.0)
+    _memo: dict = field(default_factory=dict)  # error and transient at the last time asked
 
     def __post_init__(self) -> None:
         self._rng = np.random.default_rng([self.options.seed, 0x6E55])
@@ -121,20 +122,26 @@ class GpsError:
 
     def error(self, t: float) -> np.ndarray:
         """The GPS error at ``t`` seconds after boot, ``(2,)`` east/north metres."""
-        out = self._wander(t)
-        for t0, east, north in self._all_steps():
-            if t >= t0:
-                out = out + (east, north)
-        return out
+        key = ("error", t, len(self._steps))  # asked several times per step: once
+        if self._memo.get("error", (None,))[0] != key:
+            out = self._wander(t)
+            for t0, east, north in self._all_steps():
+                if t >= t0:
+                    out = out + (east, north)
+            self._memo["error"] = (key, out)
+        return self._memo["error"][1].copy()
 
     def transient(self, t: float) -> np.ndarray:
         """The part of the steps so far the EKF has not yet fused (each step decaying
         with ``response_s``), ``(2,)``: the GPS reads this much beyond the estimate."""
-        out = np.zeros(2)
-        for t0, east, north in self._all_steps():
-            if t >= t0:
-                out += np.array([east, north]) * math.exp(-(t - t0) / self.response_s)
-        return out
+        key = ("transient", t, len(self._steps))
+        if self._memo.get("transient", (None,))[0] != key:
+            out = np.zeros(2)
+            for t0, east, north in self._all_steps():
+                if t >= t0:
+                    out += np.array([east, north]) * math.exp(-(t - t0) / self.response_s)
+            self._memo["transient"] = (key, out)
+        return self._memo["transient"][1].copy()
 
     def accuracy_m(self) -> float:
         return float(self.params.get("SIM_GPS_ACC", SITL_GPS_ACCURACY_M))

@@ -165,6 +165,7 @@ class Vehicle:
         self.autopilot.utc_offset_s = self.utc_offset_s  # flies only after its GPS fix
         self.gps = GpsError(options.gps, self.autopilot.params, lat_deg=lat)
         self._ground_truth: np.ndarray | None = np.zeros(2)  # placed at its home, truly
+        self._home_memo: tuple | None = None  # (home_en, current_home()) last converted
         self.links: dict[Link, LinkState] = {}
         self._mission_version = -1
         # GPS_RTCM_DATA reassembled as AP_GPS::handle_gps_rtcm_fragment does (link/rtcm.py)
@@ -251,7 +252,13 @@ class Vehicle:
         return (lat, lon, self.home[2])
 
     def home_for_missions(self, now: float) -> None:
-        self.missions.home = self.current_home() if self.home_set(now) else None
+        if not self.home_set(now):
+            self.missions.home = None
+            return
+        at = tuple(self.autopilot.home_en.tolist())  # converted again only when it moved
+        if self._home_memo is None or self._home_memo[0] != at:
+            self._home_memo = (at, self.current_home())
+        self.missions.home = self._home_memo[1]
 
     def _announce(self, texts: list, link: Link | None) -> list:
         """The autopilot's STATUSTEXT and MISSION_ITEM_REACHED for every active link;
