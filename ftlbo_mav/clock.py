@@ -27,13 +27,14 @@ import itertools
 import queue
 import threading
 import time as _time
+import traceback
 from collections import deque
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Self
 
 __all__ = ["ClockStopped", "Condition", "Event", "Executor", "SimpleQueue", "Thread",
-           "VirtualClock", "monotonic", "sleep", "time", "virtual"]
+           "VirtualClock", "call_later", "monotonic", "sleep", "time", "virtual"]
 
 
 STALL_WALL_S = 60.0
@@ -86,6 +87,15 @@ def sleep(seconds: float) -> None:
     _current.get().sleep(seconds)
 
 
+def call_later(delay: float, fn: Callable[[], None], *, name: str = "a scheduled call") -> None:
+    """:meth:`VirtualClock.call_later` on this thread's clock (a virtual one only: on the
+    wall clock a thread waits instead)."""
+    c = virtual()
+    if c is None:
+        raise RuntimeError("call_later needs a virtual clock")
+    c.call_later(delay, fn, name=name)
+
+
 class _Waiter:
     __slots__ = ("gate", "name", "released", "woken")
 
@@ -100,6 +110,15 @@ class _Waiter:
         if not self.released:
             self.released = True
             self.gate.release()
+
+
+class _Call:
+    """A function the clock calls in its turn (:meth:`VirtualClock.call_later`)."""
+
+    __slots__ = ("fn", "name", "woken")
+
+    def __init__(self, fn: Callable[[], None], name: str) -> None:
+        self.fn, self.name, self.woken = fn, name, False
 
 
 class VirtualClock:
@@ -125,6 +144,7 @@ class VirtualClock:
         self._holder = "the thread that opened it"  # who has the turn (what a stall names)
         self._turns = 0               # turns passed so far (the watchdog's sign of life)
         self._token = None
+        self._calling: int | None = None  # the thread running a scheduled call, if one is
 
     # -- time
     def monotonic(self) -> float:
@@ -137,12 +157,29 @@ class VirtualClock:
         with self._lock:
             self._park(self._now + max(0.0, seconds))
 
+    def call_later(self, delay: float, fn: Callable[[], None], *,
+                   name: str = "a scheduled call") -> None:
+        """``fn()`` after ``delay`` seconds, in its turn among the threads (at once: queued
+        now, as a thread started now is), run by whichever thread passes the turn then:
+        no thread of its own, so no thread switch. ``fn`` may not wait (sleep, or wait
+        on anything); it may set events, put on queues and call :meth:`call_later`."""
+        call = _Call(fn, name)
+        with self._lock:
+            if self._stopped:
+                return
+            if delay <= 0:
+                self._wake(call)
+            else:
+                heapq.heappush(self._timers, (self._now + delay, next(self._order), call))
+
     # -- the turn (called with self._lock held)
     def _park(self, deadline: float | None, *lists: list) -> None:
         """The calling thread gives up its turn until woken (by a primitive it waits on,
         in ``lists``, or by time reaching ``deadline``); returns holding the lock."""
         if self._stopped:
             raise ClockStopped("virtual clock closed")
+        if self._calling == threading.get_ident():
+            raise RuntimeError("a call scheduled on a virtual clock may not wait")
         w = _Waiter()
         self._parked.add(w)
         for waiters in lists:
@@ -172,24 +209,52 @@ class VirtualClock:
             self._wake(w)
 
     def _pass_turn(self) -> None:
-        """Nobody runs: the next woken thread runs, else time moves to the next deadline."""
-        if self._running or self._stopped:
+        """Nobody runs: the next woken thread runs, else time moves to the next deadline.
+        A scheduled call whose turn it is runs here, in the thread passing the turn."""
+        while not (self._running or self._stopped):
+            if not self._ready:
+                while self._timers and self._timers[0][2].woken:
+                    heapq.heappop(self._timers)
+                if not self._timers:
+                    self._stall("every thread waits for something no thread will do")
+                    return
+                t = self._timers[0][0]
+                self._now = max(self._now, t)
+                while self._timers and self._timers[0][0] <= t:
+                    self._wake(heapq.heappop(self._timers)[2])
+            w = self._ready.popleft()
+            self._running, self._holder = True, w.name
+            self._turns += 1
+            if isinstance(w, _Call):
+                self._call(w)
+                continue
+            self._parked.discard(w)
+            w.release()
             return
-        if not self._ready:
-            while self._timers and self._timers[0][2].woken:
-                heapq.heappop(self._timers)
-            if not self._timers:
-                self._stall("every thread waits for something no thread will do")
-                return
-            t = self._timers[0][0]
-            self._now = max(self._now, t)
-            while self._timers and self._timers[0][0] <= t:
-                self._wake(heapq.heappop(self._timers)[2])
-        w = self._ready.popleft()
-        self._parked.discard(w)
-        self._running, self._holder = True, w.name
-        self._turns += 1
-        w.release()
+
+    def _call(self, call: _Call) -> None:
+        """Run a scheduled call, the lock let go meanwhile (it may use the primitives)."""
+        self._calling = threading.get_ident()
+        self._lock.release()
+        token = _current.set(self)  # a thread may pass the turn as it ends, off the clock
+        try:
+            call.fn()
+        except ClockStopped:
+            pass
+        except BaseException as exc:  # noqa: BLE001 - ends the simulation, said why
+            traceback.print_exception(exc)
+            with self._lock:
+                self._calling = None
+                if not self._stopped:
+                    self._stall(f"{call.name} failed: {exc!r}")
+            self._lock.acquire()
+            return
+        finally:
+            _current.reset(token)
+            if self._calling is not None:
+                self._calling = None
+                self._lock.acquire()
+        self._running = False
 
     def _stall(self, why: str) -> None:
         self.stalled, self.stall_reason = True, why

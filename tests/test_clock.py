@@ -148,3 +148,43 @@ def test_a_turn_held_on_something_the_clock_does_not_know_stops_it_as_stalled(mo
             clock.sleep(1.0)  # hands the turn to the thread that never gives it back
     outside.set()
     assert vc.stalled and "'blocked elsewhere'" in vc.stall_reason
+
+
+def test_a_scheduled_call_runs_in_its_turn_by_the_thread_passing_it():
+    """No thread of its own: the call runs at its time, in the order it was scheduled
+    among threads due then, in whichever thread gives up the turn (even one that ends),
+    on the virtual clock."""
+    log = []
+    threads_before = threading.active_count()
+    with VirtualClock(start_s=0.0):
+        def tick() -> None:
+            log.append((round(clock.monotonic(), 9), "call", threading.active_count()))
+            if clock.monotonic() < 0.5:
+                clock.call_later(0.2, tick)
+
+        def sleeper() -> None:
+            clock.sleep(0.4)
+            log.append((round(clock.monotonic(), 9), "thread"))
+
+        clock.call_later(0.2, tick)
+        t = clock.Thread(sleeper)
+        t.start()
+        clock.call_later(0.0, lambda: log.append((clock.monotonic(), "now")))
+        t.join()
+        clock.sleep(1.0)
+    assert log[0] == (0.0, "now")
+    # at 0.4 the thread first: it went to sleep (at 0) before the call was scheduled (0.2)
+    assert [e[:2] for e in log[1:]] == [(0.2, "call"), (0.4, "thread"), (0.4, "call"),
+                                        (0.6, "call")]
+    assert all(e[2] <= threads_before + 2 for e in log if e[1] == "call")
+
+
+def test_a_scheduled_call_that_waits_or_fails_stops_the_clock_naming_it(capsys):
+    for bad, words in ((lambda: clock.sleep(1.0), "may not wait"),
+                       (lambda: 1 / 0, "ZeroDivisionError")):
+        with pytest.raises(ClockStopped), VirtualClock() as vc:
+            clock.call_later(1.0, bad, name="the bad one")
+            clock.sleep(5.0)
+        assert vc.stalled and "the bad one failed" in vc.stall_reason
+        assert words in vc.stall_reason
+    assert "ZeroDivisionError" in capsys.readouterr().err  # its traceback, said

@@ -253,8 +253,17 @@ class Link:
         self.radio_status_t = 0.0
         self.slowdown_ms = 0
         self._stop = clock.Event()
-        self._thread = clock.Thread(target=self._run, name=f"link {url}", daemon=True)
-        self._thread.start()
+        self._thread: clock.Thread | None = None
+        if self._pushed and clock.virtual() is not None:
+            # an emulator in this process on a simulated clock hands its bytes over: the
+            # reader's own duties (HEARTBEAT, stream requests, reconnecting) are calls
+            # the clock makes in their turn, with no thread to wake
+            self._next_beat = self._next_ask = 0.0
+            self._retry_at: float | None = None
+            clock.call_later(0.0, self._duty, name=f"link {url}")
+        else:
+            self._thread = clock.Thread(target=self._run, name=f"link {url}", daemon=True)
+            self._thread.start()
 
     def _prepare(self, conn):
         if self.signing_key is not None:
@@ -278,7 +287,8 @@ class Link:
     # -- lifetime
     def close(self) -> None:
         self._stop.set()
-        self._thread.join(timeout=2.0)
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
         try:
             self._conn.close()
         except OSError:
@@ -361,6 +371,45 @@ class Link:
             if q in subs:
                 subs.remove(q)
 
+    def _duty(self) -> None:
+        """:meth:`_run`'s loop, one pass of it a call on a virtual clock: the same duties
+        at the same times (reconnecting ``reconnect_every_s`` after the peer closed and
+        after each failed try; HEARTBEAT every second; stream requests every
+        :data:`ASK_EVERY_S`)."""
+        if self._stop.is_set():
+            return
+        name = f"link {self.url}"
+        now = clock.monotonic()
+        if self.closed_by_peer:
+            if not self.reconnect:
+                return
+            # the first try as long after it closed, each next one as long after the last
+            at = (self._retry_at if self._retry_at is not None
+                  else (self.down_since or now) + self.reconnect_every_s)
+            if now < at - 1e-9:
+                self._retry_at = at
+                clock.call_later(at - now, self._duty, name=name)
+                return
+            self._connect_again()
+            if self.closed_by_peer:
+                self._retry_at = now + self.reconnect_every_s
+                clock.call_later(self.reconnect_every_s, self._duty, name=name)
+                return
+        self._retry_at = None
+        if now >= self._next_beat:
+            self._next_beat = now + 1.0 + self.slowdown_ms / 1000.0
+            try:
+                self.send(mavlink2.MAVLink_heartbeat_message(
+                    mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0,
+                    mavlink2.MAV_STATE_ACTIVE, 3))
+            except LinkError:
+                pass
+        if now >= self._next_ask:
+            self._next_ask = now + max(ASK_EVERY_S, self.slowdown_ms / 1000.0)
+            self._ask_streams(now)
+        clock.call_later(max(0.0, min(self._next_beat, self._next_ask) - now), self._duty,
+                         name=name)
+
     def _run(self) -> None:
         next_beat = next_ask = 0.0
         while not self._stop.is_set():
@@ -394,8 +443,9 @@ class Link:
 
     def _drain(self) -> None:
         """What has arrived, read and handed out now (by whoever brought it)."""
+        conn = self._conn
         try:
-            while (msg := self._conn.recv_msg()) is not None:
+            while conn.pending() and (msg := conn.recv_msg()) is not None:
                 self._dispatch(msg)
         except (OSError, ValueError):
             pass  # a link that broke: the reader thread finds out and reconnects

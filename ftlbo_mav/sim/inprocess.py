@@ -3,7 +3,7 @@
 :class:`InProcessSimulator` is :class:`~ftlbo_mav.sim.server.Simulator` without sockets:
 the same vehicles (:class:`~ftlbo_mav.sim.server.VehicleRunner`: the same faults,
 variation, wind, GPS error and truth record), stepped every 20 ms of a
-:class:`~ftlbo_mav.clock.VirtualClock` by one more thread on that clock. The ground
+:class:`~ftlbo_mav.clock.VirtualClock` by a call the clock makes in its turn. The ground
 station reaches vehicle i at ``emu:KEY/i`` (its SERIAL1 at ``emu:KEY/i/SERIAL1``), a
 connection string that :func:`~ftlbo_mav.link.endpoints.check_url` and
 :class:`~ftlbo_mav.link.endpoints.Link` take like ``tcp:HOST:PORT``: pymavlink's own
@@ -51,16 +51,23 @@ class _Connection(mavutil.mavfile):
     # the vehicle's side (the emulator thread, or whoever wrote to it)
     def _incoming(self, data: bytes) -> None:
         self._buf += data
-        if self.on_data is not None:
-            self.on_data()
+        if self.on_data is not None:  # handed over once the emulator's step is done
+            self._sim._pending[self] = None
         else:
             self._data.set()
 
     def _dropped(self) -> None:
         self.closed = True
+        if self.on_data is not None:  # the link reads it (and finds it closed) at once
+            self._sim._pending[self] = None
         self._data.set()
 
     # pymavlink's side
+    def pending(self) -> bool:
+        """Bytes not yet parsed, here or in pymavlink's parser (a message may be in
+        them), or a close not yet noticed."""
+        return bool(self._buf) or self.mav.buf_len() > 0 or self.closed
+
     def select(self, timeout: float) -> bool:
         return self._data.wait(timeout)
 
@@ -102,9 +109,11 @@ class InProcessSimulator:
         self.lock = threading.Lock()  # the vehicles: stepped by one thread, written by others
         self._later: list = []
         self._order = itertools.count()
-        self._stop: object | None = None
-        self._thread: clock.Thread | None = None
+        self._running = False
         self._connections: list[_Connection] = []
+        # connections with bytes to hand over, in the order they came (a tick's messages
+        # are read at once, not one by one)
+        self._pending: dict[_Connection, None] = {}
 
     @property
     def runners(self) -> list[VehicleRunner]:
@@ -131,29 +140,39 @@ class InProcessSimulator:
         self.config.make_runners(self, clock.monotonic, clock.monotonic(),
                                  utc_offset_s=vc.utc_offset)
         endpoints.IN_PROCESS[self.key] = self._connect
-        self._stop = clock.Event()
-        self._thread = clock.Thread(self._run, name=f"{self.key} emulator")
-        self._thread.start()
+        self._running = True
+        vc.call_later(0.0, self._tick, name=f"{self.key} emulator")
         return self
 
     def __exit__(self, *exc) -> None:
         endpoints.IN_PROCESS.pop(self.key, None)
-        if self._stop is not None:
-            self._stop.set()
-            self._thread.join(5.0)
+        self._running = False
         for c in list(self._connections):
             c._dropped()
+        self._pending.clear()
 
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            now = clock.monotonic()
-            with self.lock:
-                while self._later and self._later[0][0] <= now:
-                    _t, _o, fn, args = heapq.heappop(self._later)
-                    fn(*args)
-                for r in self.runners:
-                    r.tick()
-            self._stop.wait(TICK_S)
+    def _tick(self) -> None:
+        """One step of every vehicle, then the next in :data:`TICK_S`: a call the clock
+        makes in its turn (no thread of its own: the step costs no thread switch)."""
+        if not self._running:
+            return
+        now = clock.monotonic()
+        with self.lock:
+            while self._later and self._later[0][0] <= now:
+                _t, _o, fn, args = heapq.heappop(self._later)
+                fn(*args)
+            for r in self.runners:
+                r.tick()
+            self._hand_over()
+        clock.call_later(TICK_S, self._tick, name=f"{self.key} emulator")
+
+    def _hand_over(self) -> None:
+        """What the vehicles wrote, read by the links now (still the same instant)."""
+        while self._pending:
+            conn = next(iter(self._pending))
+            del self._pending[conn]
+            if conn.on_data is not None:
+                conn.on_data()
 
     # -- the runners' loop (VehicleRunner: what a fault delays)
     def call_later(self, delay: float, fn: Callable, *args) -> None:
@@ -163,6 +182,7 @@ class InProcessSimulator:
     def feed(self, runner: VehicleRunner, att, data: bytes) -> None:
         with self.lock:
             runner.feed(att, data)
+            self._hand_over()
 
     def _connect(self, url: str, *, source_system: int, source_component: int) -> _Connection:
         parts = url[len(self.key) + 1:].split("/")
@@ -180,15 +200,28 @@ class InProcessSimulator:
         with self.lock:
             conn = _Connection(self, runner, url, link, source_system=source_system,
                                source_component=source_component)
+            self._hand_over()
         self._connections.append(conn)
         return conn
 
     # -- faults
+    def drop(self, index: int) -> None:
+        """Vehicle ``index``'s connections drop (a TCP bridge that restarts): it flies on
+        and takes new ones."""
+        with self.lock:
+            runner = self.runners[index]
+            for c in self._connections:
+                if c._runner is runner and not c.closed:
+                    runner.detach(c._att)
+                    c._dropped()
+            self._hand_over()
+
     def kill(self, index: int) -> None:
         """Vehicle ``index`` dies as a killed SITL process does: its connections close, it
         refuses new ones, it neither flies nor says anything again."""
         with self.lock:
             self.runners[index].dead = True
-        for c in self._connections:
-            if c._runner is self.runners[index]:
-                c._dropped()
+            for c in self._connections:
+                if c._runner is self.runners[index]:
+                    c._dropped()
+            self._hand_over()

@@ -52,6 +52,28 @@ def test_a_killed_vehicle_drops_its_link_and_refuses_to_connect_again(planned):
             Link(sim.urls[1], connect_timeout_s=0.0)
 
 
+def test_a_dropped_link_is_seen_at_once_and_connected_again_half_a_second_later(planned):
+    """The links' own duties are calls on the simulated clock (no reader threads): the
+    same times as the reader thread keeps, the close noticed when it happens."""
+    with VirtualClock(start_s=0.0), InProcessSimulator(homes=_homes(planned)) as sim:
+        links = [Link(u) for u in sim.urls]
+        try:
+            discover(links, [1, 2, 3], timeout_s=3.0)
+            clock.sleep(0.013)
+            sim.drop(0)
+            t0 = clock.monotonic()
+            assert not links[0].up and links[0].down_since == t0 and links[1].up
+            clock.sleep(0.49)
+            assert links[0].reconnects == 0 and not links[0].up
+            clock.sleep(0.02)
+            assert links[0].reconnects == 1 and links[0].up and links[0].down_since is None
+            clock.sleep(1.5)  # heard from again on the new connection
+            assert clock.monotonic() - links[0].heartbeats[1].received_at <= 1.0
+        finally:
+            for k in links:
+                k.close()
+
+
 def test_its_connection_strings_are_its_own_and_only_while_it_runs(planned):
     with VirtualClock(start_s=0.0):
         sim = InProcessSimulator(homes=_homes(planned))
