@@ -9,10 +9,14 @@ vehicles' status pumps, the watch, the keeper, the uploads) does it through this
 Inside ``with VirtualClock():`` (and in every :class:`Thread` started there) they run on
 simulated time instead, as a discrete-event simulation: the threads take turns, one at a
 time, in a fixed order; time stands still while one runs, and when every thread waits
-it jumps to the earliest deadline. An in-process emulator (:mod:`ftlbo_mav.sim.inprocess`)
-is one more such thread, stepping its copters every 20 ms of that time. A flight then
-costs only the computation it needs, however long it lasts, the ground's own delays are
-no longer the flight's error, and the same seed flies the same flight.
+it jumps to the earliest deadline. Work that never waits can be a *scheduled call*
+instead of a thread (:func:`call_later`): it takes its turn in the same order, run by
+whichever thread is giving up the turn, so it costs no thread switch (a switch between
+two threads costs tens of microseconds of the machine's time, most of a short turn). An
+in-process emulator (:mod:`ftlbo_mav.sim.inprocess`) steps its copters every 20 ms of
+that time as such a call, and a link to it does its own duties so. A flight then costs
+only the computation it needs, however long it lasts, the ground's own delays are no
+longer the flight's error, and the same seed flies the same flight.
 
 A thread that blocks on something this module does not know (a socket, a lock held
 across a wait, the standard library's own ``threading.Event``) holds everyone up: code

@@ -116,16 +116,8 @@ class PositionFollower:
     (position, velocity, acceleration, ENU) and returns the copter's new position."""
 
     def __init__(self, position, velocity=(0.0, 0.0), *, nav: Navigation = DEFAULT_NAV,
-                 airframe: Airframe = DEFAULT_AIRFRAME, wind=(0.0, 0.0),
-                 compiled: bool = False) -> None:
+                 airframe: Airframe = DEFAULT_AIRFRAME, wind=(0.0, 0.0)) -> None:
         self.nav, self.airframe = nav, airframe
-        # compiled: the same steps in ardupilot/compiled.py's numba loop (the emulator
-        # steps three copters every 20 ms; the planner keeps to Python, where numba's
-        # start-up would cost more than it saves)
-        self._compiled = None
-        if compiled:
-            from . import compiled as jit
-            self._compiled = (jit._follow, jit.nav_params(nav, airframe, 0.0))
         self.px, self.py = float(position[0]), float(position[1])
         self.vx, self.vy = float(velocity[0]), float(velocity[1])
         self.wind = (float(wind[0]), float(wind[1]))
@@ -161,8 +153,6 @@ class PositionFollower:
     def step(self, dt: float, target, target_vel, target_accel) -> np.ndarray:
         """Follow the target for ``dt`` seconds (in AC_PosControl's 400 Hz steps, the
         target held over them); the copter's position (ENU metres, 2)."""
-        if self._compiled is not None:
-            return self._step_compiled(dt, target, target_vel, target_accel)
         nav, air = self.nav, self.airframe
         kp, kvp, kvi, kvd = nav.psc_posxy_p, nav.psc_velxy_p, nav.psc_velxy_i, nav.psc_velxy_d
         imax, accel_max, lean = nav.psc_velxy_imax, self._accel_max, self._lean
@@ -231,16 +221,3 @@ class PositionFollower:
         self._ix, self._iy, self._lx, self._ly = ix, iy, lx, ly
         self._limit = (limit_x, limit_y)
         return np.array([px, py])
-
-    def _step_compiled(self, dt: float, target, target_vel, target_accel) -> np.ndarray:
-        follow, prm = self._compiled
-        f = np.array([self.px, self.py, self.vx, self.vy, self._ex, self._ey, self._dx,
-                      self._dy, self._ix, self._iy, self._lx, self._ly, self._carry,
-                      *self._limit])
-        follow(f, prm, float(dt), float(target[0]), float(target[1]), float(target_vel[0]),
-               float(target_vel[1]), float(target_accel[0]), float(target_accel[1]),
-               *self.wind)
-        (self.px, self.py, self.vx, self.vy, self._ex, self._ey, self._dx, self._dy,
-         self._ix, self._iy, self._lx, self._ly, self._carry, limit_x, limit_y) = f.tolist()
-        self._limit = (limit_x, limit_y)
-        return f[:2].copy()

@@ -168,6 +168,11 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self._followed_until: float | None = None
         self._land_target = np.zeros(3)  # where a landing's descent holds the copter
         self.battery = BatteryMonitor()  # AP_BattMonitor's first battery
+        # the 400 Hz follower in its compiled loop (ardupilot/compiled.py): the same
+        # arithmetic, but loading it stalls the first step by most of a second, which a
+        # copter on the wall clock would fly through: on a simulated clock only
+        # (sim/inprocess.py)
+        self.compiled = False
         self._battery_check = 0.0
 
     # -- what the vehicle knows about itself
@@ -577,9 +582,12 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         if (follower is None or (follower.nav is not nav and follower.nav != nav)
                 or self._followed_until is None
                 or abs(self._followed_until - (self.time - dt)) > 1e-9):
-            follower = self._follower = PositionFollower(
+            kind = PositionFollower
+            if self.compiled:
+                from ..ardupilot.compiled import CompiledFollower as kind
+            follower = self._follower = kind(
                 self.position[:2], self.velocity[:2], nav=nav,
-                airframe=self.options.limits.airframe, wind=wind[:2], compiled=True)
+                airframe=self.options.limits.airframe, wind=wind[:2])
         follower.step(dt, target, target_vel, target_accel)
         self._followed_until = self.time
         self.position = np.array([follower.px, follower.py, target[2]])

@@ -139,6 +139,8 @@ class InProcessSimulator:
                                "`with VirtualClock():`")
         self.config.make_runners(self, clock.monotonic, clock.monotonic(),
                                  utc_offset_s=vc.utc_offset)
+        for v in self.vehicles:  # the simulated clock waits for its loading
+            v.autopilot.compiled = True
         endpoints.IN_PROCESS[self.key] = self._connect
         self._running = True
         vc.call_later(0.0, self._tick, name=f"{self.key} emulator")

@@ -8,9 +8,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ftlbo_mav.ardupilot.compiled import CompiledFollower
 from ftlbo_mav.ardupilot.flight_path import fly_path, fly_path_stepwise
 from ftlbo_mav.ardupilot.navigation import vehicle_navigation
-from ftlbo_mav.ardupilot.poscontrol import Airframe
+from ftlbo_mav.ardupilot.poscontrol import Airframe, PositionFollower
 
 
 def _same(a, b) -> None:
@@ -199,3 +200,24 @@ def test_a_hold_changed_before_a_corner_is_flown_from_before_the_hold(monkeypatc
     flown = _compiled(moved, holds_s=holds)
     assert at == [2]
     assert np.array_equal(flown.positions, _fresh(moved, holds_s=holds).positions)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_compiled_follower_follows_as_the_objects_do_in_wind(seed):
+    """The emulator's copters on a simulated clock follow their targets with
+    CompiledFollower: the same positions, velocities and controller state as
+    PositionFollower, steps of any length (a 20 ms step, a shortened one, none)."""
+    rng = np.random.default_rng(seed)
+    nav = vehicle_navigation({"PSC_VELXY_P": float(rng.choice([1.0, 2.0, 3.0]))})
+    start, velocity, wind = rng.normal(0, 5, 2), rng.normal(0, 2, 2), rng.normal(0, 4, 2)
+    ours = PositionFollower(start, velocity, nav=nav, wind=wind)
+    compiled = CompiledFollower(start, velocity, nav=nav, wind=wind)
+    for k in range(200):
+        dt = (0.02, 0.013, 0.0, 0.05)[k % 4]
+        target = np.append(start + rng.normal(0, 3, 2), 5.0)
+        target_vel, target_accel = rng.normal(0, 3, 3), rng.normal(0, 1, 3)
+        a = ours.step(dt, target, target_vel, target_accel)
+        b = compiled.step(dt, target, target_vel, target_accel)
+        assert np.abs(a - b).max() < 1e-9
+        assert abs(ours.vx - compiled.vx) < 1e-9 and abs(ours.vy - compiled.vy) < 1e-9
+        assert abs(ours._ix - compiled._ix) < 1e-9 and ours._carry == compiled._carry
