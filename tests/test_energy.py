@@ -119,3 +119,13 @@ def test_a_mission_that_would_land_below_the_reserve_is_infeasible_with_its_figu
 def test_a_battery_table_that_cannot_be_used_names_its_field(tmp_path, table, field):
     with pytest.raises(ScenarioError, match=field.replace(".", r"\.")):
         _example(tmp_path, table)
+
+
+def test_the_current_at_two_speeds_is_the_arrays_to_the_last_bit():
+    """The emulator asks for the current at every step with two floats: plain floats,
+    the same numbers as the array path."""
+    rng = np.random.default_rng(3)
+    battery = Battery(5200.0, 14.0, cruise_current_a=17.0, cruise_speed_m_s=8.0)
+    for h, v in zip(rng.uniform(-12, 12, 500), rng.uniform(-6, 6, 500)):
+        assert battery.current_a(float(h), float(v)) == float(
+            battery.current_a(np.array([h]), np.array([v]))[0])

@@ -90,3 +90,19 @@ def test_parameters_compare_as_ap_param_keeps_them():
     assert F.param_equal("FENCE_ACTION", 4.0, 4.0)
     assert F.param_equal("FENCE_MARGIN", 0.5, float(np.float32(0.5)))
     assert not F.param_equal("FENCE_ALT_MAX", 8.0, 100.0)
+
+
+def test_the_breach_test_in_plain_floats_agrees_with_arrays():
+    """A copter's fence is checked 25 times a second on its corners and circles kept as
+    plain floats: the same verdicts as the array arithmetic, near every edge."""
+    rng = np.random.default_rng(2)
+    square = np.array([[-50.0, -50.0], [50.0, -50.0], [50.0, 50.0], [-50.0, 50.0]])
+    circles = np.column_stack([rng.uniform(-40, 40, (12, 2)), rng.uniform(1.0, 4.0, 12)])
+    geometry = F.FenceGeometry((square,), circles)
+    for p in rng.uniform(-55.0, 55.0, (3000, 2)):
+        outside = not (-50.0 < p[0] < 50.0 and -50.0 < p[1] < 50.0)
+        in_circle = bool(np.any(np.hypot(circles[:, 0] - p[0], circles[:, 1] - p[1])
+                                < circles[:, 2]))
+        want = F.TYPE_POLYGON if outside or in_circle else 0
+        assert F.breaches(geometry, east_north=p, alt_m=5.0, fence_type=F.TYPE_POLYGON,
+                          alt_max_m=100.0) == want

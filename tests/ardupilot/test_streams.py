@@ -99,3 +99,22 @@ def test_streams_asked_for_are_stopped_and_asked_for_no_more():
     assert sorted((m.target_system, m.command, int(m.param1), m.param2) for m in stops) == [
         (3, R.MAV_CMD_SET_MESSAGE_INTERVAL, msgid, -1.0) for msgid in sorted(READINESS)]
     assert req.due(100.0) == [] and req.missing(100.0) == []
+
+
+def test_a_streams_recent_count_reads_only_the_old_end_of_its_arrivals():
+    """How many arrived within the window is counted from the oldest arrival on (they
+    are in order): the same count as looking at every one."""
+    import random
+
+    from ftlbo_mav.ardupilot.streams import RATE_WINDOW_S, _Want
+
+    rng = random.Random(4)
+    w = _Want(hz=10.0)
+    now = 0.0
+    for _ in range(400):
+        now += rng.choice([0.1, 0.1, 0.1, 0.5, 2.5])
+        w.arrived(now)
+        for later in (now, now + 0.05, now + 1.0, now + RATE_WINDOW_S, now + 3.0):
+            every = sum(1 for t in w.arrivals if later - t <= RATE_WINDOW_S)
+            assert w._recent(later) == every
+            assert w.rate(later) == every / RATE_WINDOW_S

@@ -24,6 +24,7 @@ from ftlbo_mav.flight.departures import (
     Seen,
     Together,
 )
+from ftlbo_mav.flight.metrics import slot_errors
 
 
 def seen(**kw) -> Seen:
@@ -216,3 +217,21 @@ def test_two_uavs_closer_than_min_separation_is_a_separation_departure():
     assert [(e.index, e.kind) for e in events] == [(1, SEPARATION)]
     assert "3.04 m from uav1" in events[0].detail
     assert "min_separation 3.2 m" in events[0].detail
+
+
+@pytest.mark.parametrize("n", [2, 3, 5, 8])
+def test_a_few_uavs_are_judged_in_plain_floats_to_numpys_last_bit(n):
+    """Up to FEW_UAVS the watch computes the slot errors and distances itself (20 looks
+    a second): the same numbers, the same worst UAV and the same closest pair as numpy."""
+    rng = np.random.default_rng(n)
+    offsets = rng.normal(0.0, 3.0, (n, 3))
+    w = DepartureWatch(n, formation=FormationBound(offsets, 0.77, 2.0))
+    for _ in range(50):
+        positions = offsets + rng.normal(0.0, 0.5, (n, 3)) + rng.normal(0.0, 100.0, 3)
+        err, worst, d, i, j = w._formation_few(positions)
+        assert err == slot_errors(positions, offsets).tolist()
+        assert worst == int(np.argmax(slot_errors(positions, offsets)))
+        ours = np.linalg.norm(positions[:, None] - positions[None], axis=-1)
+        ours[np.diag_indices(n)] = np.inf
+        assert np.array_equal(d, ours)
+        assert (i, j) == tuple(int(k) for k in np.unravel_index(int(np.argmin(ours)), ours.shape))

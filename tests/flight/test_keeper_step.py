@@ -82,3 +82,28 @@ def test_the_longest_silence_of_reports_is_in_the_vehicles_seconds():
     assert s.longest_gap_s(108.05, window_s=20.0) == 0.9  # 0.45 s of ground time at 2x
     assert s.longest_gap_s(108.05, window_s=10.0) == 0.2  # the long one is 14 s ago
     assert s.longest_gap_s(109.0, window_s=1.0) == 2.0  # going on now: 1 s
+
+
+def test_the_positions_at_one_instant_are_worked_out_once_until_a_report_changes():
+    """The watch and the keeper both ask at the same instant (a simulated clock): the
+    memo answers the second, with its own copy; a new report is worked out again."""
+    from ftlbo_mav import clock
+    from ftlbo_mav.clock import VirtualClock
+    from ftlbo_mav.flight.watch import positions_now
+
+    with VirtualClock(start_s=200.0):
+        copters = [vehicle(i, clock_offset_s=100.0, boot_s=99.9, arrived_ago_s=0.0)
+                   for i in range(3)]
+        st = [v.status for v in copters]
+        for s in st:
+            s.position_t = clock.monotonic() - 0.05
+        memo: dict = {}
+        first = positions_now(PLANNED, st, memo=memo)
+        first[0][0, 0] += 100.0  # the caller's copy
+        again = positions_now(PLANNED, st, memo=memo)
+        plain = positions_now(PLANNED, st)
+        assert all(np.array_equal(a, b) for a, b in zip(again[:3], plain[:3]))
+        assert again[3] == plain[3]
+        st[1].lat_deg += 1e-5  # a new report: about 1.1 m north
+        moved = positions_now(PLANNED, st, memo=memo)
+        assert 1.0 < moved[0][1, 1] - plain[0][1, 1] < 1.2
