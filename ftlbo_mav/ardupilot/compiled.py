@@ -255,9 +255,13 @@ class CompiledFollower(poscontrol.PositionFollower):
         f = np.array([self.px, self.py, self.vx, self.vy, self._ex, self._ey, self._dx,
                       self._dy, self._ix, self._iy, self._lx, self._ly, self._carry,
                       *self._limit])
-        _follow(f, self._prm, float(dt), float(target[0]), float(target[1]),
-                float(target_vel[0]), float(target_vel[1]), float(target_accel[0]),
-                float(target_accel[1]), *self.wind)
+        tx, ty = target[:2].tolist() if isinstance(target, np.ndarray) else target[:2]
+        tvx, tvy = (target_vel[:2].tolist() if isinstance(target_vel, np.ndarray)
+                    else target_vel[:2])
+        tax, tay = (target_accel[:2].tolist() if isinstance(target_accel, np.ndarray)
+                    else target_accel[:2])
+        _follow(f, self._prm, float(dt), float(tx), float(ty), float(tvx), float(tvy),
+                float(tax), float(tay), *self.wind)
         (self.px, self.py, self.vx, self.vy, self._ex, self._ey, self._dx, self._dy,
          self._ix, self._iy, self._lx, self._ly, self._carry, *limit) = f.tolist()
         self._limit = tuple(limit)

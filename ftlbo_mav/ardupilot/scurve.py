@@ -178,6 +178,7 @@ class SCurve:
         self.position_sq = 0.0
         self._set_track(np.zeros(3), np.zeros(3))
         self.p: list[Piece] = [Piece(0.0, FLAT, 0.0, 0.0, 0.0, 0.0)]
+        self._hint = 0  # where state_at's last search ended
 
     def _set_track(self, track: np.ndarray, unit: np.ndarray) -> None:
         """The leg's track and its direction, also as plain floats (a step of the target
@@ -450,11 +451,18 @@ class SCurve:
         if not self.planned:
             return 0.0, 0.0, 0.0, 0.0
         p = self.p
+        # the piece t falls in: the first ending after it. The pieces' end times never
+        # go down, so the search may start where the last one ended when t is not before
+        # that piece's start (time moves on: most steps stay in the same piece)
+        h = self._hint
+        if h and t < p[h - 1].end_time:
+            h = 0
         i = PIECES
-        for k in range(PIECES):
+        for k in range(h, PIECES):
             if t < p[k].end_time:
                 i = k
                 break
+        self._hint = i
         if i == 0:
             q = p[0]
             j, a, v, x = _along(FLAT, 0.0, 0.0, t - q.end_time, q.accel, q.vel, q.pos)

@@ -143,5 +143,13 @@ class GpsError:
             self._memo["transient"] = (key, out)
         return self._memo["transient"][1].copy()
 
+    def unfused(self, t: float) -> tuple[float, float]:
+        """``transient(t) - error(t)`` as two floats: from the estimate to the truth
+        (east, north; the truth is recorded at every step)."""
+        key = ("unfused", t, len(self._steps))
+        if self._memo.get("unfused", (None,))[0] != key:
+            self._memo["unfused"] = (key, tuple((self.transient(t) - self.error(t)).tolist()))
+        return self._memo["unfused"][1]
+
     def accuracy_m(self) -> float:
         return float(self.params.get("SIM_GPS_ACC", SITL_GPS_ACCURACY_M))

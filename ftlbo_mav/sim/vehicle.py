@@ -575,9 +575,9 @@ class Vehicle:
         """Where the copter truly is (latitude, longitude degrees, altitude m AMSL): its
         estimate less the fused GPS error (:mod:`.gps`)."""
         ap = self.autopilot
-        t = now - self.boot_time
-        de, dn = self.gps.transient(t) - self.gps.error(t)
-        lat, lon = ap.tangent.to_latlon(ap.position[0] + de, ap.position[1] + dn)
+        de, dn = self.gps.unfused(now - self.boot_time)
+        east, north = ap.position[:2].tolist()
+        lat, lon = ap.tangent.to_latlon(east + de, north + dn)
         return lat, lon, float(self.state.alt_amsl_m)
 
     def sim_state(self, now: float):

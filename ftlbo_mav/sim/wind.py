@@ -54,6 +54,7 @@ SITL_RATE_HZ = 1200.0  # SIM_RATE_HZ, a copter's physics rate
 IIR_COEF = 0.98  # SIM_Aircraft.cpp update_wind: iir_coef
 REF_SPEED = 15.08  # SIM_Frame.h Model::refSpd (m/s), at refAngle 45 degrees
 TURB_TAU_S = -1.0 / (SITL_RATE_HZ * math.log(IIR_COEF))  # 41 ms
+NORMALS_AT_ONCE = 300  # a hundred steps' turbulence drawn at a time
 TURB_STD = 10.0 * (1 - IIR_COEF) / math.sqrt(1 - IIR_COEF ** 2)  # per SIM_WIND_TURB: 1.005
 
 
@@ -109,8 +110,11 @@ class Gusts:
     gust: np.ndarray = field(default_factory=lambda: np.zeros(3))
     error: np.ndarray = field(default_factory=lambda: np.zeros(3))
     error_vel: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    _integral: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    _accel: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    _integral: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    _accel: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # standard normal draws taken from ``rng`` a block at a time, used in order (the
+    # same numbers as drawn one by one: Generator.normal is loc + scale * a standard one)
+    _normals: list[float] = field(default_factory=list)
 
     def _draw(self, dt: float) -> np.ndarray:
         """The turbulence averaged over ``dt`` (:meth:`_draw_xyz`), ENU m/s."""
@@ -128,8 +132,12 @@ class Gusts:
             return 0.0, 0.0, 0.0
         a = math.exp(-dt / TURB_TAU_S)
         steps = max(dt * SITL_RATE_HZ, 1.0)
-        h0, h1 = self.rng.normal(0.0, sigma / math.sqrt(2 * steps), 2).tolist()
-        vertical = a * float(self.gust[2]) + sigma * math.sqrt(1 - a * a) * self.rng.normal()
+        if len(self._normals) < 3:
+            self._normals = self.rng.standard_normal(NORMALS_AT_ONCE).tolist()[::-1]
+        z = self._normals
+        h = sigma / math.sqrt(2 * steps)
+        h0, h1 = 0.0 + h * z.pop(), 0.0 + h * z.pop()
+        vertical = a * float(self.gust[2]) + sigma * math.sqrt(1 - a * a) * (0.0 + z.pop())
         self.gust = np.array([h0, h1, vertical])
         return h0, h1, vertical
 
@@ -148,7 +156,7 @@ class Gusts:
         lag = min(dt / max(self.response_s, 1e-3), 1.0)
         # per axis in plain floats (numpy's per-call cost on three numbers would be most
         # of a step): the same arithmetic, element by element
-        integral, accel_now = self._integral.tolist(), self._accel.tolist()
+        integral, accel_now = self._integral, self._accel
         error, error_vel = self.error.tolist(), self.error_vel.tolist()
         for k in range(3):
             vel_err = -(error_vel[k] + pos_p[k] * error[k])
@@ -158,7 +166,6 @@ class Gusts:
             accel = accel_now[k] + slope * gust[k]
             error_vel[k] = error_vel[k] + accel * dt
             error[k] = error[k] + error_vel[k] * dt
-        self._integral, self._accel = np.array(integral), np.array(accel_now)
         self.error_vel, self.error = np.array(error_vel), np.array(error)
         return self.error
         gust = self._draw_xyz(dt)

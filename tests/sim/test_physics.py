@@ -105,3 +105,21 @@ def test_variation_is_seeded_and_small():
     assert 0.0 <= a.start_latency_s <= 0.3
     assert abs(a.jerk_factor - 1.0) <= 0.05 and a.jerk_factor != 1.0
     assert a.nav == FlightLimits().nav  # its parameters are the fleet's
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_legs_pieces_end_in_order_and_any_search_start_finds_the_same_piece(seed):
+    """state_at starts its search where the last one ended (the pieces' end times never
+    go down, through speed changes too): any order of times gives what a fresh leg does."""
+    rng = np.random.default_rng(seed)
+    leg = _leg(float(rng.uniform(0.5, 80.0)), float(rng.uniform(1.0, 12.0)))
+    for _ in range(3):
+        ends = [q.end_time for q in leg.p]
+        assert ends == sorted(ends)
+        times = rng.uniform(-1.0, leg.time_end() + 1.0, 200)
+        for t in np.concatenate([np.sort(times), times]):
+            fresh = leg.copy()
+            fresh._hint = 0
+            assert leg.state_at(float(t)) == fresh.state_at(float(t))
+        leg.set_speed_max(float(rng.uniform(1.0, 12.0)), NAV.wp_speed_up, NAV.wp_speed_dn)
+        leg.set_origin_speed_max(float(rng.uniform(0.0, 5.0)))
