@@ -443,9 +443,10 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             self._camera_step()
             self._battery_step(dt, out)
             self._fence_step(out)
-            out += self._take_pending()
+            if self._pending:
+                out += self._take_pending()
         self._flush_do(out)
-        return out + self._take_pending()
+        return out
 
     # -- the camera (ardupilot/camera.py: AP_Camera, distance triggering)
     def _camera_trigger_distance(self, distance_m: float, trigger: float) -> None:
@@ -530,10 +531,12 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
 
     def _flush_do(self, out: list) -> None:
         """DO commands are reached at the mission's next update (AP_Mission::update)."""
-        out += self._take_pending()
-        for seq in self._do_done:
-            out.append(R.MAVLink_mission_item_reached_message(seq))
-        self._do_done = []
+        if self._pending:
+            out += self._take_pending()
+        if self._do_done:
+            for seq in self._do_done:
+                out.append(R.MAVLink_mission_item_reached_message(seq))
+            self._do_done = []
 
     def _step(self, dt: float, out: list) -> None:
         if not self.armed:

@@ -347,7 +347,8 @@ class Vehicle:
         s.lat_deg, s.lon_deg = ap.latlon()
         s.relative_alt_m = float(ap.position[2])
         s.alt_amsl_m = self.home[2] + s.relative_alt_m
-        s.mode = CopterMode(ap.mode)
+        if s.mode != ap.mode:  # (an IntEnum: equal to its number)
+            s.mode = CopterMode(ap.mode)
         s.armed = ap.armed
 
     def _set_interval(self, st: LinkState, msgid: int, interval_us: float, now: float) -> int:
