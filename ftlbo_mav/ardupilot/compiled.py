@@ -245,27 +245,50 @@ class CompiledFollower(poscontrol.PositionFollower):
     """:class:`~.poscontrol.PositionFollower` whose 400 Hz steps run in :func:`_follow`:
     the same arithmetic (held equal in tests/ardupilot/test_compiled.py), for the
     emulator on a simulated clock, which steps three copters every 20 ms (loading the
-    compiled loop takes most of a second, once)."""
+    compiled loop takes most of a second, once). Its state lives in the array the loop
+    works on (:data:`FOLLOWER_STATE`)."""
 
     def __init__(self, position, velocity=(0.0, 0.0), **kwargs) -> None:
+        self._f = np.zeros(len(FOLLOWER_STATE) + 2)
         super().__init__(position, velocity, **kwargs)
         self._prm = nav_params(self.nav, self.airframe, 0.0)
 
+    @property
+    def _limit(self) -> tuple[float, float]:
+        return float(self._f[13]), float(self._f[14])
+
+    @_limit.setter
+    def _limit(self, value) -> None:
+        self._f[13], self._f[14] = value
+
     def step(self, dt: float, target, target_vel, target_accel) -> np.ndarray:
-        f = np.array([self.px, self.py, self.vx, self.vy, self._ex, self._ey, self._dx,
-                      self._dy, self._ix, self._iy, self._lx, self._ly, self._carry,
-                      *self._limit])
         tx, ty = target[:2].tolist() if isinstance(target, np.ndarray) else target[:2]
         tvx, tvy = (target_vel[:2].tolist() if isinstance(target_vel, np.ndarray)
                     else target_vel[:2])
         tax, tay = (target_accel[:2].tolist() if isinstance(target_accel, np.ndarray)
                     else target_accel[:2])
-        _follow(f, self._prm, float(dt), float(tx), float(ty), float(tvx), float(tvy),
+        _follow(self._f, self._prm, float(dt), float(tx), float(ty), float(tvx), float(tvy),
                 float(tax), float(tay), *self.wind)
-        (self.px, self.py, self.vx, self.vy, self._ex, self._ey, self._dx, self._dy,
-         self._ix, self._iy, self._lx, self._ly, self._carry, *limit) = f.tolist()
-        self._limit = tuple(limit)
-        return f[:2].copy()
+        return self._f[:2].copy()
+
+
+FOLLOWER_STATE = ("px", "py", "vx", "vy", "_ex", "_ey", "_dx", "_dy", "_ix", "_iy", "_lx",
+                  "_ly", "_carry")
+"""PositionFollower's state in the order :func:`_follow` keeps it (then its limit's x, y)."""
+
+
+def _state_slot(k: int) -> property:
+    def get(self) -> float:
+        return float(self._f[k])
+
+    def put(self, value: float) -> None:
+        self._f[k] = value
+
+    return property(get, put)
+
+
+for _k, _name in enumerate(FOLLOWER_STATE):
+    setattr(CompiledFollower, _name, _state_slot(_k))
 
 
 SNAP_INTS = 8  # prev, this, nxt, k, n, wp_reached, fast, waiting

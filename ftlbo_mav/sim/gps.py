@@ -96,16 +96,22 @@ class GpsError:
                       self._rng.normal(0.0, self.options.wander_m, 2)]
 
     def _wander(self, t: float) -> np.ndarray:
+        return np.array(self._wander_xy(t))
+
+    def _wander_xy(self, t: float) -> tuple[float, float]:
+        """The wander at ``t``, east and north as floats (the same arithmetic, element by
+        element, as on the grid's arrays)."""
         o = self.options
         if o.wander_m == 0 or t <= 0:
-            return self._grid[0].copy() if t <= 0 else np.zeros(2)
+            return tuple(self._grid[0].tolist()) if t <= 0 else (0.0, 0.0)
         k = int(t // GRID_S)
         a = math.exp(-GRID_S / o.correlation_s)
         while len(self._grid) <= k + 1:
             self._grid.append(a * self._grid[-1]
                               + o.wander_m * math.sqrt(1 - a * a) * self._rng.normal(0, 1, 2))
         f = t / GRID_S - k
-        return (1 - f) * self._grid[k] + f * self._grid[k + 1]
+        (g0, g1), (h0, h1) = self._grid[k].tolist(), self._grid[k + 1].tolist()
+        return (1 - f) * g0 + f * h0, (1 - f) * g1 + f * h1
 
     def param_changed(self, t: float) -> None:
         """SIM_GPS_GLITCH_X/Y may have changed at ``t``: a step of the difference."""
@@ -146,6 +152,9 @@ class GpsError:
     def unfused(self, t: float) -> tuple[float, float]:
         """``transient(t) - error(t)`` as two floats: from the estimate to the truth
         (east, north; the truth is recorded at every step)."""
+        if not self._steps and not self.options.glitches:  # no step: the wander's alone
+            east, north = self._wander_xy(t)
+            return 0.0 - east, 0.0 - north
         key = ("unfused", t, len(self._steps))
         if self._memo.get("unfused", (None,))[0] != key:
             self._memo["unfused"] = (key, tuple((self.transient(t) - self.error(t)).tolist()))
