@@ -254,11 +254,11 @@ class Link:
         self.slowdown_ms = 0
         self._stop = clock.Event()
         self._thread: clock.Thread | None = None
+        self._next_beat = self._next_ask = 0.0  # when the reader's duties are due
         if self._pushed and clock.virtual() is not None:
             # an emulator in this process on a simulated clock hands its bytes over: the
             # reader's own duties (HEARTBEAT, stream requests, reconnecting) are calls
             # the clock makes in their turn, with no thread to wake
-            self._next_beat = self._next_ask = 0.0
             self._retry_at: float | None = None
             clock.call_later(0.0, self._duty, name=f"link {url}")
         else:
@@ -372,10 +372,9 @@ class Link:
                 subs.remove(q)
 
     def _duty(self) -> None:
-        """:meth:`_run`'s loop, one pass of it a call on a virtual clock: the same duties
-        at the same times (reconnecting ``reconnect_every_s`` after the peer closed and
-        after each failed try; HEARTBEAT every second; stream requests every
-        :data:`ASK_EVERY_S`)."""
+        """:meth:`_run`'s loop on a virtual clock, each pass a scheduled call: the same
+        duties at the same times (:meth:`_duties`; connecting again
+        ``reconnect_every_s`` after the peer closed and after each failed try)."""
         if self._stop.is_set():
             return
         name = f"link {self.url}"
@@ -396,6 +395,11 @@ class Link:
                 clock.call_later(self.reconnect_every_s, self._duty, name=name)
                 return
         self._retry_at = None
+        clock.call_later(max(0.0, self._duties(now) - now), self._duty, name=name)
+
+    def _duties(self, now: float) -> float:
+        """HEARTBEAT every second, the stream requests every :data:`ASK_EVERY_S` (both
+        slower while the radio's buffer fills), when due; when the next one is due."""
         if now >= self._next_beat:
             self._next_beat = now + 1.0 + self.slowdown_ms / 1000.0
             try:
@@ -407,11 +411,9 @@ class Link:
         if now >= self._next_ask:
             self._next_ask = now + max(ASK_EVERY_S, self.slowdown_ms / 1000.0)
             self._ask_streams(now)
-        clock.call_later(max(0.0, min(self._next_beat, self._next_ask) - now), self._duty,
-                         name=name)
+        return min(self._next_beat, self._next_ask)
 
     def _run(self) -> None:
-        next_beat = next_ask = 0.0
         while not self._stop.is_set():
             if self.closed_by_peer:
                 if not self.reconnect or self._stop.wait(self.reconnect_every_s):
@@ -419,22 +421,11 @@ class Link:
                 self._connect_again()
                 continue
             now = clock.monotonic()
-            if now >= next_beat:
-                next_beat = now + 1.0 + self.slowdown_ms / 1000.0
-                try:
-                    self.send(mavlink2.MAVLink_heartbeat_message(
-                        mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0,
-                        mavlink2.MAV_STATE_ACTIVE, 3))
-                except LinkError:
-                    pass
-            if now >= next_ask:
-                next_ask = now + max(ASK_EVERY_S, self.slowdown_ms / 1000.0)
-                self._ask_streams(now)
+            due = self._duties(now)
             try:
                 # what arrives is handed over at once (_drain) on an in-process link:
                 # the reader wakes only for its own duties
-                self._conn.select(max(0.0, min(next_beat, next_ask) - now)
-                                  if self._pushed else 0.05)
+                self._conn.select(max(0.0, due - now) if self._pushed else 0.05)
                 while (msg := self._conn.recv_msg()) is not None:
                     self._dispatch(msg)
             except (OSError, ValueError):
