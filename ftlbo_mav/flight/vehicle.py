@@ -2,7 +2,8 @@
 
 A :class:`FlightVehicle` owns a channel of a :class:`~ftlbo_mav.link.endpoints.Link`
 and a reader thread that keeps :class:`Status` up to date (HEARTBEAT, GLOBAL_POSITION_INT,
-MISSION_CURRENT, COMMAND_ACK, STATUSTEXT); it asks the vehicle for those streams on its
+MISSION_CURRENT, COMMAND_ACK, STATUSTEXT; on a simulated clock no thread: whoever reads a
+message updates the status); it asks the vehicle for those streams on its
 link, since ArduPilot sends only HEARTBEAT unasked (:mod:`ftlbo_mav.ardupilot.streams`).
 Commands are sent with a timeout and a retry budget and fail with :class:`FlightError`
 naming the vehicle and the step.
@@ -216,7 +217,7 @@ class Status:
 
 class FlightVehicle:
     """``name`` (uav1...) at ``sysid`` on ``link``; ``on_position(vehicle)`` is called from
-    the reader thread after every position report (the recorder hooks in there), and
+    the reader thread (whoever read it, on a simulated clock) after every position report (the recorder hooks in there), and
     ``on_photo(vehicle, msg, arrival)`` after every CAMERA_FEEDBACK (``arrival``:
     ``clock.monotonic()``)."""
 
