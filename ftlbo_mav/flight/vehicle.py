@@ -217,7 +217,8 @@ class Status:
 
 class FlightVehicle:
     """``name`` (uav1...) at ``sysid`` on ``link``; ``on_position(vehicle)`` is called from
-    the reader thread (whoever read it, on a simulated clock) after every position report (the recorder hooks in there), and
+    the reader thread (whoever read it, on a simulated clock) after every position
+    report (the recorder hooks in there), and
     ``on_photo(vehicle, msg, arrival)`` after every CAMERA_FEEDBACK (``arrival``:
     ``clock.monotonic()``)."""
 

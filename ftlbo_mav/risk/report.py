@@ -26,9 +26,10 @@ SIMULATOR_NOTE = (
     "emulator run on one simulated clock (unless --time-scale): the ground computes in "
     "no time, and a seed always flies the same flight. Against ArduCopter 4.5.6 SITL on ten seeded "
     "conditions of the example (docs/risk.md): clearance agrees within the spread; the "
-    "formation error's worst is about two fifths of SITL's (0.071 against 0.176 m "
-    "median), so this report understates it; the smallest separation is about 0.1 m "
-    "smaller than SITL's (2.87 against 2.99 m median).")
+    "formation error's worst is a third to two fifths of SITL's (0.070 against "
+    "0.176-0.219 m median in two calibrations), so this report understates it; the "
+    "smallest separation is about 0.1 m smaller than SITL's (2.87 against 2.99 m "
+    "median).")
 
 
 def _where(records, key):
