@@ -25,7 +25,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from pymavlink.dialects.v20 import ardupilotmega as R
 
 from .navigation import INT8, REAL32, ParamDefault
 
@@ -49,6 +48,8 @@ def feedback_message(*, time_usec: int, image: int, lat_e7: int, lon_e7: int, al
     0, camera id 0 (the first instance), the image index, the position and attitude at
     the photo, focal length 0, flags CAMERA_FEEDBACK_PHOTO, completed captures 0 (the
     feedback-pin count: no pin)."""
+    from pymavlink.dialects.v20 import ardupilotmega as R  # the emulator's: not a plan's
+
     return R.MAVLink_camera_feedback_message(
         time_usec, 0, 0, image, lat_e7, lon_e7, alt_msl_m, alt_rel_m, roll_deg, pitch_deg,
         yaw_deg, 0.0, R.CAMERA_FEEDBACK_PHOTO, 0)

@@ -13,12 +13,11 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 
-from pymavlink.dialects.v20 import ardupilotmega as R
-
 GRAVITY_M_S2 = 9.80665  # AP_Math/definitions.h GRAVITY_MSS
 
-REAL32, INT8, INT16, INT32 = (R.MAV_PARAM_TYPE_REAL32, R.MAV_PARAM_TYPE_INT8,
-                              R.MAV_PARAM_TYPE_INT16, R.MAV_PARAM_TYPE_INT32)
+# MAV_PARAM_TYPE (MAVLink common.xml), written out: importing pymavlink's dialect for four
+# numbers cost every plan process 33 ms (tests/ardupilot/test_vehicle_params.py holds them to it)
+REAL32, INT8, INT16, INT32 = 9, 2, 4, 6
 
 # PARAM_VALUE param_count on ArduCopter 4.5.6 SITL with copter.parm (flight.json)
 PARAM_COUNT = 1390

@@ -48,3 +48,13 @@ def test_integer_parameters_compare_as_the_whole_number_ardupilot_keeps():
     assert param_matches("RTL_ALT", 1500.0, 1500.0)  # INT32
     assert param_matches("RTL_ALT", 1500.7, 1500.0)  # AP_Param casts on set
     assert not param_matches("RTL_ALT", 1500.0, 1501.0)
+
+
+def test_the_param_types_written_out_are_mavlinks():
+    from pymavlink.dialects.v20 import ardupilotmega as R
+
+    from ftlbo_mav.ardupilot import navigation
+
+    assert (navigation.REAL32, navigation.INT8, navigation.INT16, navigation.INT32) == (
+        R.MAV_PARAM_TYPE_REAL32, R.MAV_PARAM_TYPE_INT8, R.MAV_PARAM_TYPE_INT16,
+        R.MAV_PARAM_TYPE_INT32)
