@@ -355,8 +355,12 @@ def test_a_link_that_drops_and_returns_is_picked_up_again(plan_dir):
     assert result.exit_code == 1, out
     assert "uav2 (sysid 2): link lost" in out
     assert "uav2 (sysid 2): link back: heard from again" in out
-    # the vehicle itself chose nothing: once back it is answered as the others are
-    assert "uav2 (sysid 2): link lost at" in out and "link back at" in out, out
+    # the vehicle itself chose nothing: once back it is answered as the others are. (Its
+    # line may begin with another departure: on a loaded machine its AUTO can come late,
+    # and a copter started late is flagged for formation before its link drops.)
+    summary = [line for line in out.splitlines() if line.startswith("  uav2 (sysid 2): ")]
+    assert len(summary) == 1, out
+    assert "link lost at" in summary[0] and "link back at" in summary[0], out
     assert took < 60.0
 
 
