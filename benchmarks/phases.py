@@ -91,7 +91,7 @@ def main() -> None:
             parser.error(f"--scenario {scenario}: no such file")
         print(f"{what}; {sys.executable}", flush=True)
         names = ["interpreter", "imports", "scenario", "first plan", "files", "plan again",
-                 "start-up in the first plan"]
+                 "start-up in the first plan", "feasible"]
         print("  ".join(f"{n:>12s}" for n in names))
         for r in range(args.repeats):
             t = time.perf_counter()
@@ -105,7 +105,8 @@ def main() -> None:
             f = json.loads(proc.stdout.strip().splitlines()[-1])
             row = [interpreter, f["imports_s"], f["scenario_s"], f["first_plan_s"],
                    f["files_s"], f["plan_again_s"], f["startup_in_first_s"]]
-            print("  ".join(f"{v:>11.3f}s" for v in row), flush=True)
+            print("  ".join(f"{v:>11.3f}s" for v in row)
+                  + f"  {'yes' if f['feasible'] else 'no':>12s}", flush=True)
 
 
 if __name__ == "__main__":

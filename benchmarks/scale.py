@@ -121,18 +121,22 @@ def plan_process(path: Path, out: Path, *, timeout_s: float | None = None) -> di
                                  "-m", "ftlbo_mav", "plan", str(path), "-o", str(out), "-q"],
                                 stdout=log, stderr=subprocess.STDOUT, text=True, cwd=ROOT,
                                 start_new_session=True)  # a group: a kill ends both
+        killed = False
         try:
             proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
+            killed = True
         log.seek(0)
         text = log.read()
-        fields = report.read_text().split() if report.exists() else []
-    killed = not fields
+        fields = report.read_text().split() if not killed else []
+    lines = text.strip().splitlines()
+    if not killed and len(fields) != 3:  # the launcher itself failed: not a timing
+        raise RuntimeError(f"plan process launcher exit {proc.returncode}: "
+                           f"{lines[-1] if lines else 'no output'}")
     seconds, maxrss_kib, code = ((float(fields[0]), int(fields[1]), int(fields[2]))
                                  if fields else (math.nan, 0, None))
-    lines = text.strip().splitlines()
     return {"seconds": seconds, "peak_rss_mib": maxrss_kib / 1024,
             "returncode": code, "timed_out": killed,
             "feasible": code == 0 and "feasible;" in text,
