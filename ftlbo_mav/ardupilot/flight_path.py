@@ -28,7 +28,7 @@ airframe's drag, outside it in turns, past it where it stops (0.4-0.9 m on SITL 
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
@@ -312,23 +312,29 @@ def fly_path_stepwise(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
 
 def fly_groups(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
                speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
-               dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME
+               dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME,
+               navs: Sequence[Navigation] | None = None
                ) -> tuple[list[FlownPath], np.ndarray, np.ndarray]:
     """Every row of ``paths`` ``(N, P, 3)`` flown, as ``(shapes, group, shift)``: the model
     is the same wherever a path lies (AC_WPNav works on offsets from its origin), so paths
     that are translations of one another (a formation's, each UAV at a fixed offset) are
     flown once, from the origin: path ``n`` is ``shapes[group[n]]`` moved by ``shift[n]``
-    ``(N, 3)`` (its first point)."""
+    ``(N, 3)`` (its first point). ``navs``: one copter's parameters per path (a fleet of
+    different copters; default ``nav`` for all): paths flown with other parameters are
+    flown apart."""
     paths = np.asarray(paths, float)
-    keys: dict[bytes, int] = {}
+    if navs is not None and len(navs) != len(paths):
+        raise ValueError(f"navs: {len(navs)} for {len(paths)} paths")
+    keys: dict[tuple, int] = {}
     shapes: list[FlownPath] = []
     group = np.empty(len(paths), int)
     for n, path in enumerate(paths):
+        own = nav if navs is None else navs[n]
         shape = np.round(path - path[0], 6)
-        key = shape.tobytes()
+        key = (shape.tobytes(), own)
         if key not in keys:
             keys[key] = len(shapes)
-            shapes.append(fly_path(shape, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s,
+            shapes.append(fly_path(shape, nav=own, speed_m_s=speed_m_s, holds_s=holds_s,
                                    dt=dt, airframe=airframe))
         group[n] = keys[key]
     return shapes, group, paths[:, 0].copy()
@@ -336,10 +342,10 @@ def fly_groups(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
 
 def fly_paths(paths: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
               speed_m_s: float | None = None, holds_s: np.ndarray | None = None,
-              dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME
-              ) -> list[FlownPath]:
+              dt: float = STEP_S, airframe: Airframe | None = DEFAULT_AIRFRAME,
+              navs: Sequence[Navigation] | None = None) -> list[FlownPath]:
     """:func:`fly_path` for every row of ``paths`` ``(N, P, 3)`` (translations of one
-    another flown once: :func:`fly_groups`)."""
+    another flown once: :func:`fly_groups`; ``navs``: one copter's parameters per path)."""
     shapes, group, shift = fly_groups(paths, nav=nav, speed_m_s=speed_m_s, holds_s=holds_s,
-                                      dt=dt, airframe=airframe)
+                                      dt=dt, airframe=airframe, navs=navs)
     return [shapes[g].translated(s) for g, s in zip(group, shift)]

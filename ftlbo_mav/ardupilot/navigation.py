@@ -135,6 +135,7 @@ class Navigation:
     atc_input_tc: float = 0.15    # ATC_INPUT_TC
     atc_accel_rp_max: float = math.radians(1100.0)  # ATC_ACCEL_R_MAX / _P_MAX, rad/s/s
     atc_rate_rp_max: float = 0.0  # ATC_RATE_R_MAX / _P_MAX, rad/s (0: unlimited)
+    release: str = "4.5"          # the ArduCopter series flown (AUTOPILOT_VERSION; not a parameter)
 
     def corner_accel(self) -> float:
         """AC_WPNav::get_corner_acceleration: WPNAV_ACCEL_C, or twice WPNAV_ACCEL."""
@@ -231,31 +232,35 @@ _SCALES = (
     ("ATC_RATE_R_MAX", "atc_rate_rp_max", math.degrees(1.0)),
     ("ATC_RATE_P_MAX", "atc_rate_rp_max", math.degrees(1.0)),
 )
-assert {f.name for f in fields(Navigation)} == {attr for _n, attr, _s in _SCALES}
+assert {f.name for f in fields(Navigation)} - {"release"} == {attr for _n, attr, _s in _SCALES}
 
 
-# The parameters a scenario's ``[vehicle]`` table may set (ArduPilot's names and units):
-# those that shape the flown path, each with the range ArduCopter 4.5.6 documents for it
-# (the ``@Range`` of its var_info entry).
+# Every parameter the flown path, the landing and RTL depend on (:data:`NAV_PARAMS`), with
+# the range ArduCopter 4.5.6 documents for it (the ``@Range`` of its var_info entry;
+# ArduPilot itself does not enforce it, a ground station warns).
 VEHICLE_PARAMS: Mapping[str, tuple[float, float]] = {
-    "WPNAV_SPEED": (20.0, 2000.0),     # AC_WPNav.cpp, cm/s
-    "WPNAV_RADIUS": (5.0, 1000.0),     # cm
-    "WPNAV_SPEED_UP": (10.0, 1000.0),  # cm/s
-    "WPNAV_SPEED_DN": (10.0, 500.0),   # cm/s
-    "WPNAV_ACCEL": (50.0, 500.0),      # cm/s/s
-    "WPNAV_ACCEL_Z": (50.0, 500.0),    # cm/s/s
-    "WPNAV_JERK": (1.0, 20.0),         # m/s/s/s
-    "WPNAV_ACCEL_C": (0.0, 500.0),     # cm/s/s (0: twice WPNAV_ACCEL)
-    "PSC_JERK_XY": (1.0, 20.0),        # AC_PosControl.cpp, m/s/s/s
-    "PSC_POSXY_P": (0.5, 2.0),         # AC_PosControl.cpp (AC_P_2D)
-    "PSC_VELXY_P": (0.1, 6.0),         # AC_PosControl.cpp (AC_PID_2D)
-    "PSC_VELXY_I": (0.02, 1.0),
-    "PSC_VELXY_D": (0.0, 1.0),
-    "PSC_VELXY_IMAX": (0.0, 4500.0),   # cm/s/s
-    "PSC_VELXY_FLTE": (0.0, 100.0),    # Hz
-    "PSC_VELXY_FLTD": (0.0, 100.0),    # Hz
-    "ANGLE_MAX": (1000.0, 8000.0),     # ArduCopter/Parameters.cpp, cdeg
-    "ATC_INPUT_TC": (0.0, 1.0),        # AC_AttitudeControl.cpp, s
+    # libraries/AC_WPNav/AC_WPNav.cpp var_info @Range (4.5.6; WPNAV_SPEED's minimum is 10
+    # from 4.6.0, the 4.5 one is kept: a copter of either release accepts 20)
+    "WPNAV_SPEED": (20.0, 2000.0), "WPNAV_RADIUS": (5.0, 1000.0),
+    "WPNAV_SPEED_UP": (10.0, 1000.0), "WPNAV_SPEED_DN": (10.0, 500.0),
+    "WPNAV_ACCEL": (50.0, 500.0), "WPNAV_ACCEL_Z": (50.0, 500.0),
+    "WPNAV_JERK": (1.0, 20.0), "WPNAV_ACCEL_C": (0.0, 500.0),
+    # ArduCopter/Parameters.cpp @Range
+    "LAND_SPEED": (30.0, 200.0), "LAND_SPEED_HIGH": (0.0, 500.0),
+    "LAND_ALT_LOW": (100.0, 10000.0), "RTL_ALT": (200.0, 300000.0),
+    "RTL_SPEED": (0.0, 2000.0), "RTL_ALT_FINAL": (0.0, 1000.0),
+    "RTL_LOIT_TIME": (0.0, 60000.0), "DISARM_DELAY": (0.0, 127.0),
+    "ANGLE_MAX": (1000.0, 8000.0),
+    # libraries/AC_AttitudeControl/AC_PosControl.cpp @Range
+    "PSC_JERK_XY": (1.0, 20.0), "PSC_JERK_Z": (5.0, 50.0),
+    "PSC_POSZ_P": (1.0, 3.0), "PSC_POSXY_P": (0.5, 2.0), "PSC_VELZ_P": (1.0, 8.0),
+    "PSC_VELXY_P": (0.1, 6.0), "PSC_VELXY_I": (0.02, 1.0), "PSC_VELXY_D": (0.0, 1.0),
+    "PSC_VELXY_IMAX": (0.0, 4500.0), "PSC_VELXY_FLTE": (0.0, 100.0),
+    "PSC_VELXY_FLTD": (0.0, 100.0),
+    # libraries/AC_AttitudeControl/AC_AttitudeControl.cpp @Range
+    "ATC_INPUT_TC": (0.0, 1.0), "ATC_ACCEL_R_MAX": (0.0, 180000.0),
+    "ATC_ACCEL_P_MAX": (0.0, 180000.0), "ATC_RATE_R_MAX": (0.0, 1080.0),
+    "ATC_RATE_P_MAX": (0.0, 1080.0),
 }
 
 
@@ -271,6 +276,9 @@ def vehicle_navigation(values: Mapping[str, float]) -> Navigation:
         if not (math.isfinite(value) and lo <= value <= hi):
             raise ValueError(f"{name}: {value:g} is outside ArduCopter's range [{lo:g}, {hi:g}]")
     return Navigation().with_params(values)
+
+
+assert set(VEHICLE_PARAMS) == {name for name, _attr, _scale in _SCALES}
 
 
 def vehicle_params(nav: Navigation) -> dict[str, float]:

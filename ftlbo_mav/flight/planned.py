@@ -7,13 +7,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..ardupilot.copters import Copter, copter_of
+from ..ardupilot.navigation import VEHICLE_PARAMS, vehicle_navigation
 from ..energy import battery_from_document
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
 from ..gnss import NO_BUDGET, NavigationBudget, budget_from_document
 from ..mission.export import check_plan_folder, plan_from_document, read_plan_json
 from ..mission.fence_files import FenceSet, read_fence_set
-from ..mission.items import CMD_NAV_TAKEOFF, MissionItem
+from ..mission.items import CMD_DO_CHANGE_SPEED, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT, MissionItem
 from ..mission.waypoints import read_waypoints
 from .battery import MissionBattery
 
@@ -60,17 +62,44 @@ class PlannedFlight:
     # plan.json's formation bound: a UAV farther from its slot in flight is a departure
     # (None: a plan written before it, not watched)
     formation_bound_m: float | None = None
+    # each UAV's copter as its flight was predicted (plan.json uavs[].vehicle: release,
+    # parameters, what upload sets); empty for a plan written before them
+    copters: tuple[Copter, ...] = ()
 
     @property
     def count(self) -> int:
         return len(self.names)
 
+    def fleet(self) -> tuple[Copter, ...]:
+        """One copter per UAV as the plan predicted it (ArduCopter's defaults with
+        plan.json's ``vehicle`` for a plan written before ``uavs[].vehicle``)."""
+        if len(self.copters) == self.count:
+            return self.copters
+        return (copter_of(vehicle_navigation({k: v for k, v in (self.vehicle or {}).items()
+                                              if k in VEHICLE_PARAMS}),
+                          source="plan.json"),) * self.count
+
+    def speed_and_holds(self) -> tuple[float | None, np.ndarray] | None:
+        """The missions' cruise speed (their DO_CHANGE_SPEED, None: WPNAV_SPEED) and each
+        planned point's hold ``(P,)`` seconds, as the flown path is predicted with; None
+        when the missions do not hold one waypoint per planned point."""
+        if not self.missions:
+            return None
+        items = self.missions[0]
+        speeds = [it.param2 for it in items if it.command == CMD_DO_CHANGE_SPEED]
+        holds = [it.param1 for it in items[2:] if it.command == CMD_NAV_WAYPOINT]
+        if len(holds) != self.paths.shape[1]:
+            return None
+        return (speeds[0] if speeds else None), np.array(holds, float)
+
     def assignments(self) -> list:
         """Each UAV's upload with system id i+1 (:class:`~ftlbo_mav.link.swarm.Assignment`:
-        its mission, fence and the plan's [vehicle] parameters), as ``upload`` sends it."""
+        its mission, fence, the navigation values its scenario named and its copter), as
+        ``upload`` sends it."""
         from ..link.swarm import Assignment
 
-        return [Assignment(n, i + 1, m, f, self.vehicle or {}) for i, (n, m, f) in
+        fleet = self.fleet()
+        return [Assignment(n, i + 1, m, f, fleet[i].to_set(), fleet[i]) for i, (n, m, f) in
                 enumerate(zip(self.names, self.missions, self.fences))]
 
 
@@ -110,6 +139,8 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
         predicted = [_predicted(u, "predicted_clearance_m") for u in uavs]
         separated = [_predicted(u, "predicted_separation_m") for u in uavs]
         vehicle = {str(k): float(v) for k, v in (doc.get("vehicle") or {}).items()}
+        copters = (tuple(Copter.from_document(u["vehicle"]) for u in uavs)
+                   if all(isinstance(u.get("vehicle"), dict) for u in uavs) else ())
         navigation = budget_from_document(doc.get("navigation"))
         battery = _mission_battery(doc)
         min_separation = float(doc.get("min_separation", 2.0))
@@ -136,7 +167,7 @@ def load_planned_flight(folder: str | Path) -> PlannedFlight:
                          None if None in predicted else np.array(predicted, float),
                          None if None in separated else np.array(separated, float),
                          vehicle or None, navigation, battery, min_separation, band, box,
-                         None if bound is None else float(bound))
+                         None if bound is None else float(bound), copters)
 
 
 def _mission_battery(doc: dict) -> MissionBattery | None:

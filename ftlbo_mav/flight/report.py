@@ -11,9 +11,8 @@ import io
 import numpy as np
 
 from ..ardupilot.flight_path import fly_paths
-from ..ardupilot.navigation import Navigation
 from ..formation import min_separation as planned_separation
-from ..mission.items import CMD_DO_CHANGE_SPEED, CMD_NAV_WAYPOINT
+from ..mission.items import CMD_NAV_WAYPOINT
 from .metrics import formation_error, min_clearance, min_separation
 from .planned import PlannedFlight
 
@@ -87,14 +86,13 @@ def predicted_paths(planned: PlannedFlight) -> list[np.ndarray] | None:
     ``[vehicle]`` parameters); None for a plan written without the prediction."""
     if planned.predicted_clearance is None or not planned.missions:
         return None
-    items = planned.missions[0]
-    speeds = [it.param2 for it in items if it.command == CMD_DO_CHANGE_SPEED]
-    holds = [it.param1 for it in items[2:] if it.command == CMD_NAV_WAYPOINT]
-    if len(holds) != planned.paths.shape[1]:
+    flown_with = planned.speed_and_holds()
+    if flown_with is None:
         return None
-    nav = Navigation().with_params(planned.vehicle or {})
-    flown = fly_paths(planned.paths, nav=nav, speed_m_s=speeds[0] if speeds else None,
-                      holds_s=np.array(holds, float))
+    speed, holds = flown_with
+    fleet = planned.fleet()
+    flown = fly_paths(planned.paths, nav=fleet[0].nav, speed_m_s=speed, holds_s=holds,
+                      navs=[c.nav for c in fleet])
     return [f.positions for f in flown]
 
 

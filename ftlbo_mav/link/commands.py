@@ -88,18 +88,18 @@ def mission_files(folder: Path) -> list[Path]:
     return [found[n] for n in numbers]
 
 
-def plan_vehicle_params(folder: Path) -> dict[str, float]:
-    """plan.json's ``vehicle``: the ArduCopter parameters the plan predicted every UAV's
-    flown path with (empty without a plan.json, or for a plan written before them)."""
+def plan_fleet(folder: Path):
+    """The plan of ``folder`` as the flight side reads it
+    (:class:`~ftlbo_mav.flight.planned.PlannedFlight`: each UAV's copter, its paths and
+    promises), or None without a plan.json."""
     if not (folder / "plan.json").exists():
-        return {}
-    doc, source = read_plan_json(folder)
-    vehicle = doc.get("vehicle") or {}
+        return None
+    from ..flight.planned import PlanFolderError, load_planned_flight
+
     try:
-        return {str(k): float(v) for k, v in vehicle.items()}
-    except (AttributeError, TypeError, ValueError):
-        raise BadInput(f"{source}: its \"vehicle\" is not a table of parameter values; "
-                       "plan again with `ftlbo-mav plan`; no vehicle was contacted") from None
+        return load_planned_flight(folder)
+    except PlanFolderError as exc:
+        raise BadInput(f"{exc}; no vehicle was contacted") from None
 
 
 class ProgressBoard:
@@ -173,8 +173,9 @@ def timing_options(func):
 @click.option("--no-fence", "no_fence", is_flag=True,
               help="Send only the missions: no fence, rally points or fence parameters.")
 @click.option("--no-vehicle-params", "no_vehicle_params", is_flag=True,
-              help="Leave the vehicles' WPNAV_*, PSC_JERK_XY, ATC_INPUT_TC as they are "
-                   "(`fly` still refuses a vehicle whose values are not plan.json's).")
+              help="Set no parameter at all, not even the navigation values the scenario "
+                   "names (a copter's tuning is never written). The plan is still "
+                   "predicted again with each copter's own values.")
 @click.option("--any-firmware", "any_firmware", is_flag=True,
               help="Upload to a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x (the "
                    "firmware the planner's flight model follows), saying what is then not "
@@ -187,10 +188,13 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_para
 
     With uavN.fence (and uavN.rally, fence.parm) beside it, each vehicle also gets its
     fence, rally points and fence parameters, each read back and verified. With a
-    plan.json, each vehicle also gets the [vehicle] parameters the plan predicted its
-    flown path with (WPNAV_SPEED, WPNAV_ACCEL, ...): those it holds other values of are
-    set and read back, and the line says which. Exits 0 only when every vehicle holds
-    exactly what its files say.
+    plan.json, each vehicle's firmware and flight parameters are read first: where they
+    are not those the plan was predicted with, the flight is predicted again with the
+    copters' own values and the upload goes on only when every promise still holds
+    (saying so), else nothing is sent. A copter's tuning (PSC_*, ATC_*, ANGLE_MAX, ...) is
+    never written; the navigation values the scenario names ([vehicle] WPNAV_SPEED, ...)
+    are, and the upload says which before it sends anything. Exits 0 only when every
+    vehicle holds exactly what its files say.
     """
     sysids = parse_sysids(sysid_text)
     key = load_key(signing_key) if signing_key else None
@@ -225,16 +229,26 @@ def upload_folder(mission_dir: Path, sysids: list[int], urls: list[str], *,
     try:  # every file is read before any vehicle is touched
         missions = [tuple(read_waypoints(f)) for f in files]
         fences = [None if no_fence else read_fence_set(mission_dir, f.stem) for f in files]
-        params = {} if no_vehicle_params else plan_vehicle_params(mission_dir)
     except MissionFileError as exc:
         raise BadInput(f"{exc}; no vehicle was contacted") from None
+    planned = plan_fleet(mission_dir)
+    copters = planned.fleet() if planned is not None else (None,) * len(files)
     if capacity is not None:
         for f, m in zip(files, missions):
             if len(m) > capacity:
                 raise BadInput(f"{f}: {f.name} has {len(m)} items, more than --capacity "
                                f"{capacity}; no vehicle was contacted")
-    assignments = [Assignment(f.stem, s, m, fence, params)
-                   for f, s, m, fence in zip(files, sysids, missions, fences)]
+    assignments = [Assignment(f.stem, s, m, fence,
+                              {} if c is None or no_vehicle_params else c.to_set(), c)
+                   for f, s, m, fence, c in zip(files, sysids, missions, fences, copters)]
+    fit = None
+    if planned is not None:
+        from ..flight.fit import fit_fleet
+
+        labels = [f"{a.name} (sysid {a.sysid})" for a in assignments]
+
+        def fit(actual):
+            return fit_fleet(planned, actual, labels)
     if not no_fence and all(fence is None for fence in fences):
         click.echo(f"note: {mission_dir} has no uavN.fence files: missions only (plan "
                    "writes them; --no-fence says so on purpose)", err=True)
@@ -245,7 +259,8 @@ def upload_folder(mission_dir: Path, sysids: list[int], urls: list[str], *,
     board = ProgressBoard([(a.name, a.sysid) for a in assignments])
     return upload_swarm(assignments, urls, signing_key=signing_key, timing=timing,
                         discover_timeout_s=discover_timeout_s, on_progress=board,
-                        any_firmware=any_firmware,
+                        any_firmware=any_firmware, fit=fit,
+                        on_note=lambda text: click.echo(f"note: {text}", err=True),
                         on_warning=lambda name, sysid, text: click.echo(
                             f"warning: {name} (sysid {sysid}): {text}", err=True))
 

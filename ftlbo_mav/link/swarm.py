@@ -14,6 +14,8 @@ from dataclasses import dataclass, field, replace
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from .. import clock
+from ..ardupilot.copters import FLIGHT_PARAMS, Copter, is_tuning, release_for
+from ..ardupilot.fence import param_equal
 from ..ardupilot.firmware import (
     SUPPORTED,
     UNANSWERED,
@@ -35,21 +37,30 @@ from .mission_protocol import (
     download_mission,
     run_transfer,
 )
-from .params import ParamError, set_vehicle_params
+from .params import ParamError, read_params, set_vehicle_params
 
 
 @dataclass(frozen=True)
 class Assignment:
     """Which mission goes to which vehicle: ``uav1`` -> system id 1; ``fence``: its
     fence, rally points and fence parameters, sent after the mission (None: none);
-    ``params``: the plan's ``[vehicle]`` parameters (plan.json ``vehicle``), set after
-    the fence where the vehicle holds other values, and read back."""
+    ``params``: the navigation values the scenario named (plan.json
+    ``uavs[].vehicle.set``), set after the fence where the vehicle holds other values,
+    and read back: never a tuning value (:func:`~ftlbo_mav.ardupilot.copters.is_tuning`);
+    ``copter``: the copter its flight was predicted with (None: not checked)."""
 
     name: str
     sysid: int
     items: tuple[MissionItem, ...]
     fence: FenceSet | None = None
     params: Mapping[str, float] = field(default_factory=dict)
+    copter: Copter | None = None
+
+    def __post_init__(self) -> None:
+        tuning = [n for n in self.params if is_tuning(n)]
+        if tuning:
+            raise ValueError(f"{self.name}: {', '.join(tuning)} is the copter's tuning: "
+                             "upload never writes it")
 
 
 @dataclass(frozen=True)
@@ -176,17 +187,71 @@ def _set_vehicle_params(channel, a: Assignment, timing: Timing) -> tuple[bool, s
     return True, "set " + ", ".join(f"{n} {old:g} -> {new:g}" for n, old, new in changed)
 
 
+def _fit_check(todo: Sequence[Assignment], found, versions: Mapping[int, int | None],
+               fit, timing: Timing, emit, on_note) -> dict[int, str]:
+    """Read every vehicle's flight parameters, judge the plan with them (``fit``) and say
+    what will be set; per system id why nothing may be sent (empty: go on)."""
+    def read(a: Assignment) -> dict[str, float | None]:
+        emit(ProgressEvent(a.name, a.sysid, "parameters"))
+        with found[a.sysid].channel(a.sysid) as channel:
+            return read_params(channel, FLIGHT_PARAMS, timing=timing)
+
+    with clock.Executor(len(todo)) as pool:
+        onboard = list(pool.map(read, todo))
+    why: dict[int, str] = {}
+    actual = []
+    for a, values in zip(todo, onboard):
+        silent = [n for n in a.params if values.get(n) is None]
+        if silent:
+            why[a.sysid] = (f"{a.name} (sysid {a.sysid}) does not answer for {silent[0]} "
+                            "(PARAM_REQUEST_READ), which the plan sets: not an ArduCopter "
+                            "parameter it has; nothing was sent to any vehicle")
+        held = {n: v for n, v in values.items() if v is not None}
+        release = release_for(versions.get(a.sysid), a.copter.release)
+        actual.append(a.copter.with_onboard(held, release=release,
+                                            source=f"sysid {a.sysid}"))
+    if why:
+        return why
+    verdict = fit(actual)
+    say = on_note or (lambda _t: None)
+    for line in verdict.changed:
+        say(f"{line}: the copter's own values, left as they are")
+    if verdict.broken:
+        lost = "; ".join(verdict.broken)
+        return {a.sysid: f"refused, nothing sent to any vehicle: {lost} (plan again with "
+                f"these copters' values: [vehicle] params_file or the values by name)"
+                for a in todo}
+    if verdict.kept is not None:
+        say(f"predicted again with the copters' own values: {verdict.kept}: every "
+            "promise holds")
+    for a, values in zip(todo, onboard):
+        sets = [(n, values[n], v) for n, v in a.params.items()
+                if values[n] is None or not param_equal(n, v, values[n])]
+        say(f"{a.name} (sysid {a.sysid}): " + (
+            "sets " + ", ".join(f"{n} {old:g} -> {new:g}" for n, old, new in sets)
+            if sets else "sets no parameter (its tuning is never written)"))
+    return {}
+
+
 def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                  signing_key: bytes | None = None, timing: Timing | None = None,
                  discover_timeout_s: float = 5.0,
                  on_progress: OnProgress | None = None, any_firmware: bool = False,
-                 on_warning=None) -> list[VehicleResult]:
+                 on_warning=None, fit=None, on_note=None) -> list[VehicleResult]:
     """Upload and verify every assignment concurrently; results in assignment order.
 
     First every vehicle found is asked which firmware it runs (:mod:`.firmware`): when
     one is not a firmware the flight model follows, nothing is sent to any vehicle and
     each result says why, unless ``any_firmware``: then ``on_warning(name, sysid, text)``
-    hears what is no longer promised for it and the upload goes on."""
+    hears what is no longer promised for it and the upload goes on.
+
+    Then, with ``fit`` (a function of the copters as they are, one per assignment, to a
+    :class:`~ftlbo_mav.flight.fit.Fit`), every vehicle's flight parameters are read and
+    the plan judged with them and the release each runs: when a promise is lost, or a
+    parameter the plan sets is one a vehicle does not have, nothing is sent to any
+    vehicle and each result says why; else ``on_note(text)`` hears what differed, what
+    the prediction with the copters' own values keeps, and what each vehicle will be
+    set to, before anything is sent."""
     timing = timing or Timing()
     emit = on_progress or (lambda _e: None)
     started = clock.monotonic()
@@ -265,6 +330,8 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
 
         todo = [a for a in assignments if a.sysid in found]
 
+        versions: dict[int, int | None] = {}
+
         def firmware(a: Assignment) -> tuple[bool, str | None]:
             emit(ProgressEvent(a.name, a.sysid, "firmware"))
             beat = found[a.sysid].heartbeats.get(a.sysid)
@@ -272,8 +339,16 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                         autopilot=None if beat is None else beat.autopilot)
             with found[a.sysid].channel(a.sysid) as channel:
                 version = request_version(channel, timeout_s=timing.timeout_s)
+            versions[a.sysid] = version
             silent = version is None and not heartbeat_findings(**kind)
             return silent, firmware_problem(**kind, version=version)
+
+        def refuse_all(why: Mapping[int, str], default: str) -> list[VehicleResult]:
+            for a in todo:
+                msg = why.get(a.sysid, default)
+                results[a.sysid] = VehicleResult(a.name, a.sysid, False, msg, 0.0)
+                emit(ProgressEvent(a.name, a.sysid, "failed", message=msg))
+            return [results[a.sysid] for a in assignments]
 
         if todo:
             with clock.Executor(len(todo)) as pool:
@@ -297,6 +372,11 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
             for a, p in refused:
                 if on_warning is not None:
                     on_warning(a.name, a.sysid, any_firmware_warning(p))
+        if todo and fit is not None and len(todo) == len(assignments) and all(
+                a.copter is not None for a in todo):
+            why = _fit_check(todo, found, versions, fit, timing, emit, on_note)
+            if why:
+                return refuse_all(why, "not uploaded: " + next(iter(why.values())))
         if todo:
             with clock.Executor(len(todo)) as pool:
                 for r in pool.map(one, todo):

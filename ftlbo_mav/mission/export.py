@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..ardupilot.navigation import vehicle_navigation, vehicle_params
+from ..ardupilot.copters import Copter, copter_of
+from ..ardupilot.navigation import VEHICLE_PARAMS, vehicle_navigation
 from ..energy import battery_from_document
 from ..errors import MissionFileError
 from ..gnss import budget_from_document
@@ -172,7 +173,8 @@ def plan_document(
         "navigation": _navigation_document(plan),
         "corner_allowance": plan.scenario.mission.corner_allowance_m,
         "mission": {"end_action": sc.mission.end_action, "speed": sc.mission.speed_m_s},
-        "vehicle": vehicle_params(sc.vehicle),
+        # the first copter's values (every UAV's own, with what upload sets: uavs[].vehicle)
+        "vehicle": dict(sc.fleet()[0].document()["params"]),
         "predicted": _predicted_document(plan),
         **({} if sc.battery is None else {"battery": sc.battery.document()}),
         "min_separation": plan.scenario.min_separation_m,
@@ -214,6 +216,7 @@ def plan_document(
                 "waypoints": _points(path),
                 "mission_file": f"{m.name}.waypoints" if written else None,
                 "mission_sha256": (digests or {}).get(m.name) if written else None,
+                "vehicle": sc.fleet()[n].document(),
                 **_uav_predicted(plan, n),
                 **_uav_battery(plan, n),
                 **_fence_document(m.name, fences, n, written),
@@ -226,6 +229,17 @@ def plan_document(
         "params_file": FENCE_PARAMS_FILE if written else None,
         "exclusion_radii_m": list(fences[0].exclusion_radii_m),
     }})
+
+
+def _copters_from_document(doc: dict) -> tuple[Copter, ...]:
+    """Each UAV's copter as the plan predicted it (``uavs[].vehicle``); a plan written
+    before them: the top-level ``vehicle`` for every UAV, nothing to set."""
+    uavs = doc["uavs"]
+    if all(isinstance(u.get("vehicle"), dict) for u in uavs):
+        return tuple(Copter.from_document(u["vehicle"]) for u in uavs)
+    nav = vehicle_navigation({str(k): float(v) for k, v in (doc.get("vehicle") or {}).items()
+                              if k in VEHICLE_PARAMS})
+    return (copter_of(nav, source="plan.json"),) * len(uavs)
 
 
 def _navigation_document(plan: Plan) -> dict:
@@ -467,6 +481,7 @@ def plan_from_document(doc: dict, *, source: str = "plan.json") -> Plan:
                 "max_error", MAX_FORMATION_ERROR_M)),
             vehicle=vehicle_navigation({str(k): float(v)
                                         for k, v in (doc.get("vehicle") or {}).items()}),
+            copters=_copters_from_document(doc),
             battery=battery_from_document(doc.get("battery")),
         )
         waypoints = doc["waypoints"]

@@ -393,8 +393,11 @@ def _plan_legs(scenario: Scenario, settings: PlannerSettings, base: PlanningProb
 
 
 def flight_model(scenario: Scenario) -> FlightModel:
-    """How the scenario's copters fly: its ``[vehicle]`` parameters and cruise speed."""
-    return FlightModel(nav=scenario.vehicle, speed_m_s=scenario.mission.speed_m_s)
+    """How the scenario's copters fly: each UAV's own copter (``[vehicle]``, its release
+    and parameters) and the cruise speed."""
+    navs = tuple(c.nav for c in scenario.fleet())
+    return FlightModel(nav=navs[0], speed_m_s=scenario.mission.speed_m_s,
+                       navs=None if len(set(navs)) == 1 else navs)
 
 
 def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Plan:

@@ -40,10 +40,13 @@ HOLD_S = 1
 @dataclass(frozen=True)
 class FlightModel:
     """How the copters fly a plan: ArduCopter's parameters (the scenario's
-    ``[vehicle]``) and the cruise speed (``[mission] speed``; None: WPNAV_SPEED)."""
+    ``[vehicle]``) and the cruise speed (``[mission] speed``; None: WPNAV_SPEED);
+    ``navs``: each UAV's own parameters and release (a fleet of different copters;
+    None: ``nav`` for every UAV)."""
 
     nav: Navigation = Navigation()
     speed_m_s: float | None = None
+    navs: tuple[Navigation, ...] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,8 +156,11 @@ def predict(paths: np.ndarray, *, model: FlightModel, centres: np.ndarray,
     and measure it against the cylinders ``centres`` ``(K, 2)``, ``radii`` ``(K,)``
     (their own radii, no clearance); ``pair_error_m``: the navigation budget's combined
     error of two copters, for ``true_separation``."""
+    navs = model.navs
+    if navs is not None and len(set(navs)) == 1:
+        navs = None if navs[0] == model.nav else navs
     shapes, group, shift = fly_groups(paths, nav=model.nav, speed_m_s=model.speed_m_s,
-                                      holds_s=holds_s)
+                                      holds_s=holds_s, navs=navs)
     times, pos = _common_clock(shapes, group, shift)
     N = pos.shape[0]
     radii = np.asarray(radii, float)

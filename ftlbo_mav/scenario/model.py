@@ -12,6 +12,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..ardupilot.copters import Copter, copter_of
 from ..ardupilot.navigation import Navigation
 from ..energy import Battery
 from ..geo import LocalFrame
@@ -174,6 +175,10 @@ class Scenario:
     vehicle: Navigation = field(default_factory=Navigation)
     """How the copters fly (the ``[vehicle]`` table: ArduCopter's parameters, its defaults
     unless set); the planner predicts the flown path with it."""
+    copters: tuple[Copter, ...] = ()
+    """Each UAV's copter (the ``[vehicle]`` table and its ``[vehicle.uavN]``: release,
+    parameters and where they come from); empty: ArduCopter's defaults for every UAV
+    (:meth:`fleet`)."""
     navigation: NavigationBudget = field(default_factory=budget)
     """How well the copters know where they are (the ``[navigation]`` table,
     :mod:`ftlbo_mav.gnss`): the clearance and the separation are kept on the true
@@ -184,6 +189,12 @@ class Scenario:
     dropped_obstacles: int = 0
     """Obstacles of the file that cannot touch any UAV's path inside the area (their
     disc, radius + clearance, does not reach it): left out of ``obstacles``."""
+
+    def fleet(self) -> tuple[Copter, ...]:
+        """One :class:`~ftlbo_mav.ardupilot.copters.Copter` per UAV."""
+        if len(self.copters) == len(self.offsets):
+            return self.copters
+        return (copter_of(self.vehicle),) * len(self.offsets)
 
     @property
     def true_clearance_m(self) -> float:

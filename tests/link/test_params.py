@@ -60,15 +60,15 @@ def test_a_parameter_the_vehicle_does_not_have_is_a_param_error_and_nothing_is_s
 
 
 def test_parameters_are_asked_a_window_at_a_time_not_one_round_trip_each():
-    """18 parameters over a link of 0.1 s each way: asked a window at a time, so a few
-    round trips, not 18 (virtual time)."""
+    """33 parameters over a link of 0.1 s each way: asked a window at a time, so a few
+    round trips, not 33 (virtual time)."""
     from ftlbo_mav.link.params import PARAM_WINDOW
 
     ch = channel(faults=Faults(latency_s=0.1))
     t0 = ch.clock()
     assert read_vehicle_params(ch, PLANNED, timing=TIMING) == []
     round_trips = (ch.clock() - t0) / 0.2
-    assert len(PLANNED) == 18 and round_trips <= 2 * -(-len(PLANNED) // PARAM_WINDOW) + 1
+    assert len(PLANNED) == 33 and round_trips <= 2 * -(-len(PLANNED) // PARAM_WINDOW) + 1
 
 
 def test_a_shared_link_divides_the_window_among_its_vehicles():

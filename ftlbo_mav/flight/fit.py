@@ -1,0 +1,130 @@
+"""Does the plan still fit the copters as they truly are?
+
+A plan is predicted with each copter's release and parameters as the scenario described
+them (plan.json ``uavs[].vehicle``). Before anything is sent (``upload``) or armed
+(``fly``) each copter is asked what it runs and what its values are; where they differ,
+the flight is predicted again with the copters' own values and judged on the plan's
+promises: the clearance from every obstacle (with the navigation budget), the separation
+between copters where they truly are, the area, the altitude band and the formation
+bound. The copters are never made to fit the plan: their tuning is theirs.
+
+Pure computation: the values read are given.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..ardupilot.copters import Copter, differences
+from ..planning.predicted import FlightModel, Prediction, predict
+from .metrics import slot_errors
+from .planned import PlannedFlight
+
+_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The verdict: ``changed`` one line per copter whose values or release differ from
+    the plan's; ``kept`` what the flight predicted with their own values keeps (None:
+    nothing differed, nothing predicted again); ``broken`` one line per promise lost,
+    naming the copter, its values and the promise (empty: every promise holds)."""
+
+    changed: tuple[str, ...]
+    kept: str | None
+    broken: tuple[str, ...]
+
+    @property
+    def holds(self) -> bool:
+        return not self.broken
+
+
+def describe_change(planned: Copter, actual: Copter) -> str:
+    """What differs on one copter, e.g. ``PSC_VELXY_P 1.41 (planned 2), ArduCopter 4.6``."""
+    parts = [f"{n} {b:g} (planned {a:g})" for n, a, b in differences(planned, actual)]
+    if planned.release != actual.release:
+        parts.append(f"ArduCopter {actual.release} (planned {planned.release})")
+    return ", ".join(parts)
+
+
+def predict_fleet(planned: PlannedFlight, copters: Sequence[Copter]) -> Prediction | None:
+    """The flight of ``planned`` predicted with ``copters`` (one per UAV); None when its
+    missions do not say how it is flown (a plan written without the prediction)."""
+    flown_with = planned.speed_and_holds()
+    if flown_with is None:
+        return None
+    speed, holds = flown_with
+    navs = tuple(c.nav for c in copters)
+    model = FlightModel(nav=navs[0], speed_m_s=speed, navs=navs)
+    return predict(planned.paths, model=model, centres=planned.centres, radii=planned.radii,
+                   holds_s=holds, pair_error_m=planned.navigation.pair_m)
+
+
+def fit_fleet(planned: PlannedFlight, actual: Sequence[Copter],
+              labels: Sequence[str] | None = None) -> Fit:
+    """Judge ``planned`` flown by the ``actual`` copters (one per UAV, as read from
+    them). ``labels``: how each copter is named (default its UAV name)."""
+    labels = list(labels or planned.names)
+    fleet = planned.fleet()
+    changes = [describe_change(p, a) for p, a in zip(fleet, actual)]
+    changed = tuple(f"{lab}: {c}" for lab, c in zip(labels, changes) if c)
+    if not changed:
+        return Fit((), None, ())
+    pred = predict_fleet(planned, actual)
+    if pred is None:
+        return Fit(changed, None, tuple(
+            f"{lab}: flies with {c}, and this plan holds no prediction to check it "
+            "against: plan again" for lab, c in zip(labels, changes) if c))
+    broken = []
+
+    def blame(n: int) -> str:
+        """Whose values lose a promise at UAV ``n``: its own, else every changed one."""
+        if changes[n]:
+            return f"{labels[n]} with its {changes[n]}"
+        return " and ".join(f"{lab} with its {c}" for lab, c in zip(labels, changes) if c)
+
+    need = planned.clearance_m + planned.navigation.horizontal_m
+    for n in np.flatnonzero(pred.clearance < need - _TOL):
+        i, k = pred.worst[n]
+        broken.append(f"{blame(int(n))}: {labels[n]}'s flown path is predicted to pass "
+                      f"{pred.clearance[n]:.2f} m from obstacle {k + 1} "
+                      f"{pred.times[i]:.1f} s into its legs; the plan keeps {need:.2f} m "
+                      "(clearance and navigation budget)")
+    true = pred.separation if pred.true_separation is None else pred.true_separation
+    for n in np.flatnonzero(true < planned.min_separation_m - _TOL):
+        broken.append(f"{blame(int(n))}: {labels[n]} is predicted as close as "
+                      f"{true[n]:.2f} m to another copter where they truly are; the plan "
+                      f"keeps {planned.min_separation_m:g} m (min_separation)")
+    if planned.area is not None:
+        lo, hi = planned.area
+        xy = pred.positions[..., :2]
+        out = ((xy < lo - _TOL) | (xy > hi + _TOL)).any(axis=(1, 2))
+        for n in np.flatnonzero(out):
+            broken.append(f"{blame(int(n))}: {labels[n]}'s flown path is predicted to "
+                          "leave the area")
+    if planned.band is not None:
+        z = pred.positions[..., 2]
+        low, high = planned.band
+        for n in np.flatnonzero(((z < low - _TOL) | (z > high + _TOL)).any(axis=1)):
+            broken.append(f"{blame(int(n))}: {labels[n]}'s flown path is predicted to "
+                          f"leave the altitude band [{low:g}, {high:g}] m")
+    worst_slot = None
+    if planned.count > 1:
+        errors = slot_errors(pred.positions.transpose(1, 0, 2), planned.offsets)  # (T, N)
+        worst_slot = errors.max(axis=0)
+        bound = planned.formation_bound_m
+        if bound is not None:
+            for n in np.flatnonzero(worst_slot > bound + _TOL):
+                broken.append(f"{blame(int(n))}: {labels[n]} is predicted up to "
+                              f"{worst_slot[n]:.2f} m from its slot in the formation; "
+                              f"`fly` counts {bound:.2f} m a departure (formation_bound)")
+    kept = (f"clearance {float(pred.clearance.min()):.2f} m (kept {need:.2f}), separation "
+            f"{float(true.min()):.2f} m (kept {planned.min_separation_m:g})")
+    if worst_slot is not None:
+        kept += f", formation worst {float(worst_slot.max()):.2f} m"
+        if planned.formation_bound_m is not None:
+            kept += f" (bound {planned.formation_bound_m:.2f})"
+    return Fit(changed, kept, tuple(broken))
