@@ -2,13 +2,14 @@
 firmware it runs.
 
 The flown path the planner predicts (:mod:`.wpnav`, :mod:`.poscontrol`, :mod:`.scurve`)
-follows ArduCopter 4.5's waypoint navigation and position control: libraries/AC_WPNav/
+follows ArduCopter's waypoint navigation and position control: libraries/AC_WPNav/
 AC_WPNav.cpp, libraries/AC_AttitudeControl/AC_PosControl.cpp and libraries/AP_Math/
-SCurve.cpp as on the Copter-4.5 branch, and is tested against ArduCopter 4.5.6 SITL
-(``tests/data/ardupilot-4.5.6/``). Other versions change them (4.4 and 4.6 differ in
-AC_PosControl's shaping and WPNAV_*/PSC_* handling), and other autopilots fly paths of
-their own, so for them the predicted path, the clearance kept on it and its timing are
-not promised.
+SCurve.cpp as on the Copter-4.5 and Copter-4.6 branches (where they differ, both, chosen
+by the copter's release), and is tested against ArduCopter 4.5.6 and 4.6.3 SITL
+(``tests/data/ardupilot-4.5.6/``, ``ardupilot-4.6.3/``). Other releases (4.4, 4.7) are
+not held to recordings, and other autopilots fly paths of their own, so for them the
+predicted path, the clearance kept on it and its timing are not promised; the refusal
+names the nearest modelled release.
 
 How a vehicle says it (libraries/GCS_MAVLink/GCS_Common.cpp):
 
@@ -29,6 +30,8 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from .copters import nearest_release
+
 AUTOPILOT_VERSION_ID = R.MAVLINK_MSG_ID_AUTOPILOT_VERSION  # 148
 
 # FIRMWARE_VERSION_TYPE (libraries/AP_Common/AP_FWVersion.h, MAVLink common.xml)
@@ -36,12 +39,14 @@ VERSION_TYPES = {R.FIRMWARE_VERSION_TYPE_DEV: "dev", R.FIRMWARE_VERSION_TYPE_ALP
                  R.FIRMWARE_VERSION_TYPE_BETA: "beta", R.FIRMWARE_VERSION_TYPE_RC: "rc",
                  R.FIRMWARE_VERSION_TYPE_OFFICIAL: "official"}
 
-SUPPORTED_SERIES = (4, 5)
-"""ArduCopter 4.5.x: the branch whose AC_WPNav / AC_PosControl / SCurve the model follows."""
+SUPPORTED_SERIES = ((4, 5), (4, 6))
+"""ArduCopter 4.5.x and 4.6.x: the branches whose AC_WPNav / AC_PosControl / SCurve the
+model follows, each where it differs (:mod:`.copters` ``RELEASES``), each held to
+recordings of its SITL (``tests/data/ardupilot-4.5.6``, ``ardupilot-4.6.3``)."""
 
 SUPPORTED_TYPES = frozenset({R.FIRMWARE_VERSION_TYPE_RC, R.FIRMWARE_VERSION_TYPE_OFFICIAL})
-"""Releases and release candidates of 4.5 (cut from the Copter-4.5 branch, its navigation
-frozen); dev, alpha and beta builds may carry navigation changes not in the release."""
+"""Releases and release candidates (cut from a Copter-4.x branch, its navigation frozen);
+dev, alpha and beta builds may carry navigation changes not in the release."""
 
 # The multirotor frames ArduCopter reports (AP_Motors get_frame_mav_type); the model is a
 # multirotor's, so a helicopter (AP_MotorsHeli, its own attitude control) is not one.
@@ -50,7 +55,7 @@ COPTER_TYPES = frozenset({
     R.MAV_TYPE_COAXIAL, R.MAV_TYPE_DECAROTOR, R.MAV_TYPE_DODECAROTOR,
 })
 
-SUPPORTED = "ArduCopter 4.5.x (official or rc) on a multirotor"
+SUPPORTED = "ArduCopter 4.5.x or 4.6.x (official or rc) on a multirotor"
 NOT_PROMISED = "the predicted flown path, the clearance kept on it and its timing"
 UNANSWERED = "it did not answer AUTOPILOT_VERSION (MAV_CMD_REQUEST_MESSAGE 148)"
 ANY_FIRMWARE_HINT = " (--any-firmware to go on anyway)"
@@ -80,7 +85,7 @@ class Firmware:
 
     @property
     def supported(self) -> bool:
-        return (self.major, self.minor) == SUPPORTED_SERIES and self.type in SUPPORTED_TYPES
+        return (self.major, self.minor) in SUPPORTED_SERIES and self.type in SUPPORTED_TYPES
 
 
 RECORDED = Firmware(major=4, minor=5, patch=6, type=R.FIRMWARE_VERSION_TYPE_OFFICIAL)
@@ -117,7 +122,12 @@ def firmware_problem(*, vehicle_type: int | None, autopilot: int | None,
     elif not found:
         fw = Firmware.decode(version)
         if not fw.supported:
-            found.append(f"it runs {fw.describe()}")
+            series = (fw.major, fw.minor)
+            near = nearest_release(fw.major, fw.minor)
+            found.append(f"it runs {fw.describe()}" + (
+                "" if series in SUPPORTED_SERIES else
+                f" (no recordings of {fw.major}.{fw.minor} hold the model to it; the "
+                f"nearest modelled release is ArduCopter {near})"))
     if not found:
         return None
     return f"firmware: {'; '.join(found)}; the flight model is {SUPPORTED}'s{ANY_FIRMWARE_HINT}"

@@ -332,7 +332,7 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
 @click.option("--flight-timeout", type=FiniteFloat(1, 86_400), default=900.0,
               show_default=True, help="Abort if the missions have not ended by then.")
 @click.option("--any-firmware", "any_firmware", is_flag=True,
-              help="Fly a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x (the "
+              help="Fly a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x or 4.6.x (the "
                    "firmware the planner's flight model follows), saying what is then not "
                    "promised. Without it pre-flight refuses it.")
 @click.option("--link", "link_text", default=None,

@@ -2,7 +2,7 @@
 compared as ``upload`` verifies) and the ``[vehicle]`` parameters its flown path was
 predicted with (plan.json ``vehicle``: WPNAV_SPEED, WPNAV_ACCEL, ...), has a 3D GPS fix,
 passes its pre-arm checks, runs the firmware the flight model follows
-(AUTOPILOT_VERSION: ArduCopter 4.5.x, :mod:`ftlbo_mav.ardupilot.firmware`), and has a
+(AUTOPILOT_VERSION: ArduCopter 4.5.x or 4.6.x, :mod:`ftlbo_mav.ardupilot.firmware`), and has a
 GPS fix, accuracy and EKF that hold it to the plan's navigation budget
 (:mod:`.navigation`). Any failure stops the flight here, one line per vehicle, before
 anything is armed."""
@@ -12,15 +12,18 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 
 from .. import clock
+from ..ardupilot.copters import FLIGHT_PARAMS, release_for
 from ..ardupilot.firmware import any_firmware_warning, firmware_problem
+from ..ardupilot.navigation import vehicle_param_differences
 from ..errors import FtlboError
 from ..link.codec import mission_differences
 from ..link.endpoints import is_ready, readiness_problems
 from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
-from ..link.params import read_vehicle_params
+from ..link.params import read_params
 from ..link.transfer import Timing
 from .battery import preflight_problem as battery_preflight
+from .fit import Fit, fit_fleet
 from .fleet import concurrently
 from .launch import gate_as_onboard
 from .navigation import describe, ekf_report, gps_report, preflight_problems
@@ -41,25 +44,36 @@ class PreflightError(FtlboError):
 
 def vehicle_param_problem(differences: Sequence[tuple[str, float | None, float]]
                           ) -> str | None:
-    """One sentence for a vehicle whose parameters are not the plan's ``[vehicle]`` ones
+    """One sentence for a vehicle that does not hold the navigation values the plan sets
     (``(name, onboard or None, planned)``, :func:`~ftlbo_mav.link.params.read_vehicle_params`);
     None when there are none."""
     if not differences:
         return None
     held = [(n, have, want) for n, have, want in differences if have is not None]
     silent = [n for n, have, _want in differences if have is None]
-    parts = [f"{n} is {have:g} on the vehicle, the plan predicted its path with {want:g}"
+    parts = [f"{n} is {have:g} on the vehicle, the plan sets {want:g}"
              for n, have, want in held]
     if silent:
         parts.append(f"{', '.join(silent)} not answered (PARAM_REQUEST_READ): the path the "
                      "plan predicts cannot be checked")
     text = "; ".join(parts)
     if held:
-        them = "it" if len(held) == 1 else "them"
-        values = ", ".join(f"{n} = {have:g}" for n, have, _want in held)
-        text += (f" (set {them}: `ftlbo-mav upload` does, or re-plan with [vehicle] "
-                 f"{values})")
+        text += " (`ftlbo-mav upload` sets the values the scenario names)"
     return text
+
+
+def fleet_fit(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
+              onboard: Sequence[Mapping[str, float | None]],
+              versions: Sequence[int | None]) -> Fit:
+    """The plan judged with the copters as they are: their flight parameters as read
+    (``onboard``) and the release each runs (``versions``: AUTOPILOT_VERSION, None: the
+    plan's)."""
+    fleet = planned.fleet()
+    actual = [c.with_onboard({n: x for n, x in values.items() if x is not None},
+                             release=release_for(version, c.release),
+                             source=f"sysid {v.sysid}")
+              for c, v, values, version in zip(fleet, vehicles, onboard, versions)]
+    return fit_fleet(planned, actual, [f"{v.name} (sysid {v.sysid})" for v in vehicles])
 
 
 def navigation_problems(planned: PlannedFlight, v: FlightVehicle) -> list[str]:
@@ -91,24 +105,27 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
               timing: Timing, ready_timeout_s: float, any_firmware: bool = False,
               say: Callable[[str], None] = lambda _t: None) -> None:
     """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission.
-    A vehicle whose firmware is not ArduCopter 4.5.x is one that is not, unless
+    A vehicle whose firmware is not ArduCopter 4.5.x or 4.6.x is one that is not, unless
     ``any_firmware``: then ``say`` hears what is no longer promised for it."""
-    params: Mapping[str, float] = planned.vehicle or {}
+    fleet = planned.fleet()
     firmware = firmware_problems(vehicles, timeout_s=timing.timeout_s)
     for v, problem in zip(vehicles, firmware):
         if problem is not None and any_firmware:
             say(f"warning: {v.name} (sysid {v.sysid}): {any_firmware_warning(problem)}")
 
+    values: dict[int, Mapping[str, float | None]] = {}
+
     def onboard_problems(pair) -> list[str]:
-        vehicle, expected, fence = pair
+        vehicle, expected, fence, copter = pair
         try:
             with vehicle.link.channel(vehicle.sysid) as channel:
                 onboard = download_mission(channel, timing=timing)
                 fence_diff = ([] if fence is None
                               else fence_differences(channel, fence, timing=timing))
-                param_diff = read_vehicle_params(channel, params, timing=timing)
+                values[vehicle.sysid] = read_params(channel, FLIGHT_PARAMS, timing=timing)
         except FtlboError as exc:
             return [f"cannot read its mission or fence back: {exc}"]
+        param_diff = vehicle_param_differences(copter.to_set(), values[vehicle.sysid])
         why = []
         diff = mission_differences(gate_as_onboard(expected, onboard, planned.frame), onboard)
         if diff:
@@ -123,7 +140,23 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
         return why
 
     fences = planned.fences or (None,) * len(planned.missions)
-    onboard = concurrently(onboard_problems, list(zip(vehicles, planned.missions, fences)))
+    onboard = concurrently(onboard_problems, list(zip(vehicles, planned.missions, fences,
+                                                      fleet)))
+    if len(values) == len(vehicles):
+        verdict = fleet_fit(planned, vehicles, [values[v.sysid] for v in vehicles],
+                            [v.status.firmware_version for v in vehicles])
+        for line in verdict.changed:
+            say(f"note: {line}: the copter's own values, flown as they are")
+        if verdict.broken:
+            onboard = [list(why) + [f"the plan does not fit it: {b}" for b in verdict.broken
+                                    if b.startswith(f"{v.name} (sysid {v.sysid})")]
+                       for v, why in zip(vehicles, onboard)]
+            if not any(onboard):  # a promise lost by all of them: said for each
+                onboard = [[f"the plan does not fit the fleet: {'; '.join(verdict.broken)}"]
+                           for _v in vehicles]
+        elif verdict.kept is not None:
+            say(f"note: predicted again with the copters' own values: {verdict.kept}: "
+                "every promise holds")
     deadline = clock.monotonic() + ready_timeout_s
 
     def reported(v: FlightVehicle) -> bool:

@@ -45,14 +45,26 @@ def test_the_recorded_copter_has_no_problem():
     assert firmware_problem(vehicle_type=R.MAV_TYPE_HEXAROTOR, autopilot=APM, version=rc) is None
 
 
+def test_both_modelled_releases_are_flown_official_or_rc():
+    for fw in (Firmware(4, 6, 3, 255), Firmware(4, 6, 0, R.FIRMWARE_VERSION_TYPE_RC),
+               Firmware(4, 5, 7, 255)):
+        assert firmware_problem(vehicle_type=QUAD, autopilot=APM, version=fw.encode()) is None
+
+
 def test_other_versions_are_refused_naming_what_runs_and_what_is_supported():
-    for fw, text in ((Firmware(4, 4, 4, 255), "4.4.4 official"),
-                     (Firmware(4, 6, 0, 255), "4.6.0 official"),
+    tail = ("; the flight model is ArduCopter 4.5.x or 4.6.x (official or rc) on a "
+            "multirotor's (--any-firmware to go on anyway)")
+    for fw, text in ((Firmware(4, 6, 4, R.FIRMWARE_VERSION_TYPE_BETA), "4.6.4 beta"),
                      (Firmware(4, 5, 7, R.FIRMWARE_VERSION_TYPE_BETA), "4.5.7 beta"),
                      (Firmware(4, 5, 0, R.FIRMWARE_VERSION_TYPE_DEV), "4.5.0 dev")):
         problem = firmware_problem(vehicle_type=QUAD, autopilot=APM, version=fw.encode())
-        assert problem == (f"firmware: it runs {text}; the flight model is ArduCopter 4.5.x "
-                           "(official or rc) on a multirotor's (--any-firmware to go on anyway)")
+        assert problem == f"firmware: it runs {text}{tail}"
+    for fw, text, near in ((Firmware(4, 4, 4, 255), "4.4.4 official", "4.5"),
+                           (Firmware(4, 7, 0, 255), "4.7.0 official", "4.6")):
+        problem = firmware_problem(vehicle_type=QUAD, autopilot=APM, version=fw.encode())
+        assert problem == (f"firmware: it runs {text} (no recordings of {text[:3]} hold the "
+                           f"model to it; the nearest modelled release is ArduCopter "
+                           f"{near}){tail}")
 
 
 def test_px4_a_plane_a_heli_and_silence_are_refused():
@@ -73,5 +85,6 @@ def test_the_any_firmware_warning_says_what_is_no_longer_promised():
     problem = firmware_problem(vehicle_type=QUAD, autopilot=APM,
                                version=Firmware(4, 4, 4, 255).encode())
     assert any_firmware_warning(problem) == (
-        "firmware: it runs 4.4.4 official: the predicted flown path, the clearance kept on "
-        "it and its timing are not promised for it (--any-firmware)")
+        "firmware: it runs 4.4.4 official (no recordings of 4.4 hold the model to it; the "
+        "nearest modelled release is ArduCopter 4.5): the predicted flown path, the "
+        "clearance kept on it and its timing are not promised for it (--any-firmware)")

@@ -36,8 +36,8 @@ def test_the_emulator_answers_autopilot_version_as_sitl_does():
 
 
 def test_an_emulated_copter_can_run_another_firmware():
-    v = Vehicle(sysid=1, home=HOME, options=VehicleOptions(firmware=Firmware(4, 6, 0, 255)))
+    v = Vehicle(sysid=1, home=HOME, options=VehicleOptions(firmware=Firmware(4, 7, 0, 255)))
     m = v.message(R.MAVLINK_MSG_ID_AUTOPILOT_VERSION, 0.0)
-    assert "it runs 4.6.0 official" in firmware_problem(
+    assert "it runs 4.7.0 official" in firmware_problem(
         vehicle_type=R.MAV_TYPE_QUADROTOR, autopilot=R.MAV_AUTOPILOT_ARDUPILOTMEGA,
         version=m.flight_sw_version)

@@ -1,5 +1,5 @@
 """``fly`` and ``upload`` against a copter whose firmware is not the one the planner's
-flight model follows (ArduCopter 4.5.x, ardupilot/firmware.py): refused at pre-flight,
+flight model follows (ArduCopter 4.5.x or 4.6.x, ardupilot/firmware.py): refused at pre-flight,
 one line naming the vehicle and its version, unless ``--any-firmware``, which flies and
 says what is not promised. The emulator only: SITL reports the version it was built as
 (4.5.6, tests/conformance/test_firmware_version.py holds the emulator to it)."""
@@ -55,8 +55,10 @@ def test_any_firmware_flies_and_says_what_is_not_promised(plan_dir):  # noqa: F8
                                   "--formation-bound", "5")
     out = result.output
     assert result.exit_code == 0, out
-    assert ("warning: uav2 (sysid 2): firmware: it runs 4.4.4 official: the predicted flown "
-            "path, the clearance kept on it and its timing are not promised") in out
+    assert ("warning: uav2 (sysid 2): firmware: it runs 4.4.4 official (no recordings of 4.4 "
+            "hold the model to it; the nearest modelled release is ArduCopter 4.5): the "
+            "predicted flown path, the clearance kept on it and its timing are not "
+            "promised") in out
     assert "pre-flight failed" not in out
     firmware = json.loads((plan_dir / "flight" / "summary.json").read_text())["firmware"]
     assert firmware["uav2"]["version"] == "4.4.4 official"

@@ -16,13 +16,12 @@ import pytest
 from click.testing import CliRunner
 from pymavlink import mavutil
 
-from ftlbo_mav.ardupilot.navigation import VEHICLE_PARAMS
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, abort, start_together, take_off
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.preflight import preflight
 from ftlbo_mav.link.endpoints import discover, open_links
-from ftlbo_mav.link.params import set_params
+from ftlbo_mav.link.params import read_params, set_params
 from ftlbo_mav.link.transfer import Timing
 from ftlbo_mav.scenario import load_scenario
 from ftlbo_mav.sim.homes import scenario_homes
@@ -163,30 +162,55 @@ def _set_param(url: str, sysid: int, name: str, value: float) -> None:
             link.close()
 
 
-def test_fly_refuses_a_vehicle_whose_wpnav_accel_is_not_the_plans_and_upload_sets_it(
-        plan_dir):
+def _read_param(url: str, sysid: int, name: str) -> float | None:
+    links = open_links([url])
+    try:
+        found, missing = discover(links, [sysid])
+        assert not missing
+        with found[sysid].channel(sysid) as channel:
+            return read_params(channel, [name], timing=Timing())[name]
+    finally:
+        for link in links:
+            link.close()
+
+
+def test_a_copter_with_its_own_tuning_is_flown_as_it_is_or_refused_never_retuned(plan_dir):
+    """The plan fits the copters: a copter whose values are not those the plan was
+    predicted with is predicted again with its own; where every promise holds the flight
+    goes on saying so, where one is lost fly and upload refuse naming the copter, its
+    values and the promise, and neither writes its tuning."""
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
         _upload(plan_dir, fleet.urls)
         _set_param(fleet.urls[1], 2, "WPNAV_ACCEL", 500.0)
+        planned = load_planned_flight(plan_dir)
+        said = []
+        with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
+            preflight(planned, flying.vehicles, timing=Timing(), ready_timeout_s=60.0,
+                      say=said.append)
+            assert not any(v.status.armed for v in flying.vehicles)
+        assert ("note: uav2 (sysid 2): WPNAV_ACCEL 500 (planned 250): the copter's own "
+                "values, flown as they are") in said
+        assert any("predicted again with the copters' own values" in t
+                   and "every promise holds" in t for t in said), said
+        # a copter retuned far from the plan's: the formation cannot be kept
+        _set_param(fleet.urls[1], 2, "PSC_VELXY_P", 0.3)
+        _set_param(fleet.urls[1], 2, "ANGLE_MAX", 1000.0)
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
                                            "--control-port", "0",
                                            "--connect", " ".join(fleet.urls)])
         assert result.exit_code == 1
         assert "pre-flight failed, nothing armed" in result.stderr
-        assert ("uav2 (sysid 2): WPNAV_ACCEL is 500 on the vehicle, the plan predicted its "
-                "path with 250 (set it: `ftlbo-mav upload` does, or re-plan with [vehicle] "
-                "WPNAV_ACCEL = 500)") in result.stderr
-        assert "uav1 (sysid 1)" not in result.stderr and "uav3 (sysid 3)" not in result.stderr
-        # upload sets what differs, reads it back and says so
+        assert ("uav2 (sysid 2) with its WPNAV_ACCEL 500 (planned 250), PSC_VELXY_P 0.3 "
+                "(planned 2), ANGLE_MAX 1000 (planned 3000)") in result.stderr
+        assert "(min_separation)" in result.stderr
         uploaded = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
                                              "--connect", " ".join(fleet.urls)])
-        assert uploaded.exit_code == 0, uploaded.output
-        assert "set WPNAV_ACCEL 500 -> 250)" in uploaded.stdout
-        assert uploaded.stdout.count(f"{len(VEHICLE_PARAMS)} vehicle parameters as planned") == 2
-        planned = load_planned_flight(plan_dir)
-        with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
-            preflight(planned, flying.vehicles, timing=Timing(), ready_timeout_s=60.0)
-            assert not any(v.status.armed for v in flying.vehicles)
+        assert uploaded.exit_code == 1, uploaded.output
+        assert uploaded.stdout.count("refused, nothing sent to any vehicle") == 3
+        assert "0/3 vehicles verified" in uploaded.stdout
+        # its tuning is its own: nothing was written
+        assert _read_param(fleet.urls[1], 2, "ANGLE_MAX") == 1000.0
+        assert _read_param(fleet.urls[1], 2, "PSC_VELXY_P") == pytest.approx(0.3)
 
 
 def test_monitor_records_and_forwards_to_a_ground_station(plan_dir):
