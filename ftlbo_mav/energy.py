@@ -179,7 +179,8 @@ def end_charge(battery: Battery, nav, *, end_action: str, goal: np.ndarray,
         alt = max(alt, nav.rtl_alt)
     low = min(alt, nav.land_alt_low)  # Mode::land_run_vertical_control: slow below
     fast = nav.land_descent_speed()
-    for s, vz in (((alt - low) / fast, -fast), (low / abs(nav.land_speed), -abs(nav.land_speed))):
+    for s, vz in ((nav.land_descent_delay_s, 0.0), ((alt - low) / fast, -fast),
+                  (low / abs(nav.land_speed), -abs(nav.land_speed))):
         mah += battery.mah(s, 0.0, vz)
         seconds += s
     return mah, seconds

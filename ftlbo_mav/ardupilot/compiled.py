@@ -32,7 +32,7 @@ from . import navigation, poscontrol, scurve
 from .navigation import GRAVITY_M_S2, Navigation
 from .poscontrol import SEA_LEVEL_DENSITY, Airframe, _filter_alpha
 from .poscontrol import STEP_S as PSC_STEP_S
-from .scurve import ACCEL_MAX, CONST, DECEL_END, FLAT, PIECES, SCurve
+from .scurve import ACCEL_END, ACCEL_MAX, CONST, DECEL_END, FLAT, PIECES, SCurve
 from .wpnav import WP_RADIUS_MIN
 
 try:
@@ -47,7 +47,8 @@ _T, _K, _J, _A, _V, _X = range(6)
 # nav parameters, in this order (see _nav_params)
 NAV_FIELDS = ("radius", "corner_accel", "psc_posxy_p", "wp_accel", "wp_jerk", "psc_jerk_xy",
               "desired_speed", "psc_velxy_p", "psc_velxy_i", "psc_velxy_d", "psc_velxy_imax",
-              "alpha_e", "alpha_d", "accel_max", "lean", "quad", "mom")
+              "alpha_e", "alpha_d", "accel_max", "lean", "quad", "mom", "handover_46",
+              "accel_z", "scaler_floor")
 OK, OUT_OF_TIME = 0, 1
 
 # the model's pure arithmetic, compiled as it stands (one source for both loops)
@@ -116,7 +117,8 @@ def nav_params(nav: Navigation, airframe: Airframe | None, desired_speed: float)
                   alpha_e=_filter_alpha(nav.psc_velxy_flte),
                   alpha_d=_filter_alpha(nav.psc_velxy_fltd),
                   accel_max=GRAVITY_M_S2 * math.tan(nav.angle_max), lean=lean, quad=quad,
-                  mom=mom)
+                  mom=mom, handover_46=1.0 if nav.handover_46 else 0.0,
+                  accel_z=nav.wp_accel_z, scaler_floor=nav.track_scaler_floor)
     return np.array([values[name] for name in NAV_FIELDS], float)
 
 
@@ -334,6 +336,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
     snap_f = np.zeros((P, SNAP_FLOATS))
     radius, corner_accel, posxy_p = prm[0], prm[1], prm[2]
     wp_accel, wp_jerk, jerk_xy, desired = prm[3], prm[4], prm[5], prm[6]
+    handover_46, accel_z, scaler_floor = prm[17] != 0.0, prm[18], prm[19]
     out = np.zeros((3, 3))
     if resume_i[3] == 0:
         # WaypointNav state: the three legs (-1: an empty SCurve), their times and
@@ -414,7 +417,7 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
                         track_error += (target[i] - here[i]) * direction
                         track_velocity += velocity[i] * direction
                     wanted = min(max(0.05 + (track_velocity - posxy_p * track_error) / speed,
-                                     0.1), 1.0)
+                                     scaler_floor), 1.0)
                 tc = wp_accel / wp_jerk if wp_jerk > 0 else 1.0
                 track_scaler += (wanted - track_scaler) * min(dt / tc, 1.0)
             step = dt * scale * track_scaler
@@ -428,19 +431,24 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
             this_end = _time_end(pieces, planned, this)
             done = this_t >= this_end or this_sq >= _track_sq(track, this)
             left = this_end - this_t if (this >= 0 and planned[this]) else 0.0
-            if (fast and abs(nxt_t) < _EPS
-                    and this_t >= _piece_end(pieces, planned, this, CONST)
-                    - _piece_end(pieces, planned, nxt, ACCEL_MAX)
-                    and this_sq >= 0.25 * _track_sq(track, this)):
+            if handover_46:  # SCurve.advance_target_along_track (handover_46)
+                begin = (this_t >= _piece_end(pieces, planned, this, CONST)
+                         and left <= _piece_end(pieces, planned, nxt, ACCEL_END))
+            else:
+                begin = (this_t >= _piece_end(pieces, planned, this, CONST)
+                         - _piece_end(pieces, planned, nxt, ACCEL_MAX)
+                         and this_sq >= 0.25 * _track_sq(track, this))
+            if fast and abs(nxt_t) < _EPS and begin:
                 _j, a1, v1, x1 = _state_at(pieces, planned, this, this_t + left / 2)
                 _j, a2, v2, x2 = _state_at(pieces, planned, nxt, left / 2)
                 tp0 = tp1 = tp2 = 0.0
-                tv0 = tv1 = ta0 = ta1 = 0.0
+                tv0 = tv1 = tv2 = ta0 = ta1 = ta2 = 0.0
                 if this >= 0:
                     tp0 = unit[this, 0] * x1 - track[this, 0]
                     tp1 = unit[this, 1] * x1 - track[this, 1]
                     tp2 = unit[this, 2] * x1 - track[this, 2]
                     tv0, tv1 = unit[this, 0] * v1, unit[this, 1] * v1
+                    tv2, ta2 = unit[this, 2] * v1, unit[this, 2] * a1
                     ta0, ta1 = unit[this, 0] * a1, unit[this, 1] * a1
                 if nxt >= 0:
                     tp0 += unit[nxt, 0] * x2
@@ -448,13 +456,19 @@ def fly(points, holds, pieces, planned, track, unit, vel_max, prm, dt, budget, f
                     tp2 += unit[nxt, 2] * x2
                     tv0 += unit[nxt, 0] * v2
                     tv1 += unit[nxt, 1] * v2
+                    tv2 += unit[nxt, 2] * v2
                     ta0 += unit[nxt, 0] * a2
                     ta1 += unit[nxt, 1] * a2
+                    ta2 += unit[nxt, 2] * a2
                 speed_min = min(vel_max[this] if this >= 0 else 0.0,
                                 vel_max[nxt] if nxt >= 0 else 0.0)
-                if (left < _time_end(pieces, planned, nxt) / 2
-                        and math.sqrt(tp0 * tp0 + tp1 * tp1 + tp2 * tp2) < radius
-                        and math.hypot(tv0, tv1) < speed_min
+                if handover_46:
+                    turn = (math.sqrt(tv0 * tv0 + tv1 * tv1 + tv2 * tv2) < speed_min
+                            and abs(ta2) < accel_z)
+                else:
+                    turn = (left < _time_end(pieces, planned, nxt) / 2
+                            and math.hypot(tv0, tv1) < speed_min)
+                if (turn and math.sqrt(tp0 * tp0 + tp1 * tp1 + tp2 * tp2) < radius
                         and math.hypot(ta0, ta1) < corner_accel):
                     nxt_t, nxt_sq = _advance_curve(pieces, planned, unit, nxt, nxt_t, step,
                                                    out)

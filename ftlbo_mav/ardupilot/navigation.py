@@ -137,6 +137,37 @@ class Navigation:
     atc_rate_rp_max: float = 0.0  # ATC_RATE_R_MAX / _P_MAX, rad/s (0: unlimited)
     release: str = "4.5"          # the ArduCopter series flown (AUTOPILOT_VERSION; not a parameter)
 
+    # -- where the releases differ (each in one place, chosen by ``release``)
+    @property
+    def handover_46(self) -> bool:
+        """Which SCurve::advance_target_along_track hands a leg over to the next:
+        ArduCopter 4.6's (libraries/AP_Math/SCurve.cpp at Copter-4.6.3: the next leg starts
+        once this one is decelerating, ``time_decel_start``, and will end before the next
+        one's acceleration ends, ``time_accel_end``; the turn's mid point is judged on its
+        3D speed and also on its vertical acceleration, within WPNAV_ACCEL_Z) or 4.5's
+        (at Copter-4.5.6: this leg past ``time_turn_out - next.time_turn_in`` and a quarter
+        of its track, the turn judged on its horizontal speed and on this leg's time left
+        being under half the next one's)."""
+        return self.release != "4.5"
+
+    @property
+    def track_scaler_floor(self) -> float:
+        """AC_WPNav::advance_wp_target_along_track: the floor of ``track_scaler_dt``, the
+        factor by which the track's clock slows for a copter behind its target: 0.1 in
+        4.5.6 (constrain_float(..., 0.1f, 1.0f)), 0 in 4.6.3 (a copter held back stops its
+        track's clock)."""
+        return 0.1 if self.release == "4.5" else 0.0
+
+    @property
+    def land_descent_delay_s(self) -> float:
+        """Seconds a landing's descent (AUTO's NAV_LAND) holds its altitude before it
+        starts: measured, not taken from the code. ArduCopter 4.6.3 SITL held 6 m for 1.06
+        to 1.16 s more than 4.5.6 after "Mission: N Land" (the same altitude profile
+        afterwards, 0.5 m/s; flight.json and flight_speed.json of both releases); the
+        vertical controller's rework between them (AC_PosControl's terrain offsets,
+        ``init_terrain`` / ``update_terrain``) is the likely cause. 0 for 4.5."""
+        return 0.0 if self.release == "4.5" else LAND_DELAY_46_S
+
     def corner_accel(self) -> float:
         """AC_WPNav::get_corner_acceleration: WPNAV_ACCEL_C, or twice WPNAV_ACCEL."""
         return self.wp_accel_c if self.wp_accel_c > 0 else 2.0 * self.wp_accel
@@ -349,5 +380,6 @@ LAND_RATE_ACHIEVED = 0.95
 BRAKE_DECEL_MAX_M_S2 = 3.0
 BRAKE_TIME_CONSTANT_S = 1.6
 BRAKE_RAMP_S = 0.4
+LAND_DELAY_46_S = 1.1  # Navigation.land_descent_delay_s (4.6.3 SITL, measured)
 NAV_PARAMS = tuple(name for name, _attr, _scale in _SCALES)
 """The parameters :meth:`Navigation.with_params` reads."""

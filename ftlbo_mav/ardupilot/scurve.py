@@ -487,6 +487,15 @@ class SCurve:
     def time_turn_out(self) -> float:
         return self.p[CONST].end_time if self.planned else 0.0
 
+    def time_accel_end(self) -> float:
+        """4.6's SCurve::time_accel_end: the end of the acceleration (SEG_ACCEL_END)."""
+        return self.p[ACCEL_END].end_time if self.planned else 0.0
+
+    def time_decel_start(self) -> float:
+        """4.6's SCurve::time_decel_start: the start of the deceleration (SEG_DECEL_START,
+        the same piece as 4.5's SEG_TURN_OUT)."""
+        return self.p[CONST].end_time if self.planned else 0.0
+
     def braking(self) -> bool:
         return self.time >= self.p[CONST].end_time if self.planned else True
 
@@ -503,7 +512,8 @@ class SCurve:
 
     def advance_target_along_track(self, prev: SCurve, nxt: SCurve, wp_radius: float,
                                    accel_corner: float, fast: bool, dt: float,
-                                   origin: np.ndarray):
+                                   origin: np.ndarray, *, handover_46: bool = False,
+                                   accel_z: float = 0.0):
         """SCurve::advance_target_along_track: the target moved on by ``dt`` as the sum of
         what remains of the previous leg, this leg and, once the turn has begun, the
         next. The next leg begins (at a fast waypoint) once this one is past its
@@ -514,7 +524,14 @@ class SCurve:
         finished once this leg is done, or once the next leg has run as long as this
         one has left. (Each leg's vector is its unit vector times a distance, speed or
         acceleration along it, in plain floats: the same arithmetic, element by element,
-        as on numpy's arrays.)"""
+        as on numpy's arrays.)
+
+        ``handover_46``: ArduCopter 4.6's hand-over instead
+        (:attr:`.navigation.Navigation.handover_46`): the next leg may begin once this one
+        is past its deceleration's start and has no more time left than the next one's
+        acceleration takes, and the turn's mid point must also move slower than both
+        legs in 3D and accelerate vertically less than ``accel_z`` (WPNAV_ACCEL_Z, m/s/s;
+        SCurve::calculate_track keeps it as ``accel_z_max``)."""
         x1, v1, a1 = prev._advance(dt)
         (ux, uy, uz), (kx, ky, kz) = prev._unit_xyz, prev._track_xyz
         ox, oy, oz = origin.tolist()
@@ -528,16 +545,27 @@ class SCurve:
         ax, ay, az = ax + ux * a2, ay + uy * a2, az + uz * a2
         done = self.finished()
         left = self.time_remaining()
-        if (fast and _zero(nxt.time) and self.time >= self.time_turn_out() - nxt.time_turn_in()
-                and self.position_sq >= 0.25 * self._track_sq):
+        if handover_46:  # SCurve.cpp at Copter-4.6.3
+            begin = (self.time >= self.time_decel_start()
+                     and left <= nxt.time_accel_end())
+        else:  # at Copter-4.5.6
+            begin = (self.time >= self.time_turn_out() - nxt.time_turn_in()
+                     and self.position_sq >= 0.25 * self._track_sq)
+        if fast and _zero(nxt.time) and begin:
             _j, ta, tv, tx = self.state_at(self.time + left / 2)
             _j, na, nv, nx = nxt.state_at(left / 2)
             (kx, ky, kz), (wx, wy, wz) = self._track_xyz, nxt._unit_xyz
             tp = np.array([ux * tx - kx + wx * nx, uy * tx - ky + wy * nx,
                            uz * tx - kz + wz * nx])
             speed_min = min(self.vel_max, nxt.vel_max)
-            if (self.time_remaining() < nxt.time_end() / 2 and np.linalg.norm(tp) < wp_radius
-                    and math.hypot(ux * tv + wx * nv, uy * tv + wy * nv) < speed_min
+            if handover_46:
+                turn = (math.sqrt((ux * tv + wx * nv) ** 2 + (uy * tv + wy * nv) ** 2
+                                  + (uz * tv + wz * nv) ** 2) < speed_min
+                        and abs(uz * ta + wz * na) < accel_z)
+            else:
+                turn = (self.time_remaining() < nxt.time_end() / 2
+                        and math.hypot(ux * tv + wx * nv, uy * tv + wy * nv) < speed_min)
+            if (turn and np.linalg.norm(tp) < wp_radius
                     and math.hypot(ux * ta + wx * na, uy * ta + wy * na) < accel_corner):
                 x3, v3, a3 = nxt._advance(dt)
                 px, py, pz = px + wx * x3, py + wy * x3, pz + wz * x3

@@ -158,7 +158,7 @@ class WaypointNav:
             track_error = (tx - px) * dx + (ty - py) * dy + (tz - pz) * dz
             track_velocity = vx * dx + vy * dy + vz * dz
             wanted = min(max(0.05 + (track_velocity - self.nav.psc_posxy_p * track_error)
-                             / speed, 0.1), 1.0)
+                             / speed, self.nav.track_scaler_floor), 1.0)
         tc = self.nav.wp_accel / self.nav.wp_jerk if self.nav.wp_jerk > 0 else 1.0
         self.track_scaler += (wanted - self.track_scaler) * min(dt / tc, 1.0)
         return self.track_scaler
@@ -168,7 +168,8 @@ class WaypointNav:
         scale = self._time_scale(dt)
         done, pos, vel, acc = self.this.advance_target_along_track(
             self.prev, self.next, self.radius, self.nav.corner_accel(), self.fast,
-            dt * scale * self._track_scale(dt, position, velocity), self.origin)
+            dt * scale * self._track_scale(dt, position, velocity), self.origin,
+            handover_46=self.nav.handover_46, accel_z=self.nav.wp_accel_z)
         # accel_offset: track direction x _offset_accel x |target_vel| / desired speed
         k = self.offset_accel / self.desired_speed
         self.target = np.array(pos)

@@ -177,9 +177,9 @@ def timing_options(func):
                    "names (a copter's tuning is never written). The plan is still "
                    "predicted again with each copter's own values.")
 @click.option("--any-firmware", "any_firmware", is_flag=True,
-              help="Upload to a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x or 4.6.x (the "
-                   "firmware the planner's flight model follows), saying what is then not "
-                   "promised. Without it such a swarm is refused before anything is sent.")
+              help="Upload to a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x or "
+                   "4.6.x (the firmware the planner's flight model follows), saying what is not "
+                   "then promised. Without it such a swarm is refused before anything is sent.")
 @timing_options
 @user_errors
 def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_params,

@@ -153,14 +153,17 @@ def layers(band: tuple[float, float], count: int, spacing_m: float) -> np.ndarra
 def descent(model: FlightModel, alt_m: float) -> tuple[np.ndarray, np.ndarray]:
     """NAV_LAND's descent from ``alt_m`` above the landing point: ``(times (T,), heights
     (T,))`` on :data:`STEP_S`, WPNAV_SPEED_DN (or LAND_SPEED_HIGH) above LAND_ALT_LOW,
-    LAND_SPEED below (ArduCopter/mode.cpp Mode::land_run_vertical_control)."""
+    LAND_SPEED below (ArduCopter/mode.cpp Mode::land_run_vertical_control), after the
+    release's hold (Navigation.land_descent_delay_s)."""
     nav = model.nav
     fast, slow = nav.land_descent_speed(), abs(nav.land_speed)
+    hold = nav.land_descent_delay_s
     alt = max(alt_m, 0.0)
     low = min(alt, nav.land_alt_low)
     t_fast = (alt - low) / fast
-    t = np.arange(0.0, t_fast + low / slow + STEP_S, STEP_S)
-    z = np.where(t <= t_fast, alt - fast * t, low - slow * (t - t_fast))
+    t = np.arange(0.0, hold + t_fast + low / slow + STEP_S, STEP_S)
+    d = np.maximum(t - hold, 0.0)
+    z = np.where(d <= t_fast, alt - fast * d, low - slow * (d - t_fast))
     return t, np.maximum(z, 0.0)
 
 

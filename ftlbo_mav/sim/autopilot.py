@@ -167,6 +167,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self._follower: PositionFollower | None = None  # AC_PosControl, while AC_WPNav flies
         self._followed_until: float | None = None
         self._land_target = np.zeros(3)  # where a landing's descent holds the copter
+        self._descend_from = 0.0  # when it starts down (Navigation.land_descent_delay_s)
         self.battery = BatteryMonitor()  # AP_BattMonitor's first battery
         # the 400 Hz follower in its compiled loop (ardupilot/compiled.py): the same
         # arithmetic, but loading it stalls the first step by most of a second, which a

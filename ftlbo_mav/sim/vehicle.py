@@ -20,12 +20,13 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Hashable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot.commands import INSTANT_BOOT, BootTimeline
+from ..ardupilot.copters import release_for
 from ..ardupilot.fence import (
     FENCE_CAPACITY,
     MISSION_TYPE_FENCE,
@@ -158,8 +159,11 @@ class Vehicle:
                                    mission_type=MISSION_TYPE_RALLY,
                                    options=MissionServerOptions(capacity=RALLY_CAPACITY))
         self._fence_version = -1
+        # the navigation of the release it reports (AUTOPILOT_VERSION): ardupilot/navigation.py
+        release = release_for(options.firmware.encode())
+        limits = replace(options.limits, nav=replace(options.limits.nav, release=release))
         self.autopilot = Autopilot(home=(lat, lon), boot_time=boot_time,
-                                   options=AutopilotOptions(boot=self.boot, limits=options.limits))
+                                   options=AutopilotOptions(boot=self.boot, limits=limits))
         self.autopilot.home_alt_m = alt
         self.utc_offset_s = time.time() - boot_time if utc_offset_s is None else utc_offset_s
         self.autopilot.utc_offset_s = self.utc_offset_s  # flies only after its GPS fix

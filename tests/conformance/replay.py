@@ -16,17 +16,25 @@ from pathlib import Path
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ftlbo_mav.ardupilot.commands import RECORDED_BOOT
+from ftlbo_mav.ardupilot.firmware import Firmware
 from ftlbo_mav.sim.vehicle import Vehicle, VehicleOptions
 
 DATA = Path(__file__).parents[1] / "data" / "ardupilot-4.5.6"
+RELEASES = ("4.5.6", "4.6.3")  # the recorded releases, tests/data/ardupilot-<release>/
 # the recordings' --home 12.2332099,109.1145051,0 (SITL's home item reads back 0.1 m)
 HOME = (12.2332099, 109.1145051, 0.1)
 GCS = (255, 190)
 TICK_S = 0.01
 
 
-def load(name: str) -> dict:
-    return json.loads((DATA / name).read_text())
+def load(name: str, release: str = "4.5.6") -> dict:
+    return json.loads((DATA.parent / f"ardupilot-{release}" / name).read_text())
+
+
+def firmware(release: str) -> Firmware:
+    """The AUTOPILOT_VERSION of a recorded release (official, as recorded)."""
+    major, minor, patch = map(int, release.split("."))
+    return Firmware(major, minor, patch, R.FIRMWARE_VERSION_TYPE_OFFICIAL)
 
 
 def num(v):

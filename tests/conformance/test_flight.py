@@ -1,5 +1,6 @@
-"""A mission flown in the emulator against the same mission flown by ArduCopter 4.5.6 SITL
-(flight.json; flight_speed.json with a DO_CHANGE_SPEED of 3 m/s after the takeoff).
+"""A mission flown in the emulator against the same mission flown by ArduCopter 4.5.6 and
+4.6.3 SITL (flight.json; flight_speed.json with a DO_CHANGE_SPEED of 3 m/s after the
+takeoff), the emulator reporting (and so flying as) the release recorded.
 
 The recording's ground-station messages are replayed at their recorded times (upload,
 GUIDED, arm, NAV_TAKEOFF, set current item 2, AUTO) into an emulated copter booting on
@@ -18,17 +19,19 @@ import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ftlbo_mav.ardupilot.commands import RECORDED_BOOT
 from ftlbo_mav.sim.autopilot import LocalTangent
+from ftlbo_mav.sim.vehicle import VehicleOptions
 
-from .replay import HOME, Bench, load
+from .replay import HOME, RELEASES, Bench, firmware, load
 
 REACHED_REL, REACHED_ABS = 0.10, 0.5
 TRACK_M = 0.3
 LANDING_REL = 0.20
 
 
-def _fly(rec: dict) -> Bench:
-    bench = Bench()
+def _fly(rec: dict, release: str = "4.5.6") -> Bench:
+    bench = Bench(options=VehicleOptions(boot=RECORDED_BOOT, firmware=firmware(release)))
     # GLOBAL_POSITION_INT at 10 Hz, as the recorder asked (after SITL's first-40-ms drop)
     bench.command(2.0, R.MAV_CMD_SET_MESSAGE_INTERVAL,
                   [R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 100000])
@@ -97,10 +100,13 @@ def _track_distance(rec: dict, bench: Bench, t_auto: float, t_last: float,
     return float(gap.max())
 
 
-@pytest.fixture(scope="module", params=["flight.json", "flight_speed.json"])
+@pytest.fixture(scope="module", params=[(r, f) for r in RELEASES
+                                        for f in ("flight.json", "flight_speed.json")],
+                ids=lambda p: f"{p[0]}-{p[1]}")
 def flown(request):
-    rec = load(request.param)
-    return request.param, rec, _fly(rec)
+    release, name = request.param
+    rec = load(name, release)
+    return f"{release} {name}", rec, _fly(rec, release)
 
 
 def _t_auto(rec: dict) -> float:
@@ -148,3 +154,29 @@ def test_landing_and_disarm_take_as_long_as_on_arducopter(flown):
     # and it is down and disarmed
     beats = bench.since(disarm_text[0] + 1.5, {"HEARTBEAT"})
     assert beats and not beats[-1].msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED
+
+
+DESCENT_START_S = 0.3
+
+
+def _descent_start(times, alts, t_land: float) -> float:
+    """Seconds from the land item's text until the copter is 0.1 m below where it was."""
+    times, alts = np.asarray(times, float), np.asarray(alts, float)
+    after = times >= t_land
+    times, alts = times[after], alts[after]
+    return float(times[np.argmax(alts < alts[0] - 0.1)] - t_land)
+
+
+def test_the_landing_starts_down_when_arducopter_did(flown):
+    """4.6.3 holds its altitude about 1.1 s longer than 4.5.6 before a NAV_LAND's descent
+    (ardupilot/navigation.py, Navigation.land_descent_delay_s): each release's own."""
+    name, rec, bench = flown
+    t_land = rec["derived"]["landing"]["t_statustext_mission_land"]
+    rows = np.array(rec["global_position_int"]["rows"], float)
+    recorded = _descent_start(rows[:, 0], rows[:, 5] / 1000.0, t_land)
+    (emu_land,) = [h.t for h in bench.since(_t_auto(rec), {"STATUSTEXT"})
+                   if h.msg.text.endswith(" Land")]
+    heard = bench.since(_t_auto(rec), {"GLOBAL_POSITION_INT"})
+    emulated = _descent_start([h.t for h in heard], [h.msg.relative_alt / 1000.0 for h in heard],
+                              emu_land)
+    assert emulated == pytest.approx(recorded, abs=DESCENT_START_S), name

@@ -20,6 +20,8 @@ class ModeLand:
         self.nav = None
         self.z = VerticalShaper(pos=float(self.position[2]), vel=float(self.velocity[2]))
         self._phase = "descend"
+        # a release that holds its altitude a moment first (Navigation.land_descent_delay_s)
+        self._descend_from = self.time + self.nav_params().land_descent_delay_s
 
     def _descend_step(self, dt: float) -> None:
         """Mode::land_run_vertical_control: descend at :func:`physics.landing_rate`
@@ -28,6 +30,8 @@ class ModeLand:
         nav = self.nav_params()
         rate = landing_rate(nav, float(self.position[2]), dt)
         rate *= self.options.limits.land_rate_achieved
+        if self.time < self._descend_from:
+            rate = 0.0
         self.z.at_rate(rate, dt, accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
         target = self._land_target
         self._follow(dt, (target[0], target[1], max(self.z.pos, 0.0)), (0.0, 0.0, self.z.vel),
