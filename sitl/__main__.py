@@ -1,4 +1,5 @@
-"""``python -m sitl --count 3 [--scenario FILE] [--binary PATH] [--radio SPEC]``: run SITL
+"""``python -m sitl --count 3 [--scenario FILE] [--binary PATH] [--radio SPEC]
+[--instance-binary SYSID=PATH] [--instance-defaults SYSID=FILE]``: run SITL
 copters until Ctrl-C; with ``--radio`` (``good``, ``rough`` or ``key=value`` pairs, as
 ``ftlbo-mav sim --radio``) all of them behind one telemetry radio to ``--udp-out``
 (ftlbo_mav/sim/router.py): connect the ground station with ``udpin:HOST:PORT``."""
@@ -45,6 +46,13 @@ def _udp_out(text: str) -> tuple[str, int]:
     return host, int(port)
 
 
+def _for_sysid(text: str) -> tuple[int, str]:
+    sysid, sep, path = text.partition("=")
+    if not sep or not sysid.isdigit() or not path:
+        raise argparse.ArgumentTypeError(f"{text}: SYSID=PATH")
+    return int(sysid), path
+
+
 def main(argv: list[str] | None = None) -> int:
     """Exit codes: 0 stopped by Ctrl-C/SIGTERM, 2 bad input, 1 SITL failed (died, not ready)."""
     parser = argparse.ArgumentParser(prog="python -m sitl", description=__doc__)
@@ -54,6 +62,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--binary", help="arducopter binary (default: $ARDUPILOT_SITL)")
     parser.add_argument("--defaults", action="append", default=[],
                         help="extra defaults .parm file (e.g. ArduPilot's copter.parm)")
+    parser.add_argument("--instance-binary", action="append", default=[], type=_for_sysid,
+                        metavar="SYSID=PATH",
+                        help="this copter's arducopter binary (a fleet of two releases)")
+    parser.add_argument("--instance-defaults", action="append", default=[], type=_for_sysid,
+                        metavar="SYSID=FILE",
+                        help="this copter's own defaults file, after the others (a 3DR "
+                             "Solo's values for one)")
     parser.add_argument("--speedup", type=_speedup, default=1.0)
     parser.add_argument("--workdir", help="keep the instances' files here")
     parser.add_argument("--radio", type=_radio, default=None,
@@ -72,8 +87,19 @@ def main(argv: list[str] | None = None) -> int:
                  else default_homes(args.count or 3))
         if args.count is not None and args.count != len(homes):
             parser.error(f"--count {args.count}, but the scenario has {len(homes)} UAVs")
+        n = len(homes)
+        binaries: list[str | None] = [None] * n
+        own: list[list[str]] = [[] for _ in range(n)]
+        for sysid, _path in args.instance_binary + args.instance_defaults:
+            if sysid > n:
+                parser.error(f"sysid {sysid}: the copters are 1..{n}")
+        for sysid, path in args.instance_binary:
+            binaries[sysid - 1] = path
+        for sysid, path in args.instance_defaults:
+            own[sysid - 1].append(path)
         with SitlSwarm(binary=args.binary, homes=homes, defaults=args.defaults,
-                       speedup=args.speedup, workdir=args.workdir) as swarm:
+                       speedup=args.speedup, workdir=args.workdir, binaries=binaries,
+                       instance_defaults=own) as swarm:
             for i, url in enumerate(swarm.urls):
                 print(f"SITL sysid {i + 1}: {url}  home {homes[i][0]:.7f}, {homes[i][1]:.7f}")
             if args.radio is None:

@@ -61,20 +61,33 @@ class SitlSwarm:
     def __init__(self, *, binary: str | Path | None = None,
                  homes: Sequence[tuple[float, float, float]], workdir: str | Path | None = None,
                  defaults: Sequence[str | Path] = (), model: str = "quad", speedup: float = 1.0,
-                 ready_timeout_s: float = 180.0):
+                 ready_timeout_s: float = 180.0,
+                 binaries: Sequence[str | Path | None] | None = None,
+                 instance_defaults: Sequence[Sequence[str | Path]] | None = None):
+        """``binaries``: one per copter (None: ``binary``), for a fleet of two releases;
+        ``instance_defaults``: parameter files of each copter's own, after every other
+        (a 3DR Solo's values for one of them)."""
         binary = binary or os.environ.get("ARDUPILOT_SITL")
         if not binary:
             raise BadInput("no SITL binary: pass binary= (--binary) or set ARDUPILOT_SITL")
         self.binary = Path(binary)
-        if not self.binary.is_file() or not os.access(self.binary, os.X_OK):
-            raise BadInput(f"{self.binary}: not an executable file (the arducopter SITL binary)")
         if not 1 <= len(homes) <= 254:
             raise BadInput(f"{len(homes)} copters: SITL instances are system ids 1..254")
         self.homes = list(homes)
+        self.binaries = [Path(b) if b else self.binary for b in (binaries or [None] * len(homes))]
+        for b in set(self.binaries):
+            if not b.is_file() or not os.access(b, os.X_OK):
+                raise BadInput(f"{b}: not an executable file (the arducopter SITL binary)")
+        if len(self.binaries) != len(self.homes):
+            raise BadInput(f"{len(self.binaries)} binaries for {len(self.homes)} copters")
+        self.own_defaults = [[Path(p) for p in d]
+                             for d in (instance_defaults or [()] * len(homes))]
         env_defaults = os.environ.get("ARDUPILOT_SITL_DEFAULTS", "")
-        self.defaults = [Path(p) for p in defaults] + [
-            Path(p) for p in env_defaults.split(",") if p]
-        for path in self.defaults:  # SITL would wait, not say, on a defaults file it lacks
+        # ArduPilot's own copter.parm first, then the user's files (--defaults a,b: later wins)
+        self.defaults = [Path(p) for p in env_defaults.split(",") if p] + [
+            Path(p) for p in defaults]
+        for path in self.defaults + [p for d in self.own_defaults for p in d]:
+            # SITL would wait, not say, on a defaults file it lacks
             if not path.is_file():
                 where = "--defaults" if path in [Path(p) for p in defaults] else \
                     "ARDUPILOT_SITL_DEFAULTS"
@@ -97,9 +110,9 @@ class SitlSwarm:
                 run_dir.mkdir(parents=True, exist_ok=True)
                 identity = run_dir / "identity.parm"
                 identity.write_text(IDENTITY_PARAMS.format(sysid=i + 1))
-                cmd = sitl_command(self.binary, instance=i, home=home,
-                                   defaults=[*self.defaults, identity], model=self.model,
-                                   speedup=self.speedup)
+                cmd = sitl_command(self.binaries[i], instance=i, home=home,
+                                   defaults=[*self.defaults, *self.own_defaults[i], identity],
+                                   model=self.model, speedup=self.speedup)
                 log = open(run_dir / "sitl.log", "wb")
                 try:
                     self.processes.append(subprocess.Popen(

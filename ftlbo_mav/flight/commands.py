@@ -335,6 +335,10 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
               help="Fly a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x or 4.6.x (the "
                    "firmware the planner's flight model follows), saying what is then not "
                    "promised. Without it pre-flight refuses it.")
+@click.option("--any-params", "any_params", is_flag=True,
+              help="Fly copters whose own values (read before arming) lose a promise of the "
+                   "plan, saying which: that promise is then not kept. Without it pre-flight "
+                   "refuses them.")
 @click.option("--link", "link_text", default=None,
               help="The link every copter shares: bytes a second for both ways together "
                    "(6000) or a radio (sik-64, sik-128, sik-250, wifi). Says what the flight "
@@ -357,8 +361,8 @@ def _keeper_line(waited: dict, *, listed: int = 6) -> str:
 def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, control_port,
                 on_departure, lost_wait, use_keeper, arm_budget, formation_bound,
                 preflight_timeout, flight_timeout,
-                any_firmware, link_text, resume, progress_file, report_png, timeout, retries,
-                ready_timeout, discover_timeout, signing_key, rtcm_source):
+                any_firmware, any_params, link_text, resume, progress_file, report_png,
+                timeout, retries, ready_timeout, discover_timeout, signing_key, rtcm_source):
     """Fly PLAN_DIR's missions: check, take off, start together, watch, report.
 
     The vehicles must hold the plan's missions (`ftlbo-mav upload` first); nothing is
@@ -379,7 +383,8 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
     told, budget = _link_budget(link_text, len(sysids), signed=key is not None)
     if resume:
         planned = _resume(planned, progress_file or plan_dir / "flight" / PROGRESS_FILE,
-                          sysids, urls, any_firmware=any_firmware, signing_key=key,
+                          sysids, urls, any_firmware=any_firmware, any_params=any_params,
+                          signing_key=key,
                           timing=_timing(timeout, retries, ready_timeout),
                           discover_timeout_s=discover_timeout)
         plan_dir = planned.folder
@@ -390,7 +395,7 @@ def fly_command(plan_dir, sysid_text, connect, forward, log_dir, abort_mode, con
                          flight_timeout_s=flight_timeout, abort_mode=abort_mode,
                          keeper=KeeperOptions(enabled=use_keeper),
                          policy=FaultPolicy(on_departure), lost_wait_s=lost_wait,
-                         any_firmware=any_firmware)
+                         any_firmware=any_firmware, any_params=any_params)
     keeper = make_keeper(planned, options.keeper)
     out_dir = log_dir or plan_dir / "flight"
     check_writable(out_dir)  # before any vehicle: a flight's record is not lost at its end
@@ -456,7 +461,8 @@ def _link_budget(text: str | None, copters: int, *, signed: bool, wanted_hz: flo
 
 
 def _resume(planned: PlannedFlight, progress_file: Path, sysids: list[int], urls, *,
-            any_firmware: bool, signing_key, timing, discover_timeout_s: float
+            any_firmware: bool, signing_key, timing, discover_timeout_s: float,
+            any_params: bool = False
             ) -> PlannedFlight:
     """``fly --resume`` before the flight: the rest planned and written
     (:func:`~ftlbo_mav.flight.resume.plan_rest`), uploaded to every vehicle and verified;
@@ -477,6 +483,7 @@ def _resume(planned: PlannedFlight, progress_file: Path, sysids: list[int], urls
     click.echo(f"the rest planned in {rest.folder} ({rest.plan.waypoint_count} points, "
                f"{rest.plan.seconds:.2f} s); uploading it")
     results = upload_folder(rest.folder, sysids, urls, any_firmware=any_firmware,
+                            any_params=any_params,
                             timing=timing, discover_timeout_s=discover_timeout_s,
                             signing_key=signing_key)
     for r in results:

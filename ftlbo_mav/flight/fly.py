@@ -69,6 +69,7 @@ class FlyOptions:
     lost_wait_s: float = 15.0
     watch: WatchOptions = WatchOptions()
     any_firmware: bool = False  # fly a vehicle whose firmware the model does not follow
+    any_params: bool = False  # fly copters whose own values lose a promise (flight/fit.py)
 
 
 def make_keeper(planned: PlannedFlight, options: KeeperOptions) -> FormationKeeper:
@@ -106,7 +107,7 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     """
     say("pre-flight: firmware, missions, GPS, pre-arm checks")
     preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s,
-              any_firmware=options.any_firmware, say=say)
+              any_firmware=options.any_firmware, any_params=options.any_params, say=say)
     if keeper is None and options.keeper.enabled:
         keeper = make_keeper(planned, options.keeper)
     if keeper is not None and keeper.options.enabled and keeper.cruise_speed_m_s is None:

@@ -103,6 +103,7 @@ def firmware_problems(vehicles: Sequence[FlightVehicle], *, timeout_s: float
 
 def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
               timing: Timing, ready_timeout_s: float, any_firmware: bool = False,
+              any_params: bool = False,
               say: Callable[[str], None] = lambda _t: None) -> None:
     """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission.
     A vehicle whose firmware is not ArduCopter 4.5.x or 4.6.x is one that is not, unless
@@ -147,7 +148,10 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                             [v.status.firmware_version for v in vehicles])
         for line in verdict.changed:
             say(f"note: {line}: the copter's own values, flown as they are")
-        if verdict.broken:
+        if verdict.broken and any_params:
+            for b in verdict.broken:
+                say(f"warning: the plan does not fit: {b}: not promised (--any-params)")
+        elif verdict.broken:
             onboard = [list(why) + [f"the plan does not fit it: {b}" for b in verdict.broken
                                     if b.startswith(f"{v.name} (sysid {v.sysid})")]
                        for v, why in zip(vehicles, onboard)]

@@ -10,15 +10,18 @@ import os
 import re
 import sys
 import threading
+from dataclasses import replace
 from pathlib import Path
 
 import click
 
+from ..ardupilot.copters import FLIGHT_PARAMS
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, SYSIDS, FiniteFloat
 from ..errors import MissionFileError
 from ..mission.export import check_plan_folder, read_plan_json
 from ..mission.fence_files import read_fence_set, write_fence_set
+from ..mission.params_file import write_params
 from ..mission.waypoints import read_waypoints, write_waypoints
 from .codec import storage_warnings
 from .endpoints import (
@@ -32,6 +35,7 @@ from .endpoints import (
 )
 from .geofence import download_fence_set
 from .mission_protocol import Timing, download_mission
+from .params import read_params
 from .signing import load_key
 from .swarm import Assignment, ProgressEvent, upload_swarm
 
@@ -180,10 +184,14 @@ def timing_options(func):
               help="Upload to a vehicle whose AUTOPILOT_VERSION is not ArduCopter 4.5.x or "
                    "4.6.x (the firmware the planner's flight model follows), saying what is not "
                    "then promised. Without it such a swarm is refused before anything is sent.")
+@click.option("--any-params", "any_params", is_flag=True,
+              help="Upload to copters whose own values lose a promise of the plan, saying "
+                   "which: that promise is then not kept. Without it nothing is sent.")
 @timing_options
 @user_errors
 def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_params,
-           any_firmware, timeout, retries, ready_timeout, discover_timeout, signing_key):
+           any_firmware, any_params, timeout, retries, ready_timeout, discover_timeout,
+           signing_key):
     """Upload MISSION_DIR/uavN.waypoints to the vehicles, read each back and verify it.
 
     With uavN.fence (and uavN.rally, fence.parm) beside it, each vehicle also gets its
@@ -201,6 +209,7 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_para
     results = upload_folder(mission_dir, sysids, _urls(connect) or default_urls_for(sysids),
                             capacity=capacity, no_fence=no_fence,
                             no_vehicle_params=no_vehicle_params, any_firmware=any_firmware,
+                            any_params=any_params,
                             timing=_timing(timeout, retries, ready_timeout),
                             discover_timeout_s=discover_timeout, signing_key=key,
                             sysid_text=sysid_text)
@@ -216,6 +225,7 @@ def upload(mission_dir, sysid_text, connect, capacity, no_fence, no_vehicle_para
 def upload_folder(mission_dir: Path, sysids: list[int], urls: list[str], *,
                   capacity: int | None = None, no_fence: bool = False,
                   no_vehicle_params: bool = False, any_firmware: bool = False,
+                  any_params: bool = False,
                   timing: Timing, discover_timeout_s: float, signing_key: bytes | None,
                   sysid_text: str = "") -> list:
     """What ``upload`` does, for ``fly --resume`` too: every file of ``mission_dir`` read
@@ -259,7 +269,7 @@ def upload_folder(mission_dir: Path, sysids: list[int], urls: list[str], *,
     board = ProgressBoard([(a.name, a.sysid) for a in assignments])
     return upload_swarm(assignments, urls, signing_key=signing_key, timing=timing,
                         discover_timeout_s=discover_timeout_s, on_progress=board,
-                        any_firmware=any_firmware, fit=fit,
+                        any_firmware=any_firmware, fit=fit, any_params=any_params,
                         on_note=lambda text: click.echo(f"note: {text}", err=True),
                         on_warning=lambda name, sysid, text: click.echo(
                             f"warning: {name} (sysid {sysid}): {text}", err=True))
@@ -292,13 +302,21 @@ def download(sysid, connect, output, no_fence, timeout, retries, ready_timeout,
         with found[sysid].channel(sysid) as channel:
             items = download_mission(channel, timing=timing)
             fence_set = None if no_fence else download_fence_set(channel, timing=timing)
+            flight = {} if no_fence else read_params(channel, FLIGHT_PARAMS, timing=timing)
     finally:
         for link in links:
             link.close()
     write_waypoints(output, items)
     click.echo(f"wrote {output} ({len(items)} items; item 0 is the vehicle's home)")
     if fence_set is not None:
-        for path in write_fence_set(output, fence_set):
+        for path in write_fence_set(output, replace(fence_set, params={})):
             click.echo(f"wrote {path}")
+        held = {n: v for n, v in flight.items() if v is not None}
+        parm = write_params(output.with_suffix(".parm"), dict(fence_set.params) | held,
+                            header=f"# ArduCopter parameters of sysid {sysid}, saved by "
+                                   "ftlbo-mav download: the fence's and the flight's (a "
+                                   "scenario's [vehicle] params_file reads them)")
+        click.echo(f"wrote {parm} ({len(fence_set.params)} fence and {len(held)} flight "
+                   "parameters)")
         click.echo(f"fence: {fence_set.describe()}; "
                    + ", ".join(f"{k} {v:g}" for k, v in fence_set.params.items()))

@@ -188,7 +188,8 @@ def _set_vehicle_params(channel, a: Assignment, timing: Timing) -> tuple[bool, s
 
 
 def _fit_check(todo: Sequence[Assignment], found, versions: Mapping[int, int | None],
-               fit, timing: Timing, emit, on_note) -> dict[int, str]:
+               fit, timing: Timing, emit, on_note, any_params: bool = False
+               ) -> dict[int, str]:
     """Read every vehicle's flight parameters, judge the plan with them (``fit``) and say
     what will be set; per system id why nothing may be sent (empty: go on)."""
     def read(a: Assignment) -> dict[str, float | None]:
@@ -216,7 +217,10 @@ def _fit_check(todo: Sequence[Assignment], found, versions: Mapping[int, int | N
     say = on_note or (lambda _t: None)
     for line in verdict.changed:
         say(f"{line}: the copter's own values, left as they are")
-    if verdict.broken:
+    if verdict.broken and any_params:
+        for b in verdict.broken:
+            say(f"{b}: not promised (--any-params)")
+    elif verdict.broken:
         lost = "; ".join(verdict.broken)
         return {a.sysid: f"refused, nothing sent to any vehicle: {lost} (plan again with "
                 f"these copters' values: [vehicle] params_file or the values by name)"
@@ -237,7 +241,8 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                  signing_key: bytes | None = None, timing: Timing | None = None,
                  discover_timeout_s: float = 5.0,
                  on_progress: OnProgress | None = None, any_firmware: bool = False,
-                 on_warning=None, fit=None, on_note=None) -> list[VehicleResult]:
+                 on_warning=None, fit=None, on_note=None, any_params: bool = False
+                 ) -> list[VehicleResult]:
     """Upload and verify every assignment concurrently; results in assignment order.
 
     First every vehicle found is asked which firmware it runs (:mod:`.firmware`): when
@@ -251,7 +256,8 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
     parameter the plan sets is one a vehicle does not have, nothing is sent to any
     vehicle and each result says why; else ``on_note(text)`` hears what differed, what
     the prediction with the copters' own values keeps, and what each vehicle will be
-    set to, before anything is sent."""
+    set to, before anything is sent; with ``any_params`` a promise lost is said and the
+    upload goes on."""
     timing = timing or Timing()
     emit = on_progress or (lambda _e: None)
     started = clock.monotonic()
@@ -374,7 +380,7 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                     on_warning(a.name, a.sysid, any_firmware_warning(p))
         if todo and fit is not None and len(todo) == len(assignments) and all(
                 a.copter is not None for a in todo):
-            why = _fit_check(todo, found, versions, fit, timing, emit, on_note)
+            why = _fit_check(todo, found, versions, fit, timing, emit, on_note, any_params)
             if why:
                 return refuse_all(why, "not uploaded: " + next(iter(why.values())))
         if todo:

@@ -34,6 +34,61 @@ def resolve_udp_out(host: str, port: int) -> tuple[str, int]:
     return found[0][4][0], port
 
 
+def _per_vehicle(texts, n: int, option: str) -> list[str | None]:
+    """``[SYSID=]VALUE`` options: one value per vehicle (None: not given); one without a
+    SYSID is every vehicle's, one with it that vehicle's."""
+    out: list[str | None] = [None] * n
+    for text in texts:
+        sysid, sep, value = text.partition("=")
+        if sep and sysid.strip().isdigit():
+            i = int(sysid)
+            if not 1 <= i <= n:
+                raise BadInput(f"{option} {text}: the vehicles are system ids 1..{n}")
+            out[i - 1] = value
+        else:
+            out = [text if o is None or not sep else o for o in out]
+    return out
+
+
+def fleet_options(base, n: int, *, firmware=(), profile=(), params=()) -> list:
+    """``base`` (:class:`~.vehicle.VehicleOptions`) for each of ``n`` vehicles with its
+    ``--firmware``, ``--profile`` and ``--params``; :class:`BadInput` names a bad one."""
+    from dataclasses import replace
+
+    from ..ardupilot.copters import PROFILES, flight_values, read_param_text
+    from ..ardupilot.firmware import Firmware
+    from ..ardupilot.navigation import Navigation
+    from ..inputs import read_user_text
+
+    out = []
+    for fw, prof, path in zip(_per_vehicle(firmware, n, "--firmware"),
+                              _per_vehicle(profile, n, "--profile"),
+                              _per_vehicle(params, n, "--params")):
+        o = base
+        if fw is not None:
+            parts = fw.split(".")
+            if len(parts) != 3 or not all(p.isdigit() for p in parts):
+                raise BadInput(f"--firmware {fw}: give a version such as 4.6.3")
+            o = replace(o, firmware=Firmware(*map(int, parts), 255))
+        values: dict[str, float] = {}
+        if prof is not None:
+            if prof not in PROFILES:
+                raise BadInput(f"--profile {prof}: not one of {', '.join(PROFILES)}")
+            values |= dict(PROFILES[prof].params)
+        if path is not None:
+            text = read_user_text(path, error=lambda problem, p=path: BadInput(
+                f"--params {p}: {problem}"))
+            try:
+                values |= flight_values(read_param_text(text, source=path), source=path)
+            except ValueError as exc:
+                raise BadInput(f"--params {exc}") from None
+        if values:
+            nav = Navigation().with_params(o.limits.nav.to_params() | values)
+            o = replace(o, limits=replace(o.limits, nav=nav))
+        out.append(o)
+    return out
+
+
 @click.command()
 @click.option("--count", type=click.IntRange(1, 254), default=None,
               help="Number of vehicles (default: the scenario's UAVs, else 3).")
@@ -89,10 +144,20 @@ def resolve_udp_out(host: str, port: int) -> tuple[str, int]:
                    "B/s both ways, 60+-40 ms, 3 %% lost, 2 KiB buffers), rough (120+-80 ms, "
                    "10 %% lost in bursts, 1 s outage every 15 s), and/or key=value pairs: "
                    "bytes, latency, jitter, loss, burst, buffer, overhead, outage, every.")
+@click.option("--firmware", "firmware_text", multiple=True, metavar="[SYSID=]VERSION",
+              help="The ArduCopter release the vehicles report and fly as (4.5.6, the "
+                   "default, or 4.6.3; another version is reported and flown as the nearest "
+                   "modelled one); SYSID= for one vehicle (repeatable).")
+@click.option("--profile", "profile_text", multiple=True, metavar="[SYSID=]NAME",
+              help="Boot with a board's default parameters (3dr-solo: CubeSolo's "
+                   "defaults.parm), as SITL's --defaults does; SYSID= for one vehicle.")
+@click.option("--params", "params_text", multiple=True, metavar="[SYSID=]FILE",
+              help="Boot with a parameter file's values (.param or .parm; after --profile), "
+                   "as SITL's --defaults a.parm,b.parm does; SYSID= for one vehicle.")
 @user_errors
 def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
         latency_ms, boot_delay, capacity, silent, mute, signing_key, seed, arm_delay, speed,
-        boot_scale, vary, time_scale, radio_text):
+        boot_scale, vary, time_scale, radio_text, firmware_text, profile_text, params_text):
     """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
     from ..ardupilot.commands import RECORDED_BOOT
     from ..scenario import load_scenario
@@ -138,6 +203,8 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
                              limits=FlightLimits.with_speed(speed),
                              mission=MissionServerOptions(capacity=capacity,
                                                           boot_no_space_s=boot_delay))
+    options = fleet_options(options, n, firmware=firmware_text, profile=profile_text,
+                            params=params_text)
     key = load_key(signing_key) if signing_key else None
     simulator = Simulator(homes=homes, base_port=base_port,
                           udp_out=udp_out, faults=faults,

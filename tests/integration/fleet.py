@@ -22,6 +22,8 @@ from ftlbo_mav.sim.server import Simulator
 from ftlbo_mav.sim.vehicle import VehicleOptions
 
 SITL_BINARY = os.environ.get("ARDUPILOT_SITL")
+# a second release's binary for a fleet of two (ArduCopter 4.6.x; the first is 4.5.x)
+SITL_BINARY_46 = os.environ.get("ARDUPILOT_SITL_4_6")
 BACKEND = "sitl" if SITL_BINARY else "emulator"
 FAST = VehicleOptions(heartbeat_s=0.2)  # quicker discovery; protocol timings stay ArduPilot's
 
@@ -68,14 +70,17 @@ def _behind(fleet: Fleet, radio, *, seed: int, speedup: float):
 @contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
              shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0,
-             params: dict[str, float] | None = None, radio=None, router: bool = False):
+             params: dict[str, float] | None = None, radio=None, router: bool = False,
+             copters: list[tuple[str, dict[str, float]]] | None = None):
     """``count`` vehicles, system ids 1..count, ready for uploads; ``homes`` (default a
     row at SITL's default location) and ``speedup`` (the emulator's time scale, SITL's
     --speedup) for flights; ``params``: parameters every vehicle boots with (SITL: a
     defaults file after its own; CAM1_TYPE, for one, is read at boot); ``radio``: the
     shared link is one telemetry radio (:mod:`ftlbo_mav.sim.radio`): the emulator's own,
     or with ``router`` (always on SITL) a :class:`~ftlbo_mav.sim.router.RadioRouter`
-    between the vehicles' TCP ports and the ground station."""
+    between the vehicles' TCP ports and the ground station. ``copters``: per vehicle its
+    release (``"4.5.6"`` or ``"4.6.3"``) and the parameters it boots with (a fleet of
+    different copters; on SITL a 4.6 copter needs ARDUPILOT_SITL_4_6)."""
     homes = default_homes(count) if homes is None else homes
     emulator_only = faults is not None or options is not None or signing_key or shared_link
     if BACKEND == "sitl":
@@ -86,9 +91,21 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
         extra = tempfile.NamedTemporaryFile("w", suffix=".parm", delete=False)
         with extra:
             extra.write("".join(f"{k} {v:g}\n" for k, v in (params or {}).items()))
+        binaries, own = None, None
+        if copters is not None:
+            if any(r.startswith("4.6") for r, _p in copters) and not SITL_BINARY_46:
+                pytest.skip("a 4.6 copter on SITL needs ARDUPILOT_SITL_4_6")
+            binaries = [SITL_BINARY_46 if r.startswith("4.6") else None for r, _p in copters]
+            own = []
+            for _r, values in copters:
+                f = tempfile.NamedTemporaryFile("w", suffix=".parm", delete=False)
+                with f:
+                    f.write("".join(f"{k} {v:g}\n" for k, v in values.items()))
+                own.append([f.name])
         try:
             with SitlSwarm(binary=SITL_BINARY, homes=homes, speedup=speedup,
-                           defaults=[extra.name] if params else ()) as swarm:
+                           defaults=[extra.name] if params else (), binaries=binaries,
+                           instance_defaults=own) as swarm:
                 serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
                 fleet = Fleet(urls=swarm.urls, serial1_urls=serial1,
                               kill=lambda i: swarm.processes[i].kill())
@@ -96,9 +113,16 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
                     yield fleet
         finally:
             os.unlink(extra.name)
+            for files in own or []:
+                os.unlink(files[0])
         return
     own_radio = radio is not None and not router
     udp_out = ("127.0.0.1", free_udp_port()) if shared_link or own_radio else None
+    if copters is not None:
+        from ftlbo_mav.sim.commands import fleet_options
+
+        base = options if options is not None else FAST
+        options = [fleet_options(base, 1, firmware=[release])[0] for release, _p in copters]
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
@@ -106,6 +130,8 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
                    radio=radio if own_radio else None) as sim:
         if params:
             sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
+        for v, (_r, values) in zip(sim.vehicles if copters else (), copters or ()):
+            sim.call(lambda v=v, values=values: v.autopilot.params.update(values))
         fleet = Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
                       serial1_urls=sim.serial1_urls, kill=sim.kill, radio=sim.radio)
         with _behind(fleet, None if own_radio else radio, seed=seed, speedup=speedup):

@@ -1,0 +1,119 @@
+"""The fleet as it is: copters with their own tuning and release, never retuned.
+
+The example's plan, made for ArduCopter's defaults, uploaded to and flown by copters that
+are not that copter: three 3DR Solos (CubeSolo's defaults.parm), and a fleet of three
+different copters (ArduCopter 4.5.6 with its defaults, 4.6.3 with its defaults, and a
+Solo). Upload reads each copter's values and release, predicts the flight again with
+them, says so and writes none of their tuning; the flight keeps what was promised.
+On the emulator here; on SITL with ARDUPILOT_SITL (and ARDUPILOT_SITL_4_6 for the 4.6
+copter), each copter started with copter.parm and, for a Solo, the Solo's values after it.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+
+import pytest
+from click.testing import CliRunner
+
+from ftlbo_mav.ardupilot.copters import PROFILES
+from ftlbo_mav.cli import main
+from ftlbo_mav.flight.planned import load_planned_flight
+
+from ..conftest import EXAMPLE
+from .fleet import BACKEND, vehicles
+from .test_fly import HOMES, _read_param
+
+SPEEDUP = 4.0 if BACKEND == "sitl" else 8.0
+SOLO = dict(PROFILES["3dr-solo"].params)
+TUNING = ("ANGLE_MAX", "PSC_VELXY_P", "PSC_VELXY_I", "ATC_INPUT_TC")
+
+
+@pytest.fixture
+def plan_dir(tmp_path):
+    folder = tmp_path / "plan"
+    shutil.copytree(EXAMPLE.with_suffix(""), folder)
+    return folder
+
+
+def _upload(plan_dir, urls) -> CliRunner:
+    result = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                       "--connect", " ".join(urls)])
+    assert result.exit_code == 0, result.output
+    return result
+
+
+def _fly(plan_dir, urls):
+    return CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                     "--control-port", "0", "--connect", " ".join(urls)])
+
+
+def test_three_solos_are_uploaded_to_without_a_tuning_parameter_written(plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP,
+                  copters=[("4.5.6", SOLO)] * 3) as fleet:
+        result = _upload(plan_dir, fleet.urls)
+        after = {name: _read_param(fleet.urls[1], 2, name) for name in TUNING}
+    err = result.stderr
+    assert ("note: uav2 (sysid 2): WPNAV_SPEED 300 (planned 1000), WPNAV_SPEED_UP 320 "
+            "(planned 250)") in err
+    assert "ANGLE_MAX 2000 (planned 3000)" in err
+    assert "every promise holds" in err
+    assert err.count("sets no parameter (its tuning is never written)") == 3
+    # what is said comes before anything is sent
+    assert err.index("every promise holds") < err.index("uav1 -> sysid 1: upload")
+    assert "3/3 vehicles verified" in result.stdout
+    assert after == pytest.approx({n: SOLO[n] for n in TUNING})
+
+
+def _flown_as_promised(plan_dir, predicted_clearance: float) -> dict:
+    summary = json.loads((plan_dir / "flight" / "summary.json").read_text())
+    assert summary["inside_obstacle"] is False
+    assert summary["min_clearance_m"] >= predicted_clearance - 0.05, summary
+    assert summary["formation_error_rms_legs_m"] <= 0.15, summary
+    assert summary["formation_error_max_legs_m"] <= 0.3, summary
+    return summary
+
+
+def test_three_solos_fly_the_plan_with_their_own_tuning(plan_dir):
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=[("4.5.6", SOLO)] * 3) as fleet:
+        uploaded = _upload(plan_dir, fleet.urls)
+        result = _fly(plan_dir, fleet.urls)
+        after = _read_param(fleet.urls[0], 1, "ATC_INPUT_TC")
+    assert result.exit_code == 0, result.output
+    # the clearance predicted again with the Solos' values, as upload said it
+    kept = re.search(r"own values: clearance (\d+\.\d+) m", uploaded.stderr)
+    assert kept, uploaded.stderr
+    _flown_as_promised(plan_dir, float(kept.group(1)))
+    assert after == pytest.approx(SOLO["ATC_INPUT_TC"])
+
+
+def test_a_fleet_of_two_releases_flies_the_plan_as_predicted(plan_dir):
+    """ArduCopter 4.5.6, 4.6.3 and 4.5.6, each with its defaults."""
+    copters = [("4.5.6", {}), ("4.6.3", {}), ("4.5.6", {})]
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+        uploaded = _upload(plan_dir, fleet.urls)
+        result = _fly(plan_dir, fleet.urls)
+    assert "uav2 (sysid 2): ArduCopter 4.6 (planned 4.5)" in uploaded.stderr
+    assert result.exit_code == 0, result.output
+    planned = load_planned_flight(plan_dir)
+    summary = _flown_as_promised(plan_dir, float(planned.predicted_clearance.min()))
+    assert summary["firmware"]["uav2"]["version"] == "4.6.3 official"
+
+
+def test_a_solo_among_default_copters_is_refused_naming_why(plan_dir):
+    """The Solo's slower S-curves (its ATC_INPUT_TC) and position control leave it behind
+    where the legs speed up: the plan made for default copters cannot hold the formation
+    with it, and says so before anything is sent (a plan made for this fleet says it at
+    plan time: tests/planning/test_fleet_plan.py)."""
+    copters = [("4.5.6", {}), ("4.5.6", {}), ("4.5.6", SOLO)]
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+        refused = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                            "--connect", " ".join(fleet.urls)])
+        held = fleet.missions() if fleet.sim else None
+    assert refused.exit_code == 1
+    assert refused.stdout.count("refused, nothing sent to any vehicle") == 3
+    assert "uav3 (sysid 3) with its WPNAV_SPEED 300 (planned 1000)" in refused.stdout
+    assert "from its slot in the formation" in refused.stdout
+    assert held is None or all(len(m) <= 1 for m in held)
