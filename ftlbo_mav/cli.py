@@ -22,7 +22,7 @@ from .gnss import classes_within
 from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files, read_plan
 from .mission.files import OutputFolder
 from .planning.optimizers import OPTIMIZERS
-from .planning.planner import AUTO_TARGET
+from .planning.planner import AUTO_TARGET, fleet_lags
 from .planning.planner import plan as plan_scenario
 from .scenario import AUTO, load_scenario
 from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINTS, MIN_STUDENTS
@@ -194,6 +194,8 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
     click.echo(format_summary(result))
     for line in format_survey(result) + format_battery(result):
         click.echo(line)
+    for line in fleet_lags(result):
+        click.echo(f"note: {line}", err=True)
     _say_written(paths)
     if not result.feasible:
         for line in result.violations:

@@ -113,24 +113,15 @@ def fit_fleet(planned: PlannedFlight, actual: Sequence[Copter],
                           f"leave the altitude band [{low:g}, {high:g}] m")
     worst_slot = None
     if planned.count > 1:
-        # measured at the same instant, as fly's departure watch measures it: a copter
-        # whose S-curves or position control are slower than the others' falls behind
-        # where the legs speed up, faster than the formation keeper's waits make up
-        # (the emulator: a Solo among two default copters, 0.9 m after 2 s)
+        # at the same instant, as fly's departure watch measures it, but without the
+        # formation keeper, whose waits make up a lag along the track: a copter with slower
+        # S-curves is said, not refused (ArduCopter 4.5.6 SITL, a Solo among two default
+        # copters on the example: predicted here 1.75 m, flown 0.30 m worst with the keeper)
         errors = slot_errors(pred.positions.transpose(1, 0, 2), planned.offsets)  # (T, N)
         worst_slot = errors.max(axis=0)
-        bound = planned.formation_bound_m
-        if bound is not None:
-            for n in np.flatnonzero(worst_slot > bound + _TOL):
-                i = int(np.argmax(errors[:, n]))
-                broken.append(f"{blame(int(n))}: {labels[n]} is predicted "
-                              f"{worst_slot[n]:.2f} m from its slot in the formation "
-                              f"{pred.times[i]:.1f} s into the legs; `fly` counts "
-                              f"{bound:.2f} m a departure (formation_bound)")
     kept = (f"clearance {float(pred.clearance.min()):.2f} m (kept {need:.2f}), separation "
             f"{float(true.min()):.2f} m (kept {planned.min_separation_m:g})")
     if worst_slot is not None:
-        kept += f", formation worst {float(worst_slot.max()):.2f} m"
-        if planned.formation_bound_m is not None:
-            kept += f" (bound {planned.formation_bound_m:.2f})"
+        kept += (f", up to {float(worst_slot.max()):.2f} m from a slot before the formation "
+                 "keeper's waits")
     return Fit(changed, kept, tuple(broken))

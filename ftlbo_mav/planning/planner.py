@@ -436,9 +436,6 @@ def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Pla
                              radii=own_radii, pair_error_m=sc.navigation.pair_m)
     flown = predicted_violations(plan.problem, prediction, clearance_m=keep,
                                  obstacle_radii=own_radii, min_separation_m=sc.min_separation_m)
-    if model.navs is not None:  # copters that fly differently drift apart on the legs
-        flown = list(flown) + fleet_apart(prediction, plan.problem.offsets,
-                                          max_error_m=sc.max_formation_error_m)
     charges = None
     if sc.battery is not None:
         homes = plan.uav_paths[:, 0] * np.array([1.0, 1.0, 0.0])  # each on the ground below
@@ -452,20 +449,27 @@ def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Pla
                    seconds=plan.seconds + seconds, stopped_for=stopped_for, charges=charges)
 
 
-def fleet_apart(prediction: Prediction, offsets: np.ndarray, *, max_error_m: float
-                ) -> list[str]:
-    """Why a fleet of different copters does not hold the formation on its own: each UAV
+def fleet_lags(plan: Plan) -> list[str]:
+    """Where a fleet of copters that fly differently drift apart on their own: each UAV
     predicted farther from its slot (the flown centroid plus its offset, at the same
-    instant) than ``max_error_m`` (``[formation] max_error``), in sentences."""
-    rel = prediction.positions - prediction.positions.mean(axis=0, keepdims=True)
-    target = offsets - offsets.mean(axis=0)
-    errors = np.linalg.norm(rel - target[:, None, :], axis=-1)  # (N, T)
+    instant) than ``[formation] max_error``, in sentences (empty: a fleet of alike
+    copters, or one that keeps together). Not a violation: ``fly``'s formation keeper
+    makes up a lag along the track by pausing the leaders (ArduCopter 4.5.6 SITL, a Solo
+    among two default copters, the example: 0.30 m worst with the keeper, where this
+    prediction without it says 1.75 m)."""
+    p, sc = plan.prediction, plan.scenario
+    if p is None or len({c.nav for c in sc.fleet()}) < 2:
+        return []
+    offsets = plan.problem.offsets
+    rel = p.positions - p.positions.mean(axis=0, keepdims=True)
+    errors = np.linalg.norm(rel - (offsets - offsets.mean(axis=0))[:, None, :], axis=-1)
     out = []
-    for n in np.flatnonzero(errors.max(axis=1) > max_error_m + 1e-9):
+    for n in np.flatnonzero(errors.max(axis=1) > sc.max_formation_error_m + 1e-9):
         i = int(np.argmax(errors[n]))
         out.append(f"UAV {n + 1} is predicted {errors[n, i]:.2f} m from its slot "
-                   f"{prediction.times[i]:.1f} s into its legs: its copter flies its legs "
-                   f"unlike the others ([vehicle]); [formation] max_error is {max_error_m:g} m")
+                   f"{p.times[i]:.1f} s into its legs without fly's formation keeper: its "
+                   "copter flies unlike the others ([vehicle]); the keeper's waits make up a "
+                   "lag along the track")
     return out
 
 

@@ -102,18 +102,14 @@ def test_a_fleet_of_two_releases_flies_the_plan_as_predicted(plan_dir):
     assert summary["firmware"]["uav2"]["version"] == "4.6.3 official"
 
 
-def test_a_solo_among_default_copters_is_refused_naming_why(plan_dir):
-    """The Solo's slower S-curves (its ATC_INPUT_TC) and position control leave it behind
-    where the legs speed up: the plan made for default copters cannot hold the formation
-    with it, and says so before anything is sent (a plan made for this fleet says it at
-    plan time: tests/planning/test_fleet_plan.py)."""
+def test_a_solo_among_default_copters_is_uploaded_saying_how_far_it_lags(plan_dir):
+    """The Solo's slower S-curves (its ATC_INPUT_TC) leave it behind where the legs speed
+    up; fly's formation keeper makes that up (ArduCopter 4.5.6 SITL: 0.30 m worst, the
+    Solo 0.40 m behind at most), so upload says it and goes on. (The emulator's Solo lags
+    more than SITL's: not flown here, docs/flight.md.)"""
     copters = [("4.5.6", {}), ("4.5.6", {}), ("4.5.6", SOLO)]
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
-        refused = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
-                                            "--connect", " ".join(fleet.urls)])
-        held = fleet.missions() if fleet.sim else None
-    assert refused.exit_code == 1
-    assert refused.stdout.count("refused, nothing sent to any vehicle") == 3
-    assert "uav3 (sysid 3) with its WPNAV_SPEED 300 (planned 1000)" in refused.stdout
-    assert "from its slot in the formation" in refused.stdout
-    assert held is None or all(len(m) <= 1 for m in held)
+        uploaded = _upload(plan_dir, fleet.urls)
+    assert "uav3 (sysid 3): WPNAV_SPEED 300 (planned 1000)" in uploaded.stderr
+    assert re.search(r"up to \d\.\d\d m from a slot before the formation keeper's waits: "
+                     "every promise holds", uploaded.stderr), uploaded.stderr
