@@ -15,7 +15,9 @@ Prints formation error (RMS and worst, waypoint legs), seconds on the legs, smal
 separation and clearance and the landing error per strategy and writes
 ``flight-benchmark.json``. Stops (exit 1) if any upload fails to verify. Run:
 ``python benchmarks/flight.py``; on SITL set ``ARDUPILOT_SITL`` (and
-``ARDUPILOT_SITL_DEFAULTS`` to ArduPilot's copter.parm).
+``ARDUPILOT_SITL_DEFAULTS`` to ArduPilot's copter.parm). ``--profile 3dr-solo`` flies
+copters with that board's values (ftlbo_mav/ardupilot/copters.py PROFILES): on SITL a
+defaults file after copter.parm, on the emulator each vehicle booted with them.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from ftlbo_mav.ardupilot.copters import PROFILES
 from ftlbo_mav.flight.fly import (
     Fleet,
     FlyOptions,
@@ -71,6 +74,42 @@ def naive_start(planned, vehicles) -> None:
         v.send_mode("AUTO")
     for v in vehicles:
         v.set_mode("AUTO")
+
+
+def version_strings(vehicles, timeout_s: float = 3.0) -> list[str | None]:
+    """Each vehicle's version banner as it says it (``ArduCopter V4.5.6 (bbf0b066)``: the
+    STATUSTEXT ArduCopter sends for MAV_CMD_DO_SEND_BANNER), else its AUTOPILOT_VERSION
+    release (``ArduCopter 4.5.6``), None when it says neither."""
+    from pymavlink.dialects.v20 import ardupilotmega as R
+
+    def banner(status) -> str | None:
+        return next((t for _t, _sev, t in reversed(status.text_log)
+                     if t.startswith("ArduCopter V")), None)
+
+    out = []
+    for v in vehicles:
+        try:
+            if banner(v.status) is None:
+                v.send(R.MAVLink_command_long_message(v.sysid, 1, R.MAV_CMD_DO_SEND_BANNER,
+                                                      0, 0, 0, 0, 0, 0, 0, 0), step="banner")
+                v.wait_for(lambda s: banner(s) is not None, timeout_s)
+            text = banner(v.status)
+            if text is None:
+                raw = v.request_version()
+                if raw is not None:
+                    text = f"ArduCopter {raw >> 24 & 0xFF}.{raw >> 16 & 0xFF}.{raw >> 8 & 0xFF}"
+        except Exception:  # noqa: BLE001 - what it says is for the record only
+            text = None
+        out.append(text)
+    return out
+
+
+def profile_parm(name: str, folder: Path) -> Path:
+    """A SITL defaults file of profile ``name``'s values (``NAME VALUE`` lines)."""
+    path = folder / f"profile-{name}.parm"
+    path.write_text(f"# {PROFILES[name].description}: {PROFILES[name].source}\n" + "".join(
+        f"{k} {v:g}\n" for k, v in PROFILES[name].params.items()))
+    return path
 
 
 def set_params(urls, settings) -> None:
@@ -153,10 +192,12 @@ def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None, *,
                     keeper=keeper)
             except FlightLeftPlan as exc:  # measured all the same, and said
                 left = str(exc)
+        versions = version_strings(fleet.vehicles)
     times, positions, seqs = monitor.record.grid(sysids, planned.frame)
     summary = summarize(planned, times, positions, seqs)
     summary["left_plan"] = left
     summary["_samples"] = monitor.record.samples  # for --record, not in the JSON summary
+    summary["versions"] = versions
     if keep is not None:
         keep.mkdir(parents=True, exist_ok=True)
         shutil.copytree(plan_dir, keep / "plan", dirs_exist_ok=True)
@@ -190,26 +231,39 @@ class UploadFailed(Exception):
 
 def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None,
               speedup: float = 1.0, seed: int = 0, vary: bool = False,
-              params=(), wind=None, keep: Path | None = None, radio=None) -> dict:
+              params=(), wind=None, keep: Path | None = None, radio=None,
+              profile: str | None = None) -> dict:
     """One flight of ``plan_dir`` on freshly started vehicles (SITL when ``binary``, else
     the emulator, ``vary`` and ``seed`` giving each copter its differences) flown the
     ``strategy`` way, in ``wind`` (SPD, DIR, TURB: SITL's SIM_WIND_* set on each instance,
     the emulator's wind model); its summary. ``keep``: a folder for the flight's samples
     and keeper trace and SITL's instance folders (DataFlash logs in ``instanceN/logs``).
     ``radio`` (:class:`~ftlbo_mav.sim.radio.RadioOptions`): every vehicle behind one radio
-    (SITL: the router, sim/router.py; the emulator: its shared link), seeded by ``seed``."""
+    (SITL: the router, sim/router.py; the emulator: its shared link), seeded by ``seed``.
+    ``profile`` (a :data:`~ftlbo_mav.ardupilot.copters.PROFILES` name): every copter with
+    that board's values (SITL: a defaults file after copter.parm; the emulator: each
+    vehicle booted with them)."""
     planned = load_planned_flight(plan_dir)
     udp_out = ("127.0.0.1", free_udp_port()) if radio is not None else None
+    n = len(homes)
+    parm_dir = tempfile.TemporaryDirectory()
     if binary:
         from sitl import SitlSwarm
 
-        swarm = SitlSwarm(binary=binary, homes=homes, speedup=speedup, workdir=keep)
+        own = ([[profile_parm(profile, Path(parm_dir.name))]] * n if profile else None)
+        swarm = SitlSwarm(binary=binary, homes=homes, speedup=speedup, workdir=keep,
+                          instance_defaults=own)
     else:
+        from ftlbo_mav.sim.commands import fleet_options
         from ftlbo_mav.sim.server import Simulator
+        from ftlbo_mav.sim.vehicle import VehicleOptions
 
+        options = (fleet_options(VehicleOptions(), n, profile=[profile]) if profile
+                   else None)
         swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary,
-                          udp_out=udp_out, radio=radio, **({"wind": wind} if wind else {}))
-    with swarm as started, contextlib.ExitStack() as stack:
+                          udp_out=udp_out, radio=radio, options=options,
+                          **({"wind": wind} if wind else {}))
+    with parm_dir, swarm as started, contextlib.ExitStack() as stack:
         vehicles = _Urls(started.urls, None)
         if radio is not None and binary:
             from ftlbo_mav.sim.router import RadioRouter
@@ -267,22 +321,42 @@ def print_clearance(scenario: Path, rows: dict, *, binary: str | None) -> None:
 
 
 def write_recording(path: Path, plan_dir: Path, samples, summary: dict, *, strategy: str,
-                    binary: str | None, speedup: float, scenario: Path) -> None:
+                    binary: str | None, speedup: float, scenario: Path,
+                    profile: str | None = None) -> None:
     """The flight as tests/data's recordings are: what was flown (every position sample
-    in AUTO), the plan and missions it flew, how it was recorded."""
+    in AUTO), the plan and missions it flew, how it was recorded: the version each SITL
+    copter said it runs (its banner) and the profile it was started with. A scenario
+    outside the repository is kept whole (``scenario_toml``), as the plan was made from
+    it."""
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    back = ("ArduCopter 4.5.6 SITL ($ARDUPILOT_SITL: our own build at bbf0b066, started by "
-            f"`python -m sitl`'s launcher with copter.parm only, --speedup {speedup:g})"
-            if binary else f"the emulator (time scale {speedup:g})")
+    versions = sorted({v for v in summary.get("versions") or [] if v})
+    said = " and ".join(f"`{v}`" for v in versions) or "a version it did not say"
+    with_ = (f"copter.parm then the `{profile}` profile's values ({PROFILES[profile].source},"
+             " as a defaults file)" if profile else "copter.parm only")
+    if binary:
+        back = (f"{said} SITL ($ARDUPILOT_SITL: {binary}, started by `python -m sitl`'s "
+                f"launcher with {with_}, --speedup {speedup:g})")
+    else:
+        back = (f"the emulator (time scale {speedup:g}"
+                + (f", every vehicle booted with the `{profile}` profile's values"
+                   if profile else "") + ")")
+    try:
+        shown = scenario.resolve().relative_to(ROOT)
+        text = None
+    except ValueError:  # outside the repository: kept whole
+        shown, text = scenario, scenario.read_text()
+    options = f"--scenario {shown}" + (f" --profile {profile}" if profile else "")
     doc = {
-        "about": (f"Recorded {when} by `python benchmarks/flight.py --scenario {scenario} "
+        "about": (f"Recorded {when} by `python benchmarks/flight.py {options} "
                   f"--record ...` against {back}: the plan folder uploaded as `ftlbo-mav "
                   f"upload` does, then flown as `{strategy}` ("
                   f"{'with' if strategy == 'fly' else 'without'} the formation keeper). "
                   "`samples` are the GLOBAL_POSITION_INT positions each vehicle sent in "
                   "AUTO at 10 Hz (lat/lon 1e-7 degrees, altitude above "
                   "home mm), t in seconds on the recorder's clock, boot_ms the vehicle's."),
-        "scenario": str(scenario),
+        "scenario": str(shown),
+        **({"scenario_toml": text} if text is not None else {}),
+        "profile": profile,
         "strategy": strategy,
         "plan": json.loads((plan_dir / "plan.json").read_text()),
         "missions": {p.stem: p.read_text() for p in sorted(plan_dir.glob("uav*.waypoints"))},
@@ -322,15 +396,25 @@ def main() -> int:
                         metavar="SYSID:NAME=VALUE",
                         help="set a parameter on one vehicle before each flight (PARAM_SET, "
                              "read back), e.g. 2:WPNAV_JERK=0.8 for a copter that is slower "
-                             "than the others; repeatable. `fly` refuses a copter whose "
-                             "[vehicle] parameters (WPNAV_*, PSC_JERK_XY, ATC_INPUT_TC) are "
-                             "not the plan's: those fly only the naive way")
+                             "than the others; repeatable. `fly` reads every copter's flight "
+                             "parameters and release and predicts again with them "
+                             "(ftlbo_mav/flight/fit.py): a copter that differs from the plan "
+                             "is flown as it is, said, when every promise (clearance, "
+                             "separation, formation) still holds, refused otherwise")
     parser.add_argument("--record", type=Path, default=None,
                         help="write the first `fly` flight's telemetry (in AUTO), its plan and "
-                             "missions as JSON here (tests/data/ardupilot-4.5.6/flown-*.json)")
+                             "missions as JSON here (tests/data/ardupilot-<release>/"
+                             "flown-*.json); its `about` names the version SITL said it "
+                             "runs and the --profile")
     parser.add_argument("--scenario", type=Path, default=EXAMPLE,
                         help="scenario to fly (default the shipped example); planned with "
                              "the default planner unless a folder of its name holds missions")
+    parser.add_argument("--profile", choices=sorted(PROFILES), default=None,
+                        help="every copter with this board's values (ftlbo_mav/ardupilot/"
+                             "copters.py PROFILES, e.g. 3dr-solo: CubeSolo's defaults.parm): "
+                             "on SITL a defaults file of them after copter.parm, on the "
+                             "emulator each vehicle booted with them. The plan is the "
+                             "scenario's: give it the same copter ([vehicle] profile)")
     parser.add_argument("--wind", type=parse_wind, default=None, metavar="SPD,DIR,TURB",
                         help="wind on every copter: speed m/s, direction it comes from "
                              "(degrees), turbulence m/s; on SITL its SIM_WIND_SPD/DIR/TURB "
@@ -363,7 +447,7 @@ def main() -> int:
                     summary = fly_fresh(plan_dir, homes, strategy, binary=binary,
                                         speedup=args.speedup, seed=run, vary=args.vary,
                                         params=args.params, wind=args.wind,
-                                        radio=args.radio,
+                                        radio=args.radio, profile=args.profile,
                                         keep=(args.keep / f"run{run}-{strategy.replace(' ', '')}"
                                               if args.keep else None))
                 except UploadFailed as exc:  # flying without its mission measures nothing
@@ -373,7 +457,7 @@ def main() -> int:
                 if args.record and strategy != "naive" and not recorded:
                     write_recording(args.record, plan_dir, samples, summary,
                                     strategy=strategy, binary=binary, speedup=args.speedup,
-                                    scenario=args.scenario)
+                                    scenario=args.scenario, profile=args.profile)
                     recorded = True
                 rows[strategy].append(summary)
                 print(f"run {run} {strategy:>15}: formation error "
@@ -387,6 +471,7 @@ def main() -> int:
                          else ""), flush=True)
     print(f"\n{args.scenario.name}; back end: {'ArduPilot SITL' if binary else 'emulator'}, "
           f"speedup {args.speedup:g}, {args.runs} runs each"
+          + (f"; profile {args.profile}" if args.profile else "")
           + (f"; parameters set: {', '.join(args.params)}" if args.params else "")
           + ("; per-vehicle variation (--vary)" if args.vary else "")
           + ("; wind {:g} m/s from {:g} deg, turbulence {:g} m/s".format(*args.wind)

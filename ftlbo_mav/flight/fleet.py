@@ -5,7 +5,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from .. import clock
-from ..link.endpoints import LinkError, describe_missing, discover, open_links
+from ..link.endpoints import (
+    LinkError,
+    describe_missing,
+    discover,
+    mavlink1_problem,
+    open_links,
+)
 from .vehicle import FlightVehicle
 
 
@@ -35,6 +41,9 @@ class Fleet:
             if missing:
                 raise LinkError("; ".join(describe_missing(s, self.links, self.discover_timeout_s)
                                           for s in missing))
+            old = [s for s in self.sysids if found[s].heartbeats[s].mavlink1]
+            if old:  # said at once, not found out by a time-out later
+                raise LinkError("; ".join(mavlink1_problem(s, found[s].url) for s in old))
             self.vehicles = [FlightVehicle(n, s, found[s], on_position=self.on_position,
                                            on_photo=self.on_photo, position_hz=self.position_hz,
                                            status_hz=self.status_hz)

@@ -155,6 +155,7 @@ class Heartbeat:
     base_mode: int
     system_status: int
     received_at: float
+    mavlink1: bool = False  # it came as a MAVLink 1 frame (the port speaks nothing else)
 
 
 def _is_vehicle(msg) -> bool:
@@ -485,7 +486,7 @@ class Link:
                 sysid=src, compid=msg.get_srcComponent(), vehicle_type=msg.type,
                 autopilot=msg.autopilot, custom_mode=msg.custom_mode,
                 base_mode=msg.base_mode, system_status=msg.system_status,
-                received_at=clock.monotonic())
+                received_at=clock.monotonic(), mavlink1=msg.get_msgbuf()[0] == MAVLINK1_MAGIC)
         elif kind == "AUTOPILOT_VERSION":
             self.versions[src] = int(msg.flight_sw_version)
         elif kind == "GPS_RAW_INT":
@@ -696,6 +697,18 @@ def _wait_ready(found: dict[int, Link], missing: list[int], sysids: Sequence[int
                 f"{s} ({'; '.join(readiness_problems(found[s], s))})" for s in waiting]
             raise LinkError(f"not ready after {timeout_s:g} s: system id {', '.join(what)}")
         clock.sleep(0.1)
+
+
+MAVLINK1_MAGIC = 0xFE  # a MAVLink 1 frame's first byte (MAVLink 2: 0xFD)
+
+
+def mavlink1_problem(sysid: int, url: str) -> str:
+    """One line for a vehicle whose link speaks MAVLink 1 only, and what to change."""
+    return (f"system id {sysid} speaks MAVLink 1 only on {url} (its HEARTBEATs come as "
+            "MAVLink 1 frames): ftlbo-mav needs MAVLink 2 (fence and rally points, "
+            "mission types, signing); set SERIALn_PROTOCOL = 2 for the port of this link "
+            "(a 3DR Solo on its original firmware: update it to ArduCopter 4, whose "
+            "CubeSolo build speaks MAVLink 2); nothing was sent")
 
 
 def describe_missing(sysid: int, links: Sequence[Link], timeout_s: float) -> str:

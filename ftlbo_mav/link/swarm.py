@@ -26,7 +26,7 @@ from ..ardupilot.firmware import (
 from ..mission.fence_files import FenceSet
 from ..mission.items import MissionItem
 from .codec import mission_differences
-from .endpoints import Heartbeat, describe_missing, discover, open_links
+from .endpoints import Heartbeat, describe_missing, discover, mavlink1_problem, open_links
 from .firmware import request_version
 from .geofence import upload_fence_set
 from .mission_protocol import (
@@ -356,6 +356,12 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                 emit(ProgressEvent(a.name, a.sysid, "failed", message=msg))
             return [results[a.sysid] for a in assignments]
 
+        old = [a for a in todo if found[a.sysid].heartbeats[a.sysid].mavlink1]
+        if old:  # at once, not after a protocol's time-outs
+            return refuse_all(
+                {a.sysid: mavlink1_problem(a.sysid, found[a.sysid].url) for a in old},
+                "not uploaded: " + ", ".join(f"sysid {a.sysid}" for a in old)
+                + " speaks MAVLink 1 only; nothing was sent")
         if todo:
             with clock.Executor(len(todo)) as pool:
                 answers = list(pool.map(firmware, todo))

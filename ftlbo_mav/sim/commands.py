@@ -118,6 +118,9 @@ def fleet_options(base, n: int, *, firmware=(), profile=(), params=()) -> list:
               help="This vehicle says nothing at all (repeatable).")
 @click.option("--mute", "mute", multiple=True, type=click.IntRange(1, 254), metavar="SYSID",
               help="This vehicle sends HEARTBEATs but ignores the mission protocol.")
+@click.option("--mavlink1", "mavlink1", multiple=True, type=click.IntRange(1, 254),
+              metavar="SYSID",
+              help="This vehicle's port speaks MAVLink 1 only (SERIALn_PROTOCOL 1).")
 @click.option("--signing-key", type=click.Path(dir_okay=False),
               help="Vehicles require MAVLink 2 signing with this key.")
 @click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0,
@@ -157,7 +160,8 @@ def fleet_options(base, n: int, *, firmware=(), profile=(), params=()) -> list:
 @user_errors
 def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate, reorder,
         latency_ms, boot_delay, capacity, silent, mute, signing_key, seed, arm_delay, speed,
-        boot_scale, vary, time_scale, radio_text, firmware_text, profile_text, params_text):
+        boot_scale, vary, time_scale, radio_text, firmware_text, profile_text, params_text,
+        mavlink1):
     """Run emulated ArduCopters (system ids 1..N) until Ctrl-C, listening like SITL."""
     from ..ardupilot.commands import RECORDED_BOOT
     from ..scenario import load_scenario
@@ -191,13 +195,14 @@ def sim(count, scenario, base_port, udp_out, loss, loss_up, loss_down, duplicate
         raise BadInput(f"--base-port {base_port}: {n} vehicles listen on base-port + 10*i, up "
                        f"to {base_port + 10 * (n - 1)}, beyond 65535 (at most "
                        f"{65535 - 10 * (n - 1)} for {n}; 0: any free ports)")
-    for option, ids in (("--silent", silent), ("--mute", mute)):
+    for option, ids in (("--silent", silent), ("--mute", mute), ("--mavlink1", mavlink1)):
         if any(s > n for s in ids):
             raise BadInput(f"{option} {max(ids)}: the vehicles are system ids 1..{n}")
     link = {"loss_up": loss if loss_up is None else loss_up,
             "loss_down": loss if loss_down is None else loss_down,
             "duplicate": duplicate, "reorder": reorder, "latency_s": latency_ms / 1000.0}
-    faults = [Faults(**link, silent=(i + 1) in silent, mute=(i + 1) in mute) for i in range(n)]
+    faults = [Faults(**link, silent=(i + 1) in silent, mute=(i + 1) in mute,
+                     mavlink1=(i + 1) in mavlink1) for i in range(n)]
     options = VehicleOptions(ready_after_s=boot_delay, position_after_s=arm_delay,
                              boot=None if boot_scale is None else RECORDED_BOOT.scaled(boot_scale),
                              limits=FlightLimits.with_speed(speed),

@@ -28,6 +28,11 @@ class Faults:
     ``close_after_items``: after this many mission items received (MISSION_ITEM_INT) the
     vehicle drops its TCP client, as a radio out of range or a crashed SITL does: the
     link closes mid-upload; ``None``: never.
+    ``mavlink1``: the vehicle's port speaks MAVLink 1 only (its SERIALn_PROTOCOL 1, a
+    3DR Solo on its original firmware): it sends MAVLink 1 frames, none of a message whose
+    id is over 255, and keeps to it whatever it receives (GCS_Common.cpp: only a
+    SERIALn_PROTOCOL 2 port switches to MAVLink 2 on hearing it,
+    MAVLINK_STATUS_FLAG_OUT_MAVLINK1).
     """
 
     loss_up: float = 0.0
@@ -38,6 +43,7 @@ class Faults:
     silent: bool = False
     mute: bool = False
     close_after_items: int | None = None
+    mavlink1: bool = False
 
     def __post_init__(self) -> None:
         for name in ("loss_up", "loss_down", "duplicate", "reorder"):

@@ -133,8 +133,13 @@ class VehicleRunner:
         self._send(att, self.vehicle.handle(msg, self.clock(), att.link))
 
     def _send(self, att: _Attachment, msgs: list) -> None:
+        # a port set to MAVLink 1 (SERIALn_PROTOCOL 1, read at boot as ArduPilot does)
+        v1 = self.faults.mavlink1 or self.vehicle.autopilot.params.get(
+            f"{att.link}_PROTOCOL") == 1
         for msg in msgs:
-            buf = bytes(msg.pack(self.packer))
+            if v1 and msg.get_msgId() > 255:
+                continue  # MAVLink 1 cannot carry it
+            buf = bytes(msg.pack(self.packer, force_mavlink1=v1))
             self.packer.seq = (self.packer.seq + 1) % 256
             for delay, b in self.down.route(buf):
                 self._later(delay, self._write, att, b)

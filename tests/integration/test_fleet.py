@@ -113,3 +113,19 @@ def test_a_solo_among_default_copters_is_uploaded_saying_how_far_it_lags(plan_di
     assert "uav3 (sysid 3): WPNAV_SPEED 300 (planned 1000)" in uploaded.stderr
     assert re.search(r"up to \d\.\d\d m from a slot before the formation keeper's waits: "
                      "every promise holds", uploaded.stderr), uploaded.stderr
+
+
+def test_a_copter_speaking_mavlink1_only_is_named_at_once(plan_dir):
+    """A port set to MAVLink 1 (SERIAL0_PROTOCOL 1; a Solo on its original firmware): one
+    line saying so and what to change, before anything is sent, not a time-out."""
+    copters = [("4.5.6", {}), ("4.5.6", {"SERIAL0_PROTOCOL": 1}), ("4.5.6", {})]
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+        refused = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                            "--connect", " ".join(fleet.urls)])
+        flown = _fly(plan_dir, fleet.urls)
+    assert refused.exit_code == 1
+    line = next(x for x in refused.stdout.splitlines() if x.startswith("uav2 -> sysid 2"))
+    assert "speaks MAVLink 1 only" in line and "SERIALn_PROTOCOL = 2" in line
+    assert "0/3 vehicles verified" in refused.stdout
+    assert "did not answer" not in refused.output  # found from its HEARTBEAT, not a wait
+    assert flown.exit_code != 0 and "system id 2 speaks MAVLink 1 only" in flown.output
