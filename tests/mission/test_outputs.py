@@ -28,7 +28,9 @@ EXPECTED = {
     # 1 m; issue 28); every file with a mission (and the mission hashes of plan.json and
     # the items of the KML and GeoJSON) then gained the start gate, a NAV_DELAY after
     # the start point (issue 28)
-    "plan.json": "6248c139c615468c19bfe109bacc4e66a31b948e19896e8c15c4a1dea4659413",
+    # ... then each UAV's "vehicle" (its release, every flight parameter, what upload sets)
+    # and every flight parameter in the top-level one (issue 49)
+    "plan.json": "3e00fbd12fef1da38c091054d26b352d657eb59ee740912f0034d79194eab23a",
     "plan.kml": "c01569e79ab1caba7566a496ad6c16ac899474075372f5fc18c009223f1303cb",
     "uav1.plan": "4c331e937e8c791dfc838b6377dc473acbc0fa40e490613f0f2d918899266015",
     "uav1.waypoints": "41f7bbc17bffd9ba38147620a33e54406c1796e586d0bbea132b4f5e20f0db14",
