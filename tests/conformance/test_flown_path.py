@@ -1,11 +1,14 @@
 """The model of how ArduCopter flies a mission (``ftlbo_mav.ardupilot.flight_path``)
-against what ArduCopter 4.5.6 SITL flew.
+against what ArduCopter 4.5.6 and 4.6.3 SITL flew.
 
-Each ``tests/data/ardupilot-4.5.6/flown-*.json`` is a formation flight on SITL with
-copter.parm (``benchmarks/flight.py --record``): the plan and missions flown and every
+Each ``tests/data/ardupilot-<release>/flown-*.json`` is a formation flight on SITL with
+copter.parm (``benchmarks/flight.py --record``; ``flown-example-solo.json`` with the 3DR
+Solo's values after it, ``--profile 3dr-solo``): the plan and missions flown and every
 position the copters sent in AUTO. Here each UAV's mission is flown through the model,
 from its start point (where ``fly`` starts AUTO) with the mission's DO_CHANGE_SPEED, its
-hold times and the plan's ``[vehicle]`` parameters, and compared with the recorded track:
+hold times and that UAV's copter as the plan says it (plan.json ``uavs[i].vehicle``: its
+parameters and release; a plan without it: the plan's ``vehicle`` and the release of the
+folder), and compared with the recorded track:
 
 - the smallest clearance from the obstacles, per UAV: the model's within
   :data:`CLEARANCE_M` of the one flown;
@@ -16,13 +19,12 @@ hold times and the plan's ``[vehicle]`` parameters, and compared with the record
 Both on the legs: from AUTO's start to the goal, before the mission's last item (its
 NAV_LAND, whose descent the model does not fly) is current.
 
-``flight.json`` and ``flight_speed.json`` (one copter, the example's earlier 10-waypoint
-mission at 10 and 3 m/s) are held to the same.
+``flight.json`` and ``flight_speed.json`` of both releases (one copter, the example's
+earlier 10-waypoint mission at 10 and 3 m/s) are held to the same.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -34,10 +36,12 @@ from ftlbo_mav.geo import LocalFrame
 from ftlbo_mav.mission.items import CMD_DO_CHANGE_SPEED, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT
 from ftlbo_mav.mission.waypoints import parse_waypoints
 
-from .replay import HOME, load
+from .replay import HOME, RELEASES, load
 
-DATA = Path(__file__).parents[1] / "data" / "ardupilot-4.5.6"
-FLOWN = sorted(p.name for p in DATA.glob("flown-*.json"))
+DATA = Path(__file__).parents[1] / "data"
+# (recorded release, file name) of every formation flight, 4.5.6 first
+FLOWN = [(release, p.name) for release in RELEASES
+         for p in sorted((DATA / f"ardupilot-{release}").glob("flown-*.json"))]
 CLEARANCE_M = 0.1
 TRACK_M = 0.15
 # the example's seven trees (missions/nha-trang-orchard.toml), which flight.json flew past
@@ -80,45 +84,75 @@ def off_path(xy: np.ndarray, path_xy: np.ndarray) -> np.ndarray:
     return out
 
 
-def cases():
-    """(name, [(recorded xy (T, 2), model xy (S, 2))], centres, radii) per recording."""
-    out = []
-    for name in FLOWN:
-        rec = load(name)
-        plan = rec["plan"]
-        (lat_a, lon_a), (lat_b, lon_b) = plan["area"]["corner_a"], plan["area"]["corner_b"]
-        frame = LocalFrame(origin_lat_deg=min(lat_a, lat_b), origin_lon_deg=min(lon_a, lon_b))
-        obstacles = plan["obstacles"]
-        centres = frame.to_enu(lat_deg=[o["lat"] for o in obstacles],
-                               lon_deg=[o["lon"] for o in obstacles])[:, :2]
-        radii = np.array([o["radius"] for o in obstacles], float)
-        nav = Navigation().with_params(plan.get("vehicle", {}))
-        rows = np.array([r[:6] for r in rec["samples"]["rows"]], float)
-        pairs = []
-        for n, uav in enumerate(plan["uavs"]):
-            items = parse_waypoints(rec["missions"][uav["name"]])
-            points, holds, speed = route(items, frame)
-            model = fly_path(points, nav=nav, speed_m_s=speed, holds_s=holds)
-            land = [it.seq for it in items if it.command not in (CMD_NAV_WAYPOINT,
-                                                                   CMD_DO_CHANGE_SPEED)]
-            mine = rows[(rows[:, 1] == n + 1) & (rows[:, 5] < land[-1])]  # on the legs
-            flown = frame.to_enu(lat_deg=mine[:, 2] / 1e7, lon_deg=mine[:, 3] / 1e7)[:, :2]
-            pairs.append((flown, model.positions[:, :2]))
-        out.append((name, pairs, centres, radii))
-    for name in ("flight.json", "flight_speed.json"):  # one copter, the earlier mission
-        rec = load(name)
-        frame = LocalFrame(origin_lat_deg=HOME[0], origin_lon_deg=HOME[1])
-        items = parse_waypoints(_waypoints_text(rec["mission"]["uploaded"]))
+def series(release: str) -> str:
+    """The modelled series of a recorded release (``4.6`` for 4.6.3)."""
+    return ".".join(release.split(".")[:2])
+
+
+def copter_nav(plan: dict, n: int, release: str, model_release: str | None = None
+               ) -> Navigation:
+    """UAV ``n``'s copter as the plan says it: its ``uavs[n].vehicle`` (parameters and
+    release) when the plan has one, else the plan's ``vehicle`` flown as the recorded
+    ``release``'s series; ``model_release`` flies it as that series instead."""
+    own = plan["uavs"][n].get("vehicle")
+    params = own["params"] if own else plan.get("vehicle", {})
+    chosen = model_release or (own or {}).get("release") or series(release)
+    return Navigation(release=chosen).with_params(params)
+
+
+def flown_case(release: str, name: str, model_release: str | None = None):
+    """``(id, [(recorded xy (T, 2), model xy (S, 2))], centres, radii)`` of one formation
+    flight, the model flown as the plan's copters (as ``model_release`` if given)."""
+    rec = load(name, release)
+    plan = rec["plan"]
+    (lat_a, lon_a), (lat_b, lon_b) = plan["area"]["corner_a"], plan["area"]["corner_b"]
+    frame = LocalFrame(origin_lat_deg=min(lat_a, lat_b), origin_lon_deg=min(lon_a, lon_b))
+    obstacles = plan["obstacles"]
+    centres = frame.to_enu(lat_deg=[o["lat"] for o in obstacles],
+                           lon_deg=[o["lon"] for o in obstacles])[:, :2]
+    radii = np.array([o["radius"] for o in obstacles], float)
+    rows = np.array([r[:6] for r in rec["samples"]["rows"]], float)
+    pairs = []
+    for n, uav in enumerate(plan["uavs"]):
+        nav = copter_nav(plan, n, release, model_release)
+        items = parse_waypoints(rec["missions"][uav["name"]])
         points, holds, speed = route(items, frame)
-        model = fly_path(points, speed_m_s=speed, holds_s=holds)
-        t_auto = rec["milestones"]["t_auto_cmd"]
-        t_land = rec["derived"]["landing"]["t_statustext_mission_land"]
-        rows = np.array(rec["global_position_int"]["rows"], float)
-        rows = rows[(rows[:, 0] >= t_auto) & (rows[:, 0] <= t_land)]
-        flown = frame.to_enu(lat_deg=rows[:, 2] / 1e7, lon_deg=rows[:, 3] / 1e7)[:, :2]
-        trees = np.array(EXAMPLE_TREES)
-        centres = frame.to_enu(lat_deg=trees[:, 0], lon_deg=trees[:, 1])[:, :2]
-        out.append((name, [(flown, model.positions[:, :2])], centres, trees[:, 2]))
+        model = fly_path(points, nav=nav, speed_m_s=speed, holds_s=holds)
+        land = [it.seq for it in items if it.command not in (CMD_NAV_WAYPOINT,
+                                                               CMD_DO_CHANGE_SPEED)]
+        mine = rows[(rows[:, 1] == n + 1) & (rows[:, 5] < land[-1])]  # on the legs
+        flown = frame.to_enu(lat_deg=mine[:, 2] / 1e7, lon_deg=mine[:, 3] / 1e7)[:, :2]
+        pairs.append((flown, model.positions[:, :2]))
+    return f"{release}/{name}", pairs, centres, radii
+
+
+def single_case(release: str, name: str, model_release: str | None = None):
+    """The same of a one-copter flight (flight.json, flight_speed.json): ArduCopter's
+    defaults, flown as the recorded release's series (``model_release`` if given)."""
+    rec = load(name, release)
+    frame = LocalFrame(origin_lat_deg=HOME[0], origin_lon_deg=HOME[1])
+    items = parse_waypoints(_waypoints_text(rec["mission"]["uploaded"]))
+    points, holds, speed = route(items, frame)
+    model = fly_path(points, nav=Navigation(release=model_release or series(release)),
+                     speed_m_s=speed, holds_s=holds)
+    t_auto = rec["milestones"]["t_auto_cmd"]
+    t_land = rec["derived"]["landing"]["t_statustext_mission_land"]
+    rows = np.array(rec["global_position_int"]["rows"], float)
+    rows = rows[(rows[:, 0] >= t_auto) & (rows[:, 0] <= t_land)]
+    flown = frame.to_enu(lat_deg=rows[:, 2] / 1e7, lon_deg=rows[:, 3] / 1e7)[:, :2]
+    trees = np.array(EXAMPLE_TREES)
+    centres = frame.to_enu(lat_deg=trees[:, 0], lon_deg=trees[:, 1])[:, :2]
+    return f"{release}/{name}", [(flown, model.positions[:, :2])], centres, trees[:, 2]
+
+
+def cases():
+    """(release/name, [(recorded xy (T, 2), model xy (S, 2))], centres, radii) per
+    recording of either release."""
+    out = [flown_case(release, name) for release, name in FLOWN]
+    for release in RELEASES:  # one copter, the earlier mission
+        for name in ("flight.json", "flight_speed.json"):
+            if (DATA / f"ardupilot-{release}" / name).exists():
+                out.append(single_case(release, name))
     return out
 
 
@@ -158,21 +192,31 @@ def test_the_target_alone_would_not_do():
     """The copter's lag is what the recordings need: with the copter put on its target
     (``airframe=None``) the zigzag's uav3 passes its tree 0.15 m closer than it flew and
     the copters stray 0.6 m from the path."""
-    name, pairs, centres, radii = next(c for c in CASES if c[0] == "flown-zigzag-fast.json")
+    name, pairs, centres, radii = next(c for c in CASES
+                                       if c[0] == "4.5.6/flown-zigzag-fast.json")
     flown, _model = pairs[2]
-    rec = load(name)
+    rec = load("flown-zigzag-fast.json")
     plan = rec["plan"]
     (lat_a, lon_a), (lat_b, lon_b) = plan["area"]["corner_a"], plan["area"]["corner_b"]
     frame = LocalFrame(origin_lat_deg=min(lat_a, lat_b), origin_lon_deg=min(lon_a, lon_b))
     points, holds, speed = route(parse_waypoints(rec["missions"]["uav3"]), frame)
-    target = fly_path(points, nav=Navigation().with_params(plan["vehicle"]), speed_m_s=speed,
+    target = fly_path(points, nav=copter_nav(plan, 2, "4.5.6"), speed_m_s=speed,
                       holds_s=holds, airframe=None).positions[:, :2]
     assert clearance(flown, centres, radii) - clearance(target, centres, radii) > CLEARANCE_M
     assert off_path(flown, target).max() > 2 * TRACK_M
 
 
 def test_the_recordings_are_formation_flights_of_several_maps():
-    assert len(FLOWN) >= 1
-    for name in FLOWN:
-        rec = json.loads((DATA / name).read_text())
-        assert "ArduCopter 4.5.6 SITL" in rec["about"] and rec["samples"]["rows"], name
+    """Each release has its formation flights, each recorded on that release's SITL, its
+    plan made for that release's copters."""
+    for release in RELEASES:
+        assert any(r == release for r, _name in FLOWN), release
+    for release, name in FLOWN:
+        rec = load(name, release)
+        about = rec["about"]
+        assert "SITL" in about and (f"ArduCopter {release} " in about
+                                    or f"ArduCopter V{release} " in about), (release, name)
+        assert rec["samples"]["rows"], (release, name)
+        for uav in rec["plan"]["uavs"]:
+            if "vehicle" in uav:
+                assert uav["vehicle"]["release"] == series(release), (release, name)
