@@ -21,7 +21,7 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from .navigation import NAV_PARAMS, VEHICLE_PARAMS, Navigation
+from .navigation import NAV_PARAMS, RELEASE_DEFAULTS, VEHICLE_PARAMS, Navigation
 
 # -- which parameters the plan depends on, and their ranges -----------------------------
 
@@ -200,7 +200,7 @@ class Copter:
         release = str(doc.get("release", DEFAULT_RELEASE))
         if release not in RELEASES:
             raise ValueError(f"release {release!r} is not one of {', '.join(RELEASES)}")
-        params = defaults() | {str(k): float(v) for k, v in dict(doc["params"]).items()}
+        params = defaults(release) | {str(k): float(v) for k, v in dict(doc["params"]).items()}
         named = tuple(str(k) for k in dict(doc.get("set") or {}))
         return cls(release, params, named, str(doc.get("source", "plan.json")))
 
@@ -214,9 +214,10 @@ class Copter:
         return Copter(release, params, self.named, source)
 
 
-def defaults() -> dict[str, float]:
-    """ArduCopter's defaults of every :data:`FLIGHT_PARAMS` value (the same in 4.5 and 4.6)."""
-    every = Navigation().to_params()
+def defaults(release: str = DEFAULT_RELEASE) -> dict[str, float]:
+    """ArduCopter's defaults of every :data:`FLIGHT_PARAMS` value in ``release``
+    (:data:`.navigation.RELEASE_DEFAULTS`: 4.6 differs in PSC_VELXY_D)."""
+    every = Navigation().to_params() | dict(RELEASE_DEFAULTS[release])
     return {n: round(every[n], 6) for n in FLIGHT_PARAMS}
 
 
@@ -237,7 +238,7 @@ def resolve_copter(*, profile: str = "arducopter", release: str = DEFAULT_RELEAS
     if release not in RELEASES:
         raise ValueError(f"firmware {release!r}: the modelled releases are "
                          f"{', '.join(RELEASES)}")
-    params = defaults() | dict(PROFILES[profile].params)
+    params = defaults(release) | dict(PROFILES[profile].params)
     parts = [f"ArduCopter {release}"]
     if profile != "arducopter":
         parts.append(PROFILES[profile].description)

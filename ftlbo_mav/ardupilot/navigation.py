@@ -100,6 +100,24 @@ DEFAULTS: Mapping[str, ParamDefault] = {
 }
 
 
+RELEASE_DEFAULTS: Mapping[str, Mapping[str, float]] = {
+    "4.5": {},
+    # libraries/AC_AttitudeControl/AC_PosControl.cpp at Copter-4.6.3: POSCONTROL_VEL_XY_D
+    # 0.25f for a multicopter (0.5f at Copter-4.5.6); 4.6.3 SITL with copter.parm reads
+    # PSC_VELXY_D 0.25 back, every other of these parameters as 4.5.6's
+    "4.6": {"PSC_VELXY_D": 0.25},
+}
+"""Where a release's defaults differ from :data:`DEFAULTS` (4.5.6's), by series."""
+
+
+def with_release(nav: Navigation, release: str) -> Navigation:
+    """``nav`` flown by a copter of ``release``: every parameter still at 4.5.6's default
+    takes that release's own (a value never set is the firmware's default)."""
+    own = {name: value for name, value in RELEASE_DEFAULTS[release].items()
+           if math.isclose(nav.to_params()[name], DEFAULTS[name].value)}
+    return replace(nav.with_params(own), release=release)
+
+
 @dataclass(frozen=True)
 class Navigation:
     """The navigation parameters in SI units (metres, seconds, radians)."""

@@ -41,7 +41,7 @@ from ..ardupilot.firmware import (
     Firmware,
 )
 from ..ardupilot.modes import CopterMode, heartbeat_base_mode
-from ..ardupilot.navigation import PARAM_COUNT
+from ..ardupilot.navigation import PARAM_COUNT, with_release
 from ..ardupilot.streams import data_stream_messages, radio_slowdown, reschedule_interval_s
 from ..link.rtcm import Reassembler
 from ..mission.items import MissionItem
@@ -161,7 +161,7 @@ class Vehicle:
         self._fence_version = -1
         # the navigation of the release it reports (AUTOPILOT_VERSION): ardupilot/navigation.py
         release = release_for(options.firmware.encode())
-        limits = replace(options.limits, nav=replace(options.limits.nav, release=release))
+        limits = replace(options.limits, nav=with_release(options.limits.nav, release))
         self.autopilot = Autopilot(home=(lat, lon), boot_time=boot_time,
                                    options=AutopilotOptions(boot=self.boot, limits=limits))
         self.autopilot.home_alt_m = alt

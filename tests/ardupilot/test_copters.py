@@ -106,3 +106,25 @@ def test_releases_by_autopilot_version():
     assert release_for(Firmware(4, 4, 4, 255).encode()) == "4.5"
     assert release_for(None, "4.6") == "4.6"
     assert nearest_release(5, 0) == "4.6" and nearest_release(3, 9) == "4.5"
+
+
+@pytest.mark.parametrize("release, series", [("4.5.6", "4.5"), ("4.6.3", "4.6")])
+def test_each_releases_defaults_are_what_its_sitl_reads_back(release, series):
+    """tests/data/ardupilot-<release>/flight_params.json: the 33 flight parameters read from
+    SITL started with copter.parm (4.6.3 changed PSC_VELXY_D's default, 0.5 -> 0.25)."""
+    import json
+    from pathlib import Path
+
+    path = Path(__file__).parents[1] / "data" / f"ardupilot-{release}" / "flight_params.json"
+    recorded = json.loads(path.read_text())["params"]
+    assert set(recorded) == set(FLIGHT_PARAMS)
+    assert defaults(series) == pytest.approx({k: float(v) for k, v in recorded.items()},
+                                             rel=1e-6)
+
+
+def test_an_emulated_copter_takes_its_releases_defaults():
+    from ftlbo_mav.ardupilot.navigation import with_release
+
+    assert with_release(Navigation(), "4.6").psc_velxy_d == 0.25
+    assert with_release(Navigation(psc_velxy_d=0.3), "4.6").psc_velxy_d == 0.3  # set: kept
+    assert with_release(Navigation(), "4.5").psc_velxy_d == 0.5

@@ -95,7 +95,9 @@ def test_a_fleet_of_two_releases_flies_the_plan_as_predicted(plan_dir):
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
         uploaded = _upload(plan_dir, fleet.urls)
         result = _fly(plan_dir, fleet.urls)
-    assert "uav2 (sysid 2): ArduCopter 4.6 (planned 4.5)" in uploaded.stderr
+    # 4.6.3's own default PSC_VELXY_D (0.25) and its release
+    assert ("uav2 (sysid 2): PSC_VELXY_D 0.25 (planned 0.5), ArduCopter 4.6 (planned 4.5)"
+            in uploaded.stderr)
     assert result.exit_code == 0, result.output
     planned = load_planned_flight(plan_dir)
     summary = _flown_as_promised(plan_dir, float(planned.predicted_clearance.min()))
