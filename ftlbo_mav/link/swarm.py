@@ -23,6 +23,7 @@ from ..ardupilot.firmware import (
     firmware_problem,
     heartbeat_findings,
 )
+from ..errors import BadInput
 from ..mission.fence_files import FenceSet
 from ..mission.items import MissionItem
 from .codec import mission_differences
@@ -38,6 +39,10 @@ from .mission_protocol import (
     run_transfer,
 )
 from .params import ParamError, read_params, set_vehicle_params
+
+
+class MissingParameter(BadInput):
+    """A parameter the plan sets is one a copter does not have: nothing is sent."""
 
 
 @dataclass(frozen=True)
@@ -199,20 +204,18 @@ def _fit_check(todo: Sequence[Assignment], found, versions: Mapping[int, int | N
 
     with clock.Executor(len(todo)) as pool:
         onboard = list(pool.map(read, todo))
-    why: dict[int, str] = {}
     actual = []
     for a, values in zip(todo, onboard):
         silent = [n for n in a.params if values.get(n) is None]
         if silent:
-            why[a.sysid] = (f"{a.name} (sysid {a.sysid}) does not answer for {silent[0]} "
-                            "(PARAM_REQUEST_READ), which the plan sets: not an ArduCopter "
-                            "parameter it has; nothing was sent to any vehicle")
+            raise MissingParameter(
+                f"{a.name} (sysid {a.sysid}) does not answer for {silent[0]} "
+                "(PARAM_REQUEST_READ), which the plan sets ([vehicle]): not a parameter this "
+                "copter has; nothing was sent to any vehicle")
         held = {n: v for n, v in values.items() if v is not None}
         release = release_for(versions.get(a.sysid), a.copter.release)
         actual.append(a.copter.with_onboard(held, release=release,
                                             source=f"sysid {a.sysid}"))
-    if why:
-        return why
     verdict = fit(actual)
     say = on_note or (lambda _t: None)
     for line in verdict.changed:

@@ -23,7 +23,7 @@ from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import load_planned_flight
 
 from ..conftest import EXAMPLE
-from .fleet import BACKEND, vehicles
+from .fleet import BACKEND, FAST, vehicles
 from .test_fly import HOMES, _read_param
 
 SPEEDUP = 4.0  # as test_fly: a wall-clock flight at 8x on a loaded machine judged its timing
@@ -146,3 +146,23 @@ def test_a_solo_among_default_copters_flies_in_formation(plan_dir):
     planned = load_planned_flight(plan_dir)
     _flown_as_promised(plan_dir, float(planned.predicted_clearance.min()),
                        worst_m=planned.formation_bound_m)
+
+
+def test_a_value_the_plan_sets_that_a_copter_lacks_is_one_line_exit_2(plan_dir):
+    doc = json.loads((plan_dir / "plan.json").read_text())
+    for uav in doc["uavs"]:
+        uav["vehicle"] = {"release": "4.5", "source": "scenario",
+                          "params": dict(doc["vehicle"]) | {"WPNAV_ACCEL_C": 500.0},
+                          "set": {"WPNAV_ACCEL_C": 500.0}}
+    (plan_dir / "plan.json").write_text(json.dumps(doc))
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=FAST) as fleet:
+        fleet.sim.call(lambda: fleet.sim.vehicles[1].autopilot.params.pop("WPNAV_ACCEL_C"))
+        result = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                           "--connect", " ".join(fleet.urls)])
+        held = fleet.missions()
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines()[-1] == (
+        "error: uav2 (sysid 2) does not answer for WPNAV_ACCEL_C (PARAM_REQUEST_READ), which "
+        "the plan sets ([vehicle]): not a parameter this copter has; nothing was sent to any "
+        "vehicle")
+    assert all(len(m) <= 1 for m in held)
