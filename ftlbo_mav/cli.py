@@ -17,7 +17,9 @@ import numpy as np
 
 from . import __version__
 from .cli_errors import user_errors
+from .cli_types import LINK_URL, SYSIDS
 from .energy import BATTERY_VIOLATION
+from .errors import BadInput
 from .gnss import classes_within
 from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files, read_plan
 from .mission.files import OutputFolder
@@ -114,6 +116,24 @@ def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
     return tuple(dict.fromkeys(names))
 
 
+def _with_fleet(scn, sysids_text: str, connect) -> object:
+    """``scn`` with each UAV's copter as read from the vehicles (``plan --fleet``)."""
+    from .link.commands import _urls
+    from .link.endpoints import default_urls_for, parse_sysids
+    from .link.fleet_read import read_fleet
+
+    sysids = parse_sysids(sysids_text)
+    if len(sysids) != len(scn.offsets):
+        raise BadInput(f"--fleet {sysids_text} names {len(sysids)} vehicles but the scenario "
+                       f"has {len(scn.offsets)} UAVs")
+    copters = read_fleet(scn.fleet(), sysids, _urls(connect) or default_urls_for(sysids))
+    for n, c in enumerate(copters):
+        click.echo(f"uav{n + 1}: {c.source}", err=True)
+    from dataclasses import replace
+
+    return replace(scn, copters=tuple(copters), vehicle=copters[0].nav)
+
+
 class WaypointCount(click.ParamType):
     """``--waypoints``: an integer within 1..MAX_WAYPOINTS, or ``auto``."""
 
@@ -162,11 +182,22 @@ STUDENTS = click.IntRange(MIN_STUDENTS, MAX_STUDENTS)
 @click.option("--no-fence", "no_fence", is_flag=True,
               help="Write no geofence and rally point (uavN.fence, uavN.rally, fence.parm).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar.")
+@click.option("--fleet", "fleet_sysids", type=SYSIDS, default=None, metavar="SYSIDS",
+              help="Read each copter's firmware and flight parameters from the vehicles "
+                   "with these system ids (uav1 the first) and plan for them, over "
+                   "[vehicle]'s profile and files (the values it names stay).")
+@click.option("--connect", "connect", multiple=True, type=LINK_URL,
+              help="With --fleet: the vehicles' connection strings (default: system id s "
+                   "on tcp:127.0.0.1:5760 + 10*(s-1)).")
 @user_errors
 def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, allow_infeasible,
-         formats, make_plots, no_fence, quiet):
+         formats, make_plots, no_fence, quiet, fleet_sysids, connect):
     """Plan SCENARIO (TOML) and write one Mission Planner mission per UAV."""
     scn = load_scenario(scenario)
+    if connect and fleet_sysids is None:
+        raise BadInput("--connect is for --fleet: give the vehicles' system ids with --fleet")
+    if fleet_sysids is not None:
+        scn = _with_fleet(scn, fleet_sysids, connect)
     if scn.dropped_obstacles:
         click.echo(f"note: {scn.dropped_obstacles} obstacles left out: they cannot reach any "
                    "UAV's path inside the area", err=True)

@@ -166,3 +166,22 @@ def test_a_value_the_plan_sets_that_a_copter_lacks_is_one_line_exit_2(plan_dir):
         "the plan sets ([vehicle]): not a parameter this copter has; nothing was sent to any "
         "vehicle")
     assert all(len(m) <= 1 for m in held)
+
+
+def test_plan_fleet_plans_for_the_copters_as_they_are(tmp_path):
+    """``plan --fleet``: each copter's release and values read from it; upload then finds
+    nothing to say of them."""
+    copters = [("4.5.6", {}), ("4.5.6", SOLO), ("4.5.6", {})]
+    out = tmp_path / "out"
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+        planned = CliRunner().invoke(main, ["plan", str(EXAMPLE), "-o", str(out), "-q",
+                                            "--fleet", "1..3", "--connect", " ".join(fleet.urls)])
+        assert planned.exit_code == 0, planned.output
+        doc = json.loads((out / "plan.json").read_text())
+        uploaded = _upload(out, fleet.urls)
+    assert "the copter's own values" not in uploaded.stderr  # the plan is the copters'
+    assert "note: UAV 2 is predicted" in planned.stderr  # the Solo's lag, said
+    assert "uav2: read from sysid 2 (ArduCopter 4.5.6 official" in planned.stderr
+    solo = doc["uavs"][1]["vehicle"]
+    assert solo["params"]["ATC_INPUT_TC"] == 0.25 and solo["set"] == {}
+    assert doc["uavs"][0]["vehicle"]["params"]["ATC_INPUT_TC"] == 0.15
