@@ -41,6 +41,19 @@ class Fit:
     def holds(self) -> bool:
         return not self.broken
 
+    def notes(self, *, any_params: bool = False) -> list[str]:
+        """What ``upload`` and ``fly`` say before anything is sent or armed: each copter
+        that differs, each promise lost (where ``any_params`` goes on anyway) and what the
+        prediction with the copters' own values keeps."""
+        out = [f"{line}: the copter's own values, kept as they are" for line in self.changed]
+        if self.broken and not any_params:
+            return out
+        out += [f"{b}: not promised (--any-params)" for b in self.broken]
+        if self.kept is not None:
+            out.append(f"predicted again with the copters' own values: {self.kept}"
+                       + ("" if self.broken else ": every promise holds"))
+        return out
+
 
 def describe_change(planned: Copter, actual: Copter) -> str:
     """What differs on one copter, e.g. ``PSC_VELXY_P 1.41 (planned 2), ArduCopter 4.6``."""

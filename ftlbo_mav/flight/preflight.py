@@ -146,21 +146,15 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     if len(values) == len(vehicles):
         verdict = fleet_fit(planned, vehicles, [values[v.sysid] for v in vehicles],
                             [v.status.firmware_version for v in vehicles])
-        for line in verdict.changed:
-            say(f"note: {line}: the copter's own values, flown as they are")
-        if verdict.broken and any_params:
-            for b in verdict.broken:
-                say(f"warning: the plan does not fit: {b}: not promised (--any-params)")
-        elif verdict.broken:
+        for line in verdict.notes(any_params=any_params):
+            say(f"note: {line}")
+        if verdict.broken and not any_params:
             onboard = [list(why) + [f"the plan does not fit it: {b}" for b in verdict.broken
                                     if b.startswith(f"{v.name} (sysid {v.sysid})")]
                        for v, why in zip(vehicles, onboard)]
             if not any(onboard):  # a promise lost by all of them: said for each
                 onboard = [[f"the plan does not fit the fleet: {'; '.join(verdict.broken)}"]
                            for _v in vehicles]
-        elif verdict.kept is not None:
-            say(f"note: predicted again with the copters' own values: {verdict.kept}: "
-                "every promise holds")
     deadline = clock.monotonic() + ready_timeout_s
 
     def reported(v: FlightVehicle) -> bool:

@@ -218,19 +218,13 @@ def _fit_check(todo: Sequence[Assignment], found, versions: Mapping[int, int | N
                                             source=f"sysid {a.sysid}"))
     verdict = fit(actual)
     say = on_note or (lambda _t: None)
-    for line in verdict.changed:
-        say(f"{line}: the copter's own values, left as they are")
-    if verdict.broken and any_params:
-        for b in verdict.broken:
-            say(f"{b}: not promised (--any-params)")
-    elif verdict.broken:
+    for line in verdict.notes(any_params=any_params):
+        say(line)
+    if verdict.broken and not any_params:
         lost = "; ".join(verdict.broken)
-        return {a.sysid: f"refused, nothing sent to any vehicle: {lost} (plan again with "
-                f"these copters' values: [vehicle] params_file or the values by name)"
-                for a in todo}
-    if verdict.kept is not None:
-        say(f"predicted again with the copters' own values: {verdict.kept}: every "
-            "promise holds")
+        return {a.sysid: f"refused, nothing sent to any vehicle: {lost} (plan for these "
+                "copters: `ftlbo-mav plan --fleet`, or [vehicle] params_file or values by "
+                "name; --any-params goes on)" for a in todo}
     for a, values in zip(todo, onboard):
         sets = [(n, values[n], v) for n, v in a.params.items()
                 if values[n] is None or not param_equal(n, v, values[n])]

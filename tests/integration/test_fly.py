@@ -189,7 +189,7 @@ def test_a_copter_with_its_own_tuning_is_flown_as_it_is_or_refused_never_retuned
                       say=said.append)
             assert not any(v.status.armed for v in flying.vehicles)
         assert ("note: uav2 (sysid 2): WPNAV_ACCEL 500 (planned 250): the copter's own "
-                "values, flown as they are") in said
+                "values, kept as they are") in said
         assert any("predicted again with the copters' own values" in t
                    and "every promise holds" in t for t in said), said
         # a copter retuned far from the plan's: the formation cannot be kept
