@@ -21,6 +21,7 @@ from click.testing import CliRunner
 from ftlbo_mav.ardupilot.copters import PROFILES
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.scenario import load_scenario
 
 from ..conftest import EXAMPLE
 from .fleet import BACKEND, FAST, vehicles
@@ -185,3 +186,20 @@ def test_plan_fleet_plans_for_the_copters_as_they_are(tmp_path):
     solo = doc["uavs"][1]["vehicle"]
     assert solo["params"]["ATC_INPUT_TC"] == 0.25 and solo["set"] == {}
     assert doc["uavs"][0]["vehicle"]["params"]["ATC_INPUT_TC"] == 0.15
+
+
+def test_a_parameter_file_downloaded_from_a_copter_plans_for_it(tmp_path, small_text):
+    """``download`` saves the copter's flight parameters in its .parm beside the fence's;
+    a scenario's ``[vehicle.uavN] params_file`` reads it back."""
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=[("4.5.6", SOLO)] * 3) as fleet:
+        saved = CliRunner().invoke(main, ["download", "--sysid", "2", "--connect",
+                                          fleet.urls[1], "-o", str(tmp_path / "uav2.waypoints")])
+    assert saved.exit_code == 0, saved.output
+    assert "fence and 33 flight parameters" in saved.stdout
+    text = (tmp_path / "uav2.parm").read_text()
+    assert "ANGLE_MAX 2000" in text and "ATC_INPUT_TC 0.25" in text
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(small_text + '[vehicle.uav2]\nparams_file = "uav2.parm"\n')
+    copter = load_scenario(scenario).fleet()[1]
+    assert copter.params["ATC_INPUT_TC"] == pytest.approx(0.25)
+    assert copter.params["WPNAV_SPEED"] == 300.0 and copter.to_set() == {}
