@@ -91,6 +91,11 @@ class Firmware:
 RECORDED = Firmware(major=4, minor=5, patch=6, type=R.FIRMWARE_VERSION_TYPE_OFFICIAL)
 """ArduCopter 4.5.6 SITL as recorded (boot.json ``version``: raw 67438335)."""
 RECORDED_CUSTOM_VERSION = "bbf0b066"
+RECORDED_RELEASES = {"4.5": RECORDED,
+                     "4.6": Firmware(major=4, minor=6, patch=3,
+                                     type=R.FIRMWARE_VERSION_TYPE_OFFICIAL)}
+"""The recorded release of each modelled series (tests/data/ardupilot-<release>/): what an
+emulated copter of that series reports."""
 RECORDED_CAPABILITIES = 64495
 
 

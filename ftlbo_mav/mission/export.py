@@ -264,7 +264,8 @@ def _predicted_document(plan: Plan) -> dict | None:
     if plan.prediction is None:
         return None
     return {
-        "model": "ArduCopter 4.5.6 AC_WPNav/SCurve (ftlbo_mav.ardupilot.flight_path)",
+        "model": "ArduCopter " + " and ".join(sorted({c.release for c in plan.scenario.fleet()}))
+                 + " AC_WPNav/SCurve (ftlbo_mav.ardupilot.flight_path)",
         "corners_moved": plan.corners_moved,
         "corner_stops": plan.corner_stops,
         "holds_s": [] if plan.holds_s is None else [int(h) for h in plan.holds_s],

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import clock
+from ..ardupilot.firmware import RECORDED_RELEASES
 from ..clock import ClockStopped, VirtualClock
 from ..flight.metrics import min_clearance, min_separation
 from ..flight.planned import PlannedFlight, load_planned_flight
@@ -31,6 +32,7 @@ from ..link.endpoints import Link
 from ..link.swarm import upload_swarm
 from ..sim.gps import GpsErrorOptions
 from ..sim.inprocess import InProcessSimulator
+from ..sim.physics import FlightLimits
 from ..sim.server import Simulator
 from ..sim.vehicle import VehicleOptions
 from .conditions import Conditions
@@ -84,8 +86,13 @@ def _simulator(planned: PlannedFlight, conditions: Conditions, *, time_scale: fl
     gps = [GpsErrorOptions(wander_m=conditions.gps_wander_m,
                            correlation_s=conditions.gps_correlation_s, seed=s)
            for s in conditions.gps_seeds[:len(homes)]]
+    # each copter as the plan says it is (its release and values: plan.json uavs[].vehicle)
+    copters = planned.fleet()
+    options = [VehicleOptions(gps=g, firmware=RECORDED_RELEASES[c.release],
+                              limits=FlightLimits(nav=c.nav))
+               for g, c in zip(gps, copters)]
     settings = {"homes": homes, "seed": conditions.seed, "vary": conditions.vary,
-                "wind": conditions.wind, "options": [VehicleOptions(gps=g) for g in gps]}
+                "wind": conditions.wind, "options": options}
     if time_scale is None:
         return InProcessSimulator(**settings)
     return Simulator(base_port=0, time_scale=time_scale, **settings)
