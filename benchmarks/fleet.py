@@ -6,7 +6,10 @@ copters: ``ftlbo-mav upload`` (which reads every copter's values and release, pr
 again and writes none of its tuning) and ``ftlbo-mav fly``, then a row: the exit codes,
 how many of the copters' tuning parameters changed (read before the upload and after the
 flight: must be 0), the clearance upload predicted with the copters' own values and the
-one flown, and the formation error on the legs (RMS / worst).
+one flown, and the formation error on the legs (RMS / worst). Where the upload refuses (a
+promise the plan made for default copters loses with these), the scenario is planned for
+the fleet as the refusal says (``plan --fleet``, each copter's values read from it) and
+that plan uploaded and flown.
 
 Fleets: ``4.5.6`` and ``4.6.3`` (three copters of that release, copter.parm only),
 ``solo-4.5.6`` and ``solo-4.6.3`` (three 3DR Solos: CubeSolo's defaults.parm after
@@ -118,6 +121,14 @@ def one(scenario: Path, name: str, speedup: float) -> dict:
         before = tuning(urls)
         args = ["--sysid", f"1..{len(urls)}", "--connect", " ".join(urls)]
         up = CliRunner().invoke(cli, ["upload", str(folder), *args])
+        plan_for = "default copters"
+        if up.exit_code == 1 and "refused" in up.stdout:  # as the refusal says: plan for them
+            again = CliRunner().invoke(cli, ["plan", str(scenario), "-o", str(folder), "-q",
+                                             "--fleet", f"1..{len(urls)}",
+                                             "--connect", " ".join(urls)])
+            plan_for = "the fleet (plan --fleet)" if again.exit_code == 0 else (
+                f"plan --fleet exit {again.exit_code}")
+            up = CliRunner().invoke(cli, ["upload", str(folder), *args])
         flown = CliRunner().invoke(cli, ["fly", str(folder), *args, "--control-port", "0"])
         after = tuning(urls)
     changed = sum(b[k] != a[k] for b, a in zip(before, after) for k in TUNING)
@@ -127,7 +138,7 @@ def one(scenario: Path, name: str, speedup: float) -> dict:
     summary_path = folder / "flight" / "summary.json"
     s = json.loads(summary_path.read_text()) if summary_path.exists() else {}
     shutil.rmtree(folder.parent, ignore_errors=True)
-    return {"scenario": scenario.stem, "fleet": name, "backend": backend,
+    return {"scenario": scenario.stem, "fleet": name, "backend": backend, "plan": plan_for,
             "upload_exit": up.exit_code, "fly_exit": flown.exit_code,
             "tuning_changed": changed,
             "predicted_clearance_m": predicted,
@@ -145,9 +156,9 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=None, help="also write the rows as JSON")
     args = ap.parse_args()
     rows = []
-    print("| scenario | fleet | back end | upload / fly exit | tuning written | clearance "
-          "predicted / flown | formation RMS / worst | departures |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| scenario | fleet | back end | plan made for | upload / fly exit | tuning written "
+          "| clearance predicted / flown | formation RMS / worst | departures |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for scenario in args.scenario or SCENARIOS:
         for name in args.fleet or list(FLEETS):
             r = one(scenario, name, args.speedup)
@@ -156,7 +167,8 @@ def main() -> int:
             def f(x):
                 return "-" if x is None else f"{x:.2f}"
 
-            print(f"| {r['scenario']} | {r['fleet']} | {r['backend']} | {r['upload_exit']} / "
+            print(f"| {r['scenario']} | {r['fleet']} | {r['backend']} | {r['plan']} | "
+                  f"{r['upload_exit']} / "
                   f"{r['fly_exit']} | {r['tuning_changed']} | {f(r['predicted_clearance_m'])} /"
                   f" {f(r['flown_clearance_m'])} m | {f(r['formation_rms_m'])} / "
                   f"{f(r['formation_worst_m'])} m | {r['departures']} |", flush=True)

@@ -24,6 +24,7 @@ from .metrics import slot_errors
 from .planned import PlannedFlight
 
 _TOL = 1e-6
+BLAME_MOST = 4  # values named in a promise lost (all of them in the note before it)
 
 
 @dataclass(frozen=True)
@@ -55,11 +56,14 @@ class Fit:
         return out
 
 
-def describe_change(planned: Copter, actual: Copter) -> str:
-    """What differs on one copter, e.g. ``PSC_VELXY_P 1.41 (planned 2), ArduCopter 4.6``."""
+def describe_change(planned: Copter, actual: Copter, *, most: int | None = None) -> str:
+    """What differs on one copter, e.g. ``PSC_VELXY_P 1.41 (planned 2), ArduCopter 4.6``;
+    ``most``: name at most that many, then how many more."""
     parts = [f"{n} {b:g} (planned {a:g})" for n, a, b in differences(planned, actual)]
     if planned.release != actual.release:
         parts.append(f"ArduCopter {actual.release} (planned {planned.release})")
+    if most is not None and len(parts) > most:
+        parts = parts[:most] + [f"{len(parts) - most} more"]
     return ", ".join(parts)
 
 
@@ -83,6 +87,7 @@ def fit_fleet(planned: PlannedFlight, actual: Sequence[Copter],
     labels = list(labels or planned.names)
     fleet = planned.fleet()
     changes = [describe_change(p, a) for p, a in zip(fleet, actual)]
+    short = [describe_change(p, a, most=BLAME_MOST) for p, a in zip(fleet, actual)]
     changed = tuple(f"{lab}: {c}" for lab, c in zip(labels, changes) if c)
     if not changed:
         return Fit((), None, ())
@@ -95,9 +100,9 @@ def fit_fleet(planned: PlannedFlight, actual: Sequence[Copter],
 
     def blame(n: int) -> str:
         """Whose values lose a promise at UAV ``n``: its own, else every changed one."""
-        if changes[n]:
-            return f"{labels[n]} with its {changes[n]}"
-        return " and ".join(f"{lab} with its {c}" for lab, c in zip(labels, changes) if c)
+        if short[n]:
+            return f"{labels[n]} with its {short[n]}"
+        return " and ".join(f"{lab} with its {c}" for lab, c in zip(labels, short) if c)
 
     need = planned.clearance_m + planned.navigation.horizontal_m
     for n in np.flatnonzero(pred.clearance < need - _TOL):
