@@ -5,8 +5,10 @@ them (plan.json ``uavs[].vehicle``). Before anything is sent (``upload``) or arm
 (``fly``) each copter is asked what it runs and what its values are; where they differ,
 the flight is predicted again with the copters' own values and judged on the plan's
 promises: the clearance from every obstacle (with the navigation budget), the separation
-between copters where they truly are, the area, the altitude band and the formation
-bound. The copters are never made to fit the plan: their tuning is theirs.
+between copters where they truly are, the area and the altitude band. How far apart the
+copters drift before ``fly``'s formation keeper waits for the laggards is said, not
+judged (the keeper makes a lag along the track up). The copters are never made to fit
+the plan: their tuning is theirs.
 
 Pure computation: the values read are given.
 """
