@@ -13,7 +13,8 @@ that plan uploaded and flown.
 
 Fleets: ``4.5.6`` and ``4.6.3`` (three copters of that release, copter.parm only),
 ``solo-4.5.6`` and ``solo-4.6.3`` (three 3DR Solos: CubeSolo's defaults.parm after
-copter.parm), ``mixed`` (4.5.6, 4.6.3 and a Solo on 4.5.6).
+copter.parm), ``mixed`` (4.5.6, 4.6.3 and a Solo on 4.5.6), ``solo-among-4.5.6`` (two
+4.5.6 copters and a Solo).
 
 On ArduPilot SITL when ``ARDUPILOT_SITL`` names a 4.5.x build (``ARDUPILOT_SITL_DEFAULTS``
 ArduPilot's copter.parm) and ``ARDUPILOT_SITL_4_6`` a 4.6.x one; on the emulator
@@ -55,6 +56,7 @@ FLEETS = {
     "solo-4.5.6": [("4.5.6", SOLO)] * 3,
     "solo-4.6.3": [("4.6.3", SOLO)] * 3,
     "mixed": [("4.5.6", {}), ("4.6.3", {}), ("4.5.6", SOLO)],
+    "solo-among-4.5.6": [("4.5.6", {}), ("4.5.6", {}), ("4.5.6", SOLO)],
 }
 SCENARIOS = [ROOT / "missions" / "nha-trang-orchard.toml",
              ROOT / "missions" / "orchard-survey.toml"]
