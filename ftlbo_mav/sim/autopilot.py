@@ -603,7 +603,11 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         vertically it is on its target); the mode in use then checks whether its leg is
         over (ModeAuto::verify_command, ModeRTL::run)."""
         nav = self.nav
-        nav.advance(dt, self.position, self.velocity)
+        err = self.options.limits.velocity_estimate_error
+        if err != (0.0, 0.0):  # what its navigation reads (FlightLimits)
+            nav.advance(dt, self.position, self.velocity + np.array([err[0], err[1], 0.0]))
+        else:
+            nav.advance(dt, self.position, self.velocity)
         self._follow(dt, nav.target, nav.target_vel, nav.target_accel)
         if self.gusts is not None:  # the gusts push it off the path it follows
             (vx, vy, vz), (wx, wy, wz) = self.velocity.tolist(), self.gusts.wind.velocity_xyz

@@ -85,6 +85,10 @@ class FlightLimits:
     hover_error_m: float = 0.025
     airframe: Airframe = DEFAULT_AIRFRAME
     power: Battery = field(default_factory=lambda: SITL_POWER)
+    velocity_estimate_error: tuple[float, float] = (0.0, 0.0)
+    """East, north m/s: the error of the velocity estimate AC_WPNav's track scaler reads
+    (AC_WPNav::advance_wp_target_along_track, ``_inav.get_velocity_neu_cms()``), 0 on an
+    exact copter; :func:`varied` draws one per copter of a fleet."""
 
     @property
     def speed_m_s(self) -> float:
@@ -94,6 +98,31 @@ class FlightLimits:
     def with_speed(cls, speed_m_s: float, **kw) -> FlightLimits:
         """ArduCopter's defaults with WPNAV_SPEED ``speed_m_s``."""
         return cls(nav=replace(Navigation(), wp_speed=speed_m_s), **kw)
+
+
+HOVER_VELOCITY_ERROR_M_S = 0.003
+"""Per axis, the spread (one standard deviation) of the velocity a hovering copter's
+navigation reads against its target where AUTO starts a leg: measured, not from the code.
+ArduCopter 4.5.6 and 4.6.3 SITL (copter.parm), three copters each at the start gate of
+three flights: the track scaler's ``v - PSC_POSXY_P x error`` along the first leg was
++0.53, -0.17, +0.30 / +0.31, +0.09, +0.12 / +0.06, -0.04, 0.00 cm/s (DataFlash PSC, EKF
+and SIM2 records). A leg that starts from a hover divides it by a target speed of mm/s
+(AC_WPNav::advance_wp_target_along_track), so its sign decides whether that copter's
+track clock starts at 0.1 or at full pace: its target ran 120-185 ms late in one flight,
+the largest part of SITL's formation error at the start of legs (0.065 m along the track
+RMS, against 0.015 m here without it)."""
+
+
+def hovering(limits: FlightLimits, rng: np.random.Generator, *,
+             spread_m_s: float = HOVER_VELOCITY_ERROR_M_S) -> FlightLimits:
+    """``limits`` with the velocity error its navigation reads drawn per axis, normal
+    with ``spread_m_s`` (:data:`HOVER_VELOCITY_ERROR_M_S`), unless it has one: every
+    ArduCopter has it, alike copters too (the emulator's :class:`~.server.Simulator`
+    draws one per copter from its seed)."""
+    if limits.velocity_estimate_error != (0.0, 0.0):
+        return limits
+    east, north = (float(v) for v in rng.normal(0.0, spread_m_s, 2))
+    return replace(limits, velocity_estimate_error=(east, north))
 
 
 def varied(limits: FlightLimits, rng: np.random.Generator, *, latency_s: float = 0.3,

@@ -22,7 +22,7 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from .faults import Faults, FaultyPipe
-from .physics import varied
+from .physics import hovering, varied
 from .radio import DOWN, RADIO_STATUS_S, UP, RadioOptions, SharedRadio, StatusSender
 from .vehicle import Vehicle, VehicleOptions
 from .wind import Gusts, Wind
@@ -288,6 +288,9 @@ class Simulator:
         if vary:
             self.options = [replace(o, limits=varied(o.limits, np.random.default_rng(
                 [seed, 0x7A, i]))) for i, o in enumerate(self.options)]
+        # how every ArduCopter hovers where its legs start (physics.hovering)
+        self.options = [replace(o, limits=hovering(o.limits, np.random.default_rng(
+            [seed, 0x48, i]))) for i, o in enumerate(self.options)]
         self.signing_key, self.seed, self.first_sysid = signing_key, seed, first_sysid
         self.wind = None if wind is None else Wind.parse(wind)
         self.ports: list[int] = []
