@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 
 from .. import clock
-from ..ardupilot.copters import FLIGHT_PARAMS, release_for
+from ..ardupilot.copters import FLIGHT_PARAMS, Copter, release_for
 from ..ardupilot.firmware import any_firmware_warning, firmware_problem
 from ..ardupilot.navigation import vehicle_param_differences
 from ..errors import FtlboError
@@ -23,7 +23,7 @@ from ..link.mission_protocol import download_mission
 from ..link.params import read_params
 from ..link.transfer import Timing
 from .battery import preflight_problem as battery_preflight
-from .fit import Fit, fit_fleet
+from .fit import fit_fleet
 from .fleet import concurrently
 from .launch import gate_as_onboard
 from .navigation import describe, ekf_report, gps_report, preflight_problems
@@ -62,18 +62,14 @@ def vehicle_param_problem(differences: Sequence[tuple[str, float | None, float]]
     return text
 
 
-def fleet_fit(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
-              onboard: Sequence[Mapping[str, float | None]],
-              versions: Sequence[int | None]) -> Fit:
-    """The plan judged with the copters as they are: their flight parameters as read
-    (``onboard``) and the release each runs (``versions``: AUTOPILOT_VERSION, None: the
-    plan's)."""
-    fleet = planned.fleet()
-    actual = [c.with_onboard({n: x for n, x in values.items() if x is not None},
-                             release=release_for(version, c.release),
-                             source=f"sysid {v.sysid}")
-              for c, v, values, version in zip(fleet, vehicles, onboard, versions)]
-    return fit_fleet(planned, actual, [f"{v.name} (sysid {v.sysid})" for v in vehicles])
+def copters_as_they_are(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
+                        onboard: Sequence[Mapping[str, float | None]],
+                        versions: Sequence[int | None]) -> list[Copter]:
+    """Each UAV's copter with its flight parameters as read (``onboard``) and the release
+    it runs (``versions``: AUTOPILOT_VERSION, None: the plan's)."""
+    return [c.with_onboard({n: x for n, x in values.items() if x is not None},
+                           release=release_for(version, c.release), source=f"sysid {v.sysid}")
+            for c, v, values, version in zip(planned.fleet(), vehicles, onboard, versions)]
 
 
 def navigation_problems(planned: PlannedFlight, v: FlightVehicle) -> list[str]:
@@ -144,8 +140,9 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     onboard = concurrently(onboard_problems, list(zip(vehicles, planned.missions, fences,
                                                       fleet)))
     if len(values) == len(vehicles):
-        verdict = fleet_fit(planned, vehicles, [values[v.sysid] for v in vehicles],
-                            [v.status.firmware_version for v in vehicles])
+        actual = copters_as_they_are(planned, vehicles, [values[v.sysid] for v in vehicles],
+                                     [v.status.firmware_version for v in vehicles])
+        verdict = fit_fleet(planned, actual, [f"{v.name} (sysid {v.sysid})" for v in vehicles])
         for line in verdict.notes(any_params=any_params):
             say(f"note: {line}")
         if verdict.broken and not any_params:
