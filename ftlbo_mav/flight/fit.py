@@ -32,8 +32,9 @@ BLAME_MOST = 4  # values named in a promise lost (all of them in the note before
 @dataclass(frozen=True)
 class Fit:
     """The verdict: ``changed`` one line per copter whose values or release differ from
-    the plan's; ``kept`` what the flight predicted with their own values keeps (None:
-    nothing differed, nothing predicted again); ``broken`` one line per promise lost,
+    the plan's (copters that differ alike in one line); ``kept`` what the flight
+    predicted with their own values keeps (None: nothing differed, nothing predicted
+    again); ``broken`` one line per promise lost,
     naming the copter, its values and the promise (empty: every promise holds)."""
 
     changed: tuple[str, ...]
@@ -90,7 +91,11 @@ def fit_fleet(planned: PlannedFlight, actual: Sequence[Copter],
     fleet = planned.fleet()
     changes = [describe_change(p, a) for p, a in zip(fleet, actual)]
     short = [describe_change(p, a, most=BLAME_MOST) for p, a in zip(fleet, actual)]
-    changed = tuple(f"{lab}: {c}" for lab, c in zip(labels, changes) if c)
+    alike: dict[str, list[str]] = {}  # copters that differ alike are said together
+    for lab, c in zip(labels, changes):
+        if c:
+            alike.setdefault(c, []).append(lab)
+    changed = tuple(f"{', '.join(labs)}: {c}" for c, labs in alike.items())
     if not changed:
         return Fit((), None, ())
     pred = predict_fleet(planned, actual)

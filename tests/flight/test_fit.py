@@ -32,7 +32,8 @@ def test_three_solos_keep_every_promise_and_are_said(planned):
     fit = fit_fleet(planned, [resolve_copter(profile="3dr-solo")] * 3,
                     [f"uav{n} (sysid {n})" for n in (1, 2, 3)])
     assert fit.holds
-    assert fit.changed[1].startswith("uav2 (sysid 2): WPNAV_SPEED 300 (planned 1000)")
+    assert fit.changed[0].startswith("uav1 (sysid 1), uav2 (sysid 2), uav3 (sysid 3): "
+                                     "WPNAV_SPEED 300 (planned 1000)")
     notes = fit.notes()
     assert notes[-1].startswith("predicted again with the copters' own values: clearance ")
     assert notes[-1].endswith("every promise holds")

@@ -57,8 +57,8 @@ def test_three_solos_are_uploaded_to_without_a_tuning_parameter_written(plan_dir
         result = _upload(plan_dir, fleet.urls)
         after = {name: _read_param(fleet.urls[1], 2, name) for name in TUNING}
     err = result.stderr
-    assert ("note: uav2 (sysid 2): WPNAV_SPEED 300 (planned 1000), WPNAV_SPEED_UP 320 "
-            "(planned 250)") in err
+    assert ("note: uav1 (sysid 1), uav2 (sysid 2), uav3 (sysid 3): WPNAV_SPEED 300 (planned "
+            "1000), WPNAV_SPEED_UP 320 (planned 250)") in err
     assert "ANGLE_MAX 2000 (planned 3000)" in err
     assert "every promise holds" in err
     assert err.count("sets no parameter (its tuning is never written)") == 3
