@@ -27,8 +27,8 @@ SIMULATOR_NOTE = (
     "emulator run on one simulated clock (unless --time-scale): the ground computes in "
     "no time, and a seed always flies the same flight. Against ArduCopter 4.5.6 SITL on ten seeded "
     "conditions of the example (docs/risk.md): clearance agrees within the spread; the "
-    "formation error's worst is about three quarters of SITL's (0.147 against 0.203 m "
-    "median; four SITL flights of ten passed the emulator's largest, 0.229 m), so this "
+    "formation error's worst is about three fifths of SITL's (0.119 against 0.203 m "
+    "median; five SITL flights of ten passed the emulator's largest, 0.192 m), so this "
     "report still understates it (the copters' vertical state where AUTO starts is not "
     "modelled); the smallest separation is about 0.1 m smaller than SITL's (2.87 against "
     "2.99 m median).")

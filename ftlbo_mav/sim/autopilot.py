@@ -70,7 +70,7 @@ from .gps import SIM_GPS_PARAM_DEFAULTS
 from .modes import ModeAuto, ModeBrake, ModeGuided, ModeLand, ModeRTL
 from .modes.common import AUTO, FLOWN_MODES, LAND, RTL, STABILIZE
 from .modes.common import text as _text
-from .physics import FlightLimits, VerticalShaper, WaypointNav
+from .physics import SETTLING_S, FlightLimits, VerticalShaper, WaypointNav
 from .wind import Gusts
 
 PARAM_DEFAULTS = {**NAV_DEFAULTS, **ap_fence.FENCE_PARAM_DEFAULTS, **CAMERA_PARAM_DEFAULTS,
@@ -168,6 +168,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self._followed_until: float | None = None
         self._land_target = np.zeros(3)  # where a landing's descent holds the copter
         self._descend_from = 0.0  # when it starts down (Navigation.land_descent_delay_s)
+        self._nav_since = 0.0  # when AC_WPNav was started from a hover
         self.battery = BatteryMonitor()  # AP_BattMonitor's first battery
         # the 400 Hz follower in its compiled loop (ardupilot/compiled.py): the same
         # arithmetic, but loading it stalls the first step by most of a second, which a
@@ -423,6 +424,7 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         """AC_WPNav::wp_and_spline_init at the copter's (stopped) position."""
         point = self.position.copy() if stopping_point is None else stopping_point
         self.nav = WaypointNav(self.nav_params(), point, self.speed_m_s)
+        self._nav_since = self.time  # the hover it starts from (FlightLimits: its settling)
 
     # -- mode starts (once the copter has stopped)
     # -- time
@@ -604,8 +606,12 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         over (ModeAuto::verify_command, ModeRTL::run)."""
         nav = self.nav
         err = self.options.limits.velocity_estimate_error
-        if err != (0.0, 0.0):  # what its navigation reads (FlightLimits)
-            nav.advance(dt, self.position, self.velocity + np.array([err[0], err[1], 0.0]))
+        settling = self.time - self._nav_since
+        if err != (0.0, 0.0) and settling < 5.0 * SETTLING_S:
+            # the hover it started from, still settling (FlightLimits.velocity_estimate_error)
+            k = math.exp(-settling / SETTLING_S)
+            nav.advance(dt, self.position,
+                        self.velocity + np.array([err[0] * k, err[1] * k, 0.0]))
         else:
             nav.advance(dt, self.position, self.velocity)
         self._follow(dt, nav.target, nav.target_vel, nav.target_accel)

@@ -49,7 +49,7 @@ def compiled_once(tmp_path_factory):
     issue 51) takes a signal only once the compile returns."""
     out = tmp_path_factory.mktemp("warm") / "out"
     subprocess.run([*CLI, "plan", str(ROOT / "missions" / "nha-trang-orchard.toml"), "-o",
-                    str(out), "--algorithm", "ftlbo", "--waypoints", "10", "--students", "20",
+                    str(out), "--algorithm", "ftlbo", "--waypoints", "10", "--students", "2000",
                     "--iterations", "2", "-q", "--allow-infeasible"], cwd=ROOT,
                    capture_output=True, timeout=300)
 
