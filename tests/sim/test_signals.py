@@ -18,6 +18,14 @@ ROOT = Path(__file__).resolve().parents[2]
 CLI = [sys.executable, "-c", "from ftlbo_mav.cli import main; main()"]
 
 
+def _as_from_a_shell() -> None:
+    """The child starts with SIGINT's default action, as a shell starts a command: a
+    disposition of ignore is inherited across exec, and Python then keeps Ctrl-C ignored
+    (a test worker may have it ignored: in the clean-clone CI run this test's plan never
+    saw its SIGINT)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.parametrize("scale", [0.0, -1.0, MAX_TIME_SCALE * 10, 1e9, float("nan")])
 def test_a_time_scale_the_emulator_cannot_keep_is_refused(scale):
     with pytest.raises(ValueError, match="time_scale"):
@@ -29,7 +37,7 @@ def test_a_time_scale_the_emulator_cannot_keep_is_refused(scale):
 def test_sim_stops_on_a_signal_at_any_time_scale(scale, sig):
     proc = subprocess.Popen([*CLI, "sim", "--base-port", "0", "--count", "3", "--time-scale",
                              scale], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True)
+                            text=True, preexec_fn=_as_from_a_shell)
     try:
         while "emulating" not in (line := proc.stdout.readline()):
             assert line, "the emulator ended before it was ready"
@@ -60,7 +68,8 @@ def test_a_plan_stops_on_a_signal_and_writes_nothing(sig, tmp_path, compiled_onc
     proc = subprocess.Popen([*CLI, "plan", str(ROOT / "missions" / "nha-trang-orchard.toml"),
                              "-o", str(out), "--algorithm", "ftlbo", "--waypoints", "10",
                              "--students", "2000", "--iterations", "100000", "-q"], cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_as_from_a_shell)
     try:
         time.sleep(3.0)  # planning: minutes of work at these sizes
         assert proc.poll() is None, proc.communicate()
