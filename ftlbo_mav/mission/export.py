@@ -151,6 +151,7 @@ def plan_document(
     view = geodetic if geodetic is not None else geodetic_view(plan)
     firsts = np.cumsum([0] + [leg.waypoints + 1 for leg in plan.legs[:-1]])
     survey = sc.survey
+    fleet = [c.document() for c in sc.fleet()]
     if photos is None:
         photos = plan_photos(plan, missions)
     return {
@@ -174,7 +175,7 @@ def plan_document(
         "corner_allowance": plan.scenario.mission.corner_allowance_m,
         "mission": {"end_action": sc.mission.end_action, "speed": sc.mission.speed_m_s},
         # the first copter's values (every UAV's own, with what upload sets: uavs[].vehicle)
-        "vehicle": dict(sc.fleet()[0].document()["params"]),
+        "vehicle": dict(fleet[0]["params"]),
         "predicted": _predicted_document(plan),
         **({} if sc.battery is None else {"battery": sc.battery.document()}),
         "min_separation": plan.scenario.min_separation_m,
@@ -216,7 +217,7 @@ def plan_document(
                 "waypoints": _points(path),
                 "mission_file": f"{m.name}.waypoints" if written else None,
                 "mission_sha256": (digests or {}).get(m.name) if written else None,
-                "vehicle": sc.fleet()[n].document(),
+                "vehicle": fleet[n],
                 **_uav_predicted(plan, n),
                 **_uav_battery(plan, n),
                 **_fence_document(m.name, fences, n, written),

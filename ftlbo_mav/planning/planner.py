@@ -395,7 +395,10 @@ def _plan_legs(scenario: Scenario, settings: PlannerSettings, base: PlanningProb
 def flight_model(scenario: Scenario) -> FlightModel:
     """How the scenario's copters fly: each UAV's own copter (``[vehicle]``, its release
     and parameters) and the cruise speed."""
-    navs = tuple(c.nav for c in scenario.fleet())
+    fleet = scenario.fleet()
+    if all(c is fleet[0] for c in fleet):  # one copter for all (the same object)
+        return FlightModel(nav=fleet[0].nav, speed_m_s=scenario.mission.speed_m_s)
+    navs = tuple(c.nav for c in fleet)
     return FlightModel(nav=navs[0], speed_m_s=scenario.mission.speed_m_s,
                        navs=None if len(set(navs)) == 1 else navs)
 

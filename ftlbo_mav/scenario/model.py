@@ -192,6 +192,10 @@ class Scenario:
 
     def fleet(self) -> tuple[Copter, ...]:
         """One :class:`~ftlbo_mav.ardupilot.copters.Copter` per UAV."""
+        return self._fleet
+
+    @cached_property
+    def _fleet(self) -> tuple[Copter, ...]:
         if len(self.copters) == len(self.offsets):
             return self.copters
         return (copter_of(self.vehicle),) * len(self.offsets)
