@@ -60,3 +60,16 @@ def min_separation(offsets: np.ndarray) -> float:
     """Smallest 3D distance between two UAVs of the formation, metres (inf for one UAV)."""
     pair = closest_pair(offsets)
     return float("inf") if pair is None else pair[2]
+
+
+def slot_errors(positions: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Each UAV's distance from its slot: the group's centroid plus its planned offset.
+
+    The slot is taken from the flown centroid, so a formation that holds its shape but
+    lags the plan has zero error. Returns ``(..., N)`` metres.
+    """
+    positions = np.asarray(positions, float)
+    offsets = np.asarray(offsets, float)
+    rel = positions - positions.mean(axis=-2, keepdims=True)
+    target = offsets - offsets.mean(axis=0)
+    return np.linalg.norm(rel - target, axis=-1)

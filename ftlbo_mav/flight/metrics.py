@@ -8,18 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def slot_errors(positions: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """Each UAV's distance from its slot: the group's centroid plus its planned offset.
-
-    The slot is taken from the flown centroid, so a formation that holds its shape but
-    lags the plan has zero error. Returns ``(..., N)`` metres.
-    """
-    positions = np.asarray(positions, float)
-    offsets = np.asarray(offsets, float)
-    rel = positions - positions.mean(axis=-2, keepdims=True)
-    target = offsets - offsets.mean(axis=0)
-    return np.linalg.norm(rel - target, axis=-1)
+from ..formation import slot_errors
 
 
 def formation_error(positions: np.ndarray, offsets: np.ndarray) -> np.ndarray:

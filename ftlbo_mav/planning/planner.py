@@ -19,6 +19,7 @@ import numpy as np
 from ..ardupilot.flight_path import stepwise_budget
 from ..energy import MissionCharge, charge_problem, mission_charges
 from ..errors import BadInput
+from ..formation import slot_errors
 from ..scenario import AUTO, PlannerSettings, Scenario, relay_lanes
 from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
@@ -463,9 +464,7 @@ def fleet_lags(plan: Plan) -> list[str]:
     p, sc = plan.prediction, plan.scenario
     if p is None or len({c.nav for c in sc.fleet()}) < 2:
         return []
-    offsets = plan.problem.offsets
-    rel = p.positions - p.positions.mean(axis=0, keepdims=True)
-    errors = np.linalg.norm(rel - (offsets - offsets.mean(axis=0))[:, None, :], axis=-1)
+    errors = slot_errors(p.positions.transpose(1, 0, 2), plan.problem.offsets).T  # (N, T)
     out = []
     for n in np.flatnonzero(errors.max(axis=1) > sc.max_formation_error_m + 1e-9):
         i = int(np.argmax(errors[n]))
