@@ -77,8 +77,7 @@ def predict_fleet(planned: PlannedFlight, copters: Sequence[Copter]) -> Predicti
     if flown_with is None:
         return None
     speed, holds = flown_with
-    navs = tuple(c.nav for c in copters)
-    model = FlightModel(nav=navs[0], speed_m_s=speed, navs=navs)
+    model = FlightModel.of_fleet([c.nav for c in copters], speed)
     return predict(planned.paths, model=model, centres=planned.centres, radii=planned.radii,
                    holds_s=holds, pair_error_m=planned.navigation.pair_m)
 

@@ -399,9 +399,7 @@ def flight_model(scenario: Scenario) -> FlightModel:
     fleet = scenario.fleet()
     if all(c is fleet[0] for c in fleet):  # one copter for all (the same object)
         return FlightModel(nav=fleet[0].nav, speed_m_s=scenario.mission.speed_m_s)
-    navs = tuple(c.nav for c in fleet)
-    return FlightModel(nav=navs[0], speed_m_s=scenario.mission.speed_m_s,
-                       navs=None if len(set(navs)) == 1 else navs)
+    return FlightModel.of_fleet([c.nav for c in fleet], scenario.mission.speed_m_s)
 
 
 def fly_as_arducopter(plan: Plan, *, own_radii: np.ndarray | None = None) -> Plan:

@@ -15,6 +15,7 @@ Pure computation, metres ENU and seconds.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,6 +48,13 @@ class FlightModel:
     nav: Navigation = Navigation()
     speed_m_s: float | None = None
     navs: tuple[Navigation, ...] | None = None
+
+    @classmethod
+    def of_fleet(cls, navs: Sequence[Navigation], speed_m_s: float | None) -> FlightModel:
+        """One copter's parameters per UAV: ``navs`` only where they differ."""
+        navs = tuple(navs)
+        return cls(nav=navs[0], speed_m_s=speed_m_s,
+                   navs=None if len(set(navs)) == 1 else navs)
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,11 +164,8 @@ def predict(paths: np.ndarray, *, model: FlightModel, centres: np.ndarray,
     and measure it against the cylinders ``centres`` ``(K, 2)``, ``radii`` ``(K,)``
     (their own radii, no clearance); ``pair_error_m``: the navigation budget's combined
     error of two copters, for ``true_separation``."""
-    navs = model.navs
-    if navs is not None and len(set(navs)) == 1:
-        navs = None if navs[0] == model.nav else navs
     shapes, group, shift = fly_groups(paths, nav=model.nav, speed_m_s=model.speed_m_s,
-                                      holds_s=holds_s, navs=navs)
+                                      holds_s=holds_s, navs=model.navs)
     times, pos = _common_clock(shapes, group, shift)
     N = pos.shape[0]
     radii = np.asarray(radii, float)
