@@ -21,7 +21,13 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from .navigation import NAV_PARAMS, RELEASE_DEFAULTS, VEHICLE_PARAMS, Navigation
+from .navigation import (
+    NAV_PARAMS,
+    RELEASE_DEFAULTS,
+    VEHICLE_PARAMS,
+    Navigation,
+    param_matches,
+)
 
 # -- which parameters the plan depends on, and their ranges -----------------------------
 
@@ -253,11 +259,11 @@ def resolve_copter(*, profile: str = "arducopter", release: str = DEFAULT_RELEAS
 
 
 def differences(planned: Copter, actual: Copter) -> list[tuple[str, float, float]]:
-    """``(name, planned value, actual value)`` of every flight parameter that differs
-    (within float32's precision, as a copter keeps it)."""
+    """``(name, planned value, actual value)`` of every flight parameter that differs as
+    a copter keeps it (:func:`.navigation.param_matches`)."""
     out = []
     for name in FLIGHT_PARAMS:
         a, b = float(planned.params[name]), float(actual.params[name])
-        if not math.isclose(a, b, rel_tol=1e-6, abs_tol=1e-6):
+        if not param_matches(name, a, b):
             out.append((name, a, b))
     return out
