@@ -74,20 +74,11 @@ def copters(homes, fleet, speedup: float):
         later = os.environ.get("ARDUPILOT_SITL_4_6")
         if any(r.startswith("4.6") for r, _v in fleet) and not later:
             raise SystemExit("a 4.6 copter on SITL needs ARDUPILOT_SITL_4_6")
-        files = []
-        for _r, values in fleet:
-            f = tempfile.NamedTemporaryFile("w", suffix=".parm", delete=False)
-            with f:
-                f.write("".join(f"{k} {v:g}\n" for k, v in values.items()))
-            files.append([f.name])
-        try:
-            with SitlSwarm(homes=homes, speedup=speedup, instance_defaults=files,
-                           binaries=[later if r.startswith("4.6") else None
-                                     for r, _v in fleet]) as swarm:
-                yield swarm.urls, "SITL"
-        finally:
-            for f in files:
-                os.unlink(f[0])
+        with SitlSwarm(homes=homes, speedup=speedup,
+                       instance_params=[values for _r, values in fleet],
+                       binaries=[later if r.startswith("4.6") else None
+                                 for r, _v in fleet]) as swarm:
+            yield swarm.urls, "SITL"
         return
     from ftlbo_mav.sim.commands import fleet_options
     from ftlbo_mav.sim.server import Simulator

@@ -104,14 +104,6 @@ def version_strings(vehicles, timeout_s: float = 3.0) -> list[str | None]:
     return out
 
 
-def profile_parm(name: str, folder: Path) -> Path:
-    """A SITL defaults file of profile ``name``'s values (``NAME VALUE`` lines)."""
-    path = folder / f"profile-{name}.parm"
-    path.write_text(f"# {PROFILES[name].description}: {PROFILES[name].source}\n" + "".join(
-        f"{k} {v:g}\n" for k, v in PROFILES[name].params.items()))
-    return path
-
-
 def set_params(urls, settings) -> None:
     """``["2:WPNAV_JERK=0.8", ...]``: PARAM_SET on that vehicle, confirmed by PARAM_VALUE."""
     from pymavlink.dialects.v20 import ardupilotmega as R
@@ -246,13 +238,11 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
     planned = load_planned_flight(plan_dir)
     udp_out = ("127.0.0.1", free_udp_port()) if radio is not None else None
     n = len(homes)
-    parm_dir = tempfile.TemporaryDirectory()
     if binary:
         from sitl import SitlSwarm
 
-        own = ([[profile_parm(profile, Path(parm_dir.name))]] * n if profile else None)
         swarm = SitlSwarm(binary=binary, homes=homes, speedup=speedup, workdir=keep,
-                          instance_defaults=own)
+                          instance_params=[PROFILES[profile].params] * n if profile else None)
     else:
         from ftlbo_mav.sim.commands import fleet_options
         from ftlbo_mav.sim.server import Simulator
@@ -263,7 +253,7 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
         swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary,
                           udp_out=udp_out, radio=radio, options=options,
                           **({"wind": wind} if wind else {}))
-    with parm_dir, swarm as started, contextlib.ExitStack() as stack:
+    with swarm as started, contextlib.ExitStack() as stack:
         vehicles = _Urls(started.urls, None)
         if radio is not None and binary:
             from ftlbo_mav.sim.router import RadioRouter

@@ -16,7 +16,7 @@ import signal
 import subprocess
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Self
 
@@ -63,10 +63,12 @@ class SitlSwarm:
                  defaults: Sequence[str | Path] = (), model: str = "quad", speedup: float = 1.0,
                  ready_timeout_s: float = 180.0,
                  binaries: Sequence[str | Path | None] | None = None,
-                 instance_defaults: Sequence[Sequence[str | Path]] | None = None):
+                 instance_defaults: Sequence[Sequence[str | Path]] | None = None,
+                 instance_params: Sequence[Mapping[str, float]] | None = None):
         """``binaries``: one per copter (None: ``binary``), for a fleet of two releases;
         ``instance_defaults``: parameter files of each copter's own, after every other
-        (a 3DR Solo's values for one of them)."""
+        (a 3DR Solo's values for one of them); ``instance_params``: values of each
+        copter's own, written as a defaults file in its folder after those."""
         binary = binary or os.environ.get("ARDUPILOT_SITL")
         if not binary:
             raise BadInput("no SITL binary: pass binary= (--binary) or set ARDUPILOT_SITL")
@@ -82,6 +84,7 @@ class SitlSwarm:
             raise BadInput(f"{len(self.binaries)} binaries for {len(self.homes)} copters")
         self.own_defaults = [[Path(p) for p in d]
                              for d in (instance_defaults or [()] * len(homes))]
+        self.own_params = [dict(p) for p in (instance_params or [{}] * len(homes))]
         env_defaults = os.environ.get("ARDUPILOT_SITL_DEFAULTS", "")
         # ArduPilot's own copter.parm first, then the user's files (--defaults a,b: later wins)
         self.defaults = [Path(p) for p in env_defaults.split(",") if p] + [
@@ -110,8 +113,14 @@ class SitlSwarm:
                 run_dir.mkdir(parents=True, exist_ok=True)
                 identity = run_dir / "identity.parm"
                 identity.write_text(IDENTITY_PARAMS.format(sysid=i + 1))
+                own = []
+                if self.own_params[i]:
+                    own = [run_dir / "own.parm"]
+                    own[0].write_text("".join(f"{k} {v:g}\n"
+                                              for k, v in self.own_params[i].items()))
                 cmd = sitl_command(self.binaries[i], instance=i, home=home,
-                                   defaults=[*self.defaults, *self.own_defaults[i], identity],
+                                   defaults=[*self.defaults, *self.own_defaults[i], *own,
+                                             identity],
                                    model=self.model, speedup=self.speedup)
                 log = open(run_dir / "sitl.log", "wb")
                 try:

@@ -96,16 +96,11 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
             if any(r.startswith("4.6") for r, _p in copters) and not SITL_BINARY_46:
                 pytest.skip("a 4.6 copter on SITL needs ARDUPILOT_SITL_4_6")
             binaries = [SITL_BINARY_46 if r.startswith("4.6") else None for r, _p in copters]
-            own = []
-            for _r, values in copters:
-                f = tempfile.NamedTemporaryFile("w", suffix=".parm", delete=False)
-                with f:
-                    f.write("".join(f"{k} {v:g}\n" for k, v in values.items()))
-                own.append([f.name])
+            own = [values for _r, values in copters]
         try:
             with SitlSwarm(binary=SITL_BINARY, homes=homes, speedup=speedup,
                            defaults=[extra.name] if params else (), binaries=binaries,
-                           instance_defaults=own) as swarm:
+                           instance_params=own) as swarm:
                 serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
                 fleet = Fleet(urls=swarm.urls, serial1_urls=serial1,
                               kill=lambda i: swarm.processes[i].kill())
@@ -113,8 +108,6 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
                     yield fleet
         finally:
             os.unlink(extra.name)
-            for files in own or []:
-                os.unlink(files[0])
         return
     own_radio = radio is not None and not router
     udp_out = ("127.0.0.1", free_udp_port()) if shared_link or own_radio else None
