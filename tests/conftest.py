@@ -8,6 +8,9 @@ from pathlib import Path
 # Before any test module imports pymavlink (as ftlbo_mav/__init__.py does for the package):
 # pymavlink picks MAVLink 1 or 2 from this when it first loads a dialect.
 os.environ.setdefault("MAVLINK20", "1")
+# A first run after an install compiles numba's loops in the background
+# (ftlbo_mav/compiling.py): not from the many processes of a test run.
+os.environ.setdefault("FTLBO_MAV_BACKGROUND_COMPILE", "0")
 
 import pytest
 

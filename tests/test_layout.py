@@ -140,12 +140,18 @@ def test_link_imports_nothing_from_the_emulator():
     assert _arrows({"link"}, {"sim"}) == []
 
 
-def test_ardupilot_model_imports_only_errors():
+def test_ardupilot_model_imports_only_errors_and_compiling():
     outside = sorted(
         f"{m} -> {t}"
         for m, targets in GRAPH.items()
         if _part(m) == "ardupilot"
         for t in targets
-        if _part(t) not in {"ardupilot", "errors"}
+        if _part(t) not in {"ardupilot", "errors", "compiling"}
     )
     assert outside == []
+
+
+def test_compiling_is_a_leaf():
+    """numba's machinery (when a loop is cached, the word before a compile) imports
+    nothing of the package: every floor may use it."""
+    assert GRAPH["ftlbo_mav.compiling"] == set()

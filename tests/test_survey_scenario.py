@@ -16,6 +16,7 @@ from ftlbo_mav.mission.waypoints import read_waypoints
 from ftlbo_mav.scenario import AUTO, parse_scenario
 
 from .conftest import ROOT, SMALL
+from .test_docs import assert_quotes_hold
 
 SURVEY = ROOT / "missions" / "orchard-survey.toml"
 HEAD = SMALL.split("[planner]")[0]
@@ -137,6 +138,8 @@ def test_the_shipped_survey_missions_are_what_the_planner_writes(tmp_path):
     out = tmp_path / "survey"
     result = CliRunner().invoke(main, ["plan", str(SURVEY), "-o", str(out), "-q"])
     assert result.exit_code == 0, result.output
+    # and what the README quotes it as printing (tests/test_docs.py)
+    assert_quotes_hold("ftlbo-mav plan missions/orchard-survey.toml -o out", result.output)
     shipped = SURVEY.with_suffix("")
     for n in (1, 2, 3):
         assert (out / f"uav{n}.waypoints").read_text() == (

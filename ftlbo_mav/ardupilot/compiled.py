@@ -28,18 +28,13 @@ import math
 
 import numpy as np
 
+from ..compiling import njit, ready
 from . import navigation, poscontrol, scurve
 from .navigation import GRAVITY_M_S2, Navigation
 from .poscontrol import SEA_LEVEL_DENSITY, Airframe, _filter_alpha
 from .poscontrol import STEP_S as PSC_STEP_S
 from .scurve import ACCEL_END, ACCEL_MAX, CONST, DECEL_END, FLAT, PIECES, SCurve
 from .wpnav import WP_RADIUS_MIN
-
-try:
-    from numba import njit
-except ImportError:  # pragma: no cover - numba is a dependency; pure Python still works
-    def njit(*_args, **_kwargs):
-        return lambda f: f
 
 _EPS = 1.1920929e-07  # scurve._EPS: ArduPilot's float32 is_zero
 # columns of a leg's pieces: end time, kind, jerk, accel, vel, pos (scurve.Piece)
@@ -241,6 +236,11 @@ def _follow(f, prm, dt, tx, ty, tvx, tvy, tax, tay, wx, wy):
     f[4], f[5], f[6], f[7] = ex_f, ey_f, dx_f, dy_f
     f[8], f[9], f[10], f[11] = ix, iy, lx, ly
     f[12], f[13], f[14] = carry, limit_x, limit_y
+
+
+def follower_ready() -> bool:
+    """Whether :class:`CompiledFollower`'s loop is compiled or cached (:mod:`..compiling`)."""
+    return ready(_follow)
 
 
 class CompiledFollower(poscontrol.PositionFollower):

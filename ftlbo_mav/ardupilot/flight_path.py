@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..compiling import compile_later, ready
 from .navigation import Navigation
 from .poscontrol import DEFAULT_AIRFRAME, Airframe, PositionFollower
 from .wpnav import WaypointNav
@@ -47,12 +48,19 @@ _MIN_PACE_M_S = 0.05  # for the step budget: no leg is flown slower on average
 SETTLED_M, SETTLED_M_S, SETTLE_BUDGET_S = 0.01, 0.02, 15.0
 STEPWISE_UP_TO_S = 60.0
 """Flights expected to last up to this many seconds (length over speed, and the holds)
-are flown stepwise, not compiled: numba's start-up in a new process
-(about 0.3 s) is what the stepwise loop takes for some 200 s of flight. Inside
-:func:`stepwise_budget` the seconds are counted over all the flights flown there."""
+are flown stepwise, not compiled: numba's start-up in a new process whose cache holds the
+compiled loop (about 0.3 s) is what the stepwise loop takes for some 200 s of flight.
+Inside :func:`stepwise_budget` the seconds are counted over all the flights flown there."""
+COLD_STEPWISE_UP_TO_S = 6000.0
+"""Seconds of flight a process flies stepwise beyond :data:`STEPWISE_UP_TO_S` while the
+compiled loop is not cached (the first run after an install or upgrade,
+:func:`..compiling.ready`): compiling it takes some 11 s on 2 cores, what the stepwise loop
+takes for 6,000-7,000 s of flight. The example's plan predicts some 2,000 s: it is planned
+without a compile; a survey that predicts more compiles once, saying so on stderr."""
 
 _STEPWISE_LEFT: ContextVar[float | None] = ContextVar("stepwise_left", default=None)
 _compiled_loaded = False  # whether this process has flown a path compiled: its start-up paid
+_cold_left = COLD_STEPWISE_UP_TO_S  # what this process may still fly stepwise, cache cold
 
 
 @contextmanager
@@ -60,9 +68,11 @@ def stepwise_budget(seconds: float = STEPWISE_UP_TO_S) -> Iterator[None]:
     """Within: flights are flown stepwise while together they are expected to last at
     most ``seconds``, and compiled from the first that would go over (one plan, which
     predicts its flights again and again while it keeps the clearance, pays numba's
-    start-up once the stepwise loop would cost more). In a process that has already
-    flown a path compiled every flight is compiled, inside or not; the two loops fly the
-    same path (within 1e-6 m, ``tests/ardupilot/test_compiled.py``)."""
+    start-up once the stepwise loop would cost more), or, while the compiled loop is not
+    cached, once they also go over what is left of :data:`COLD_STEPWISE_UP_TO_S`. In a
+    process that has already flown a path compiled every flight is compiled, inside or
+    not; the two loops fly the same path (within 1e-6 m, ``tests/ardupilot/
+    test_compiled.py``)."""
     token = _STEPWISE_LEFT.set(seconds)
     try:
         yield
@@ -73,13 +83,49 @@ def stepwise_budget(seconds: float = STEPWISE_UP_TO_S) -> Iterator[None]:
 def _stepwise(expected_s: float) -> bool:
     """Whether a flight expected to last ``expected_s`` is flown stepwise (and counted):
     never once the process has loaded the compiled loop, whose start-up is then paid."""
+    global _cold_left
     if _compiled_loaded:
         return False
     left = _STEPWISE_LEFT.get()
     if left is None:
-        return expected_s <= STEPWISE_UP_TO_S
-    _STEPWISE_LEFT.set(left - expected_s if expected_s <= left else 0.0)
-    return expected_s <= left
+        left = STEPWISE_UP_TO_S
+    else:
+        _STEPWISE_LEFT.set(left - expected_s if expected_s <= left else 0.0)
+    if expected_s <= left:
+        return True
+    if expected_s > _cold_left:
+        return False
+    from . import compiled
+
+    if ready(compiled.fly):
+        return False
+    compile_in_background()
+    _cold_left -= expected_s
+    return True
+
+
+def compile_now() -> None:
+    """Compile the flown-path model into numba's cache, as a plan's flights
+    (:func:`.compiled.fly`) and the emulator (:class:`.compiled.CompiledFollower`) call
+    it: what :func:`..compiling.compile_later` runs in the background while a first run
+    after an install flies stepwise."""
+    global _cold_left
+    _cold_left = 0.0
+    points = np.array([[0.0, 0.0, 5.0], [30.0, 0.0, 5.0], [30.0, 30.0, 6.0]])
+    with stepwise_budget(0.0):
+        fly_path(points)
+        fly_path(points + [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])  # taken up
+    from .compiled import CompiledFollower
+
+    CompiledFollower(points[0]).step(0.0025, points[1], np.zeros(3), np.zeros(3))
+
+
+def compile_in_background() -> bool:
+    """:func:`compile_now` in the background (:func:`..compiling.compile_later`); whether
+    it was started (not when the tests or the user say no)."""
+    from . import compiled
+
+    return compile_later(compiled.__name__, f"{__name__}:compile_now")
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,8 +180,9 @@ def fly_path(points: np.ndarray, *, nav: Navigation = DEFAULT_NAV,
     The model's arithmetic, compiled (:mod:`.compiled`): the same path as
     :func:`fly_path_stepwise` flies with the model's objects, 40 times faster; a short
     flight (up to :data:`STEPWISE_UP_TO_S`, or within what is left of a
-    :func:`stepwise_budget`) is flown stepwise, since numba's start-up costs more than
-    that; once a process has flown one path compiled, every later one is (the two loops
+    :func:`stepwise_budget`; more while the compiled loop is not cached,
+    :data:`COLD_STEPWISE_UP_TO_S`) is flown stepwise, since numba's start-up costs more
+    than that; once a process has flown one path compiled, every later one is (the two loops
     fly the same path within 1e-6 m, so the choice never changes a plan beyond that)."""
     points, holds = _checked(points, holds_s)
     desired = WaypointNav(nav, points[0].copy(), speed_m_s).desired_speed

@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import prange
 
-from ..ardupilot.compiled import njit
+from ..compiling import njit
 
 
 @njit(cache=True)

@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import prange
 
-from ..ardupilot.compiled import njit
+from ..compiling import njit
 
 
 @njit(cache=True, parallel=True, fastmath={"reassoc", "nsz"})

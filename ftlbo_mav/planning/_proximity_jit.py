@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..ardupilot.compiled import njit
+from ..compiling import njit
 
 
 @njit(cache=True)

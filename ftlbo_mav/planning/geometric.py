@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._numba_state import numba_loaded
+from ..compiling import cheap
 from .problem import PlanningProblem
 
 _TOL = 1e-9
@@ -110,7 +110,7 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     uav = np.repeat(np.arange(N), K)
     lower, upper = centroid_rectangle(problem)
     if len(radii) >= COMPILED_RIM_FROM or (len(radii) >= COMPILED_RIM_LOADED_FROM
-                                           and numba_loaded()):
+                                           and cheap(_rim_discs)):
         from ._geometric_jit import rim_discs
 
         keep, rim = rim_discs(np.ascontiguousarray(centres, float), radii,
@@ -140,6 +140,12 @@ def formation_discs(problem: PlanningProblem, *, margin: float = 0.0) -> Discs:
     return discs
 
 
+def _rim_discs():
+    from ._geometric_jit import rim_discs
+
+    return rim_discs
+
+
 COMPILED_RIM_FROM = 5000
 """Discs (UAVs x cylinders) from which :func:`formation_discs` finds the discs it keeps
 compiled (:func:`._geometric_jit.rim_discs`), not through arrays of every touching pair
@@ -147,7 +153,7 @@ compiled (:func:`._geometric_jit.rim_discs`), not through arrays of every touchi
 compiled; 50 UAVs among 320 trees, 16,000 discs: 0.35 s and 0.06 s)."""
 COMPILED_RIM_LOADED_FROM = 500
 """Discs from which :func:`formation_discs` keeps its discs compiled when numba is loaded
-already (:func:`._numba_state.numba_loaded`): the same discs (tests/planning/
+already and the loop cached (:func:`..compiling.cheap`): the same discs (tests/planning/
 test_geometric.py), and a plan whose first tangent graph loaded numba finds the seed
 routes' discs without a Python walk around each circle (10 UAVs among 320 trees: 3,200
 discs, 0.06 s in numpy, some 5 ms compiled)."""
@@ -371,7 +377,16 @@ of Python tuples (an orchard's way back across its rows: 100,000 nodes, 4.7 mill
 operations)."""
 ARRAY_GRAPH_LOADED_FROM = 500
 """Graph nodes from which the graph is held in arrays and searched compiled when numba is
-loaded already (:func:`._numba_state.numba_loaded`): the same search, so the same routes."""
+loaded already and the search cached (:func:`..compiling.cheap`): the same search, so the
+same routes."""
+
+
+
+def _graph_loops():
+    from ._geometric_jit import arcs_free, dijkstra
+
+    return arcs_free, dijkstra
+
 
 CHUNKED_GRAPH_FROM = 250
 """Discs from which the tangent graph's candidate segments are made and tested compiled, a
@@ -764,7 +779,7 @@ class _Graph:
         groups = np.flatnonzero(np.diff(self.node_disc[order])) + 1
         self._csr = None
         if len(self.points) >= ARRAY_GRAPH_FROM or (
-                len(self.points) >= ARRAY_GRAPH_LOADED_FROM and numba_loaded()):
+                len(self.points) >= ARRAY_GRAPH_LOADED_FROM and cheap(_graph_loops)):
             self.edges = None
             self._arrays(a_seg, b_seg, lengths, order, groups,
                          _forbidden_arrays(discs, lower, upper), discs)

@@ -20,11 +20,11 @@ import math
 
 import numpy as np
 
-from ._numba_state import numba_loaded
+from ..compiling import cheap
 
 FULL_ARRAY_LIMIT = 2_000_000
 """Samples x points up to which the full distance array is computed (16 MB), unless numba
-is loaded already (:func:`._numba_state.numba_loaded`) and there are more than
+is loaded already and the loop cached (:func:`..compiling.cheap`) and there are more than
 :data:`COMPILED_LOADED_FROM`: the same distances and indices, compiled (the dense 100-tree
 field's 18 predictions: 0.47 s in arrays)."""
 COMPILED_LOADED_FROM = 20_000
@@ -39,11 +39,16 @@ def nearest_samples(xy: np.ndarray, centres: np.ndarray) -> tuple[np.ndarray, np
     if len(xy) == 0:
         raise ValueError("no samples")
     size = len(xy) * len(centres)
-    if size <= FULL_ARRAY_LIMIT and not (size > COMPILED_LOADED_FROM and numba_loaded()):
+    if size <= FULL_ARRAY_LIMIT and not (size > COMPILED_LOADED_FROM
+                                         and cheap(_compiled_nearest)):
         d = np.sqrt(((xy[None, :, :] - centres[:, None, :]) ** 2).sum(axis=-1))  # (M, T)
         index = d.argmin(axis=1)
         return d[np.arange(len(centres)), index], index
+    run = max(int(math.sqrt(len(xy))), 8)
+    return _compiled_nearest()(xy, centres, run)
+
+
+def _compiled_nearest():
     from ._proximity_jit import _nearest
 
-    run = max(int(math.sqrt(len(xy))), 8)
-    return _nearest(xy, centres, run)
+    return _nearest

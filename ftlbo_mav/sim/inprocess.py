@@ -25,6 +25,8 @@ from typing import Self
 from pymavlink import mavutil
 
 from .. import clock
+from ..ardupilot import flight_path
+from ..ardupilot.compiled import follower_ready
 from ..link import endpoints
 from .server import TICK_S, Simulator, VehicleRunner
 
@@ -139,8 +141,12 @@ class InProcessSimulator:
                                "`with VirtualClock():`")
         self.config.make_runners(self, clock.monotonic, clock.monotonic(),
                                  utc_offset_s=vc.utc_offset)
-        for v in self.vehicles:  # the simulated clock waits for its loading
-            v.autopilot.compiled = True
+        # the simulated clock waits for the compiled follower's loading; while its machine
+        # code is not cached (a first run after an install) it is compiled in the
+        # background and the copters follow stepwise meanwhile (the same arithmetic)
+        compiled = follower_ready() or not flight_path.compile_in_background()
+        for v in self.vehicles:
+            v.autopilot.compiled = compiled
         endpoints.IN_PROCESS[self.key] = self._connect
         self._running = True
         vc.call_later(0.0, self._tick, name=f"{self.key} emulator")

@@ -66,6 +66,7 @@ def test_a_plans_flights_share_one_stepwise_budget(monkeypatch):
 
     monkeypatch.setattr(fp, "fly_path_stepwise", counted)
     monkeypatch.setattr(fp, "_compiled_loaded", False)  # as in a new process
+    monkeypatch.setattr(fp, "_cold_left", 0.0)  # whose cache holds the compiled loop
     points = np.array([[0.0, 0.0, 5.0], [40.0, 0.0, 5.0]])  # 40 m at 10 m/s: 4 s expected
     alone = [fp.fly_path(points, speed_m_s=10.0) for _ in range(3)]
     assert len(stepwise) == 3  # alone, each is short: stepwise
@@ -84,6 +85,7 @@ def test_a_short_flight_is_stepwise_until_the_compiled_loop_is_loaded(monkeypatc
     from ftlbo_mav.ardupilot import flight_path as fp
 
     monkeypatch.setattr(fp, "_compiled_loaded", False)
+    monkeypatch.setattr(fp, "_cold_left", 0.0)
     calls = []
     real = fp.fly_path_stepwise
     monkeypatch.setattr(fp, "fly_path_stepwise", lambda *a, **k: calls.append(1) or real(*a, **k))
@@ -94,6 +96,80 @@ def test_a_short_flight_is_stepwise_until_the_compiled_loop_is_loaded(monkeypatc
     calls.clear()
     fp.fly_path(points, speed_m_s=10.0)
     assert calls == []
+
+
+def test_while_the_compiled_loop_is_not_cached_flights_stay_stepwise_and_it_compiles_later(
+        monkeypatch):
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    monkeypatch.setattr(fp, "_compiled_loaded", False)  # a new process
+    monkeypatch.setattr(fp, "ready", lambda *f: False)  # its cache cold
+    monkeypatch.setattr(fp, "_cold_left", 10.0)
+    later = []
+    monkeypatch.setattr(fp, "compile_in_background", lambda: later.append(1) or True)
+    stepwise = []
+    real = fp.fly_path_stepwise
+    monkeypatch.setattr(fp, "fly_path_stepwise",
+                        lambda *a, **k: stepwise.append(1) or real(*a, **k))
+    points = np.array([[0.0, 0.0, 5.0], [40.0, 0.0, 5.0]])  # 4 s expected
+    with fp.stepwise_budget(0.0):  # nothing left of the warm budget
+        flown = [fp.fly_path(points, speed_m_s=10.0) for _ in range(3)]
+    assert len(stepwise) == 2 and len(later) == 2  # 4 s + 4 s of the cold 10 s, then compiled
+    _same(flown[0], flown[2])
+    assert fp._compiled_loaded
+
+
+def test_compile_later_starts_nothing_when_told_not_to(monkeypatch):
+    from ftlbo_mav import compiling
+
+    monkeypatch.setenv(compiling.BACKGROUND_ENV, "0")
+    started = []
+    monkeypatch.setattr(compiling.subprocess, "Popen", lambda *a, **k: started.append(a))
+    assert not compiling.compile_later("ftlbo_mav.ardupilot.compiled", "x:y")
+    assert not started
+
+
+def test_compile_now_compiles_what_a_plan_and_the_emulator_call():
+    """The background job compiles the signatures a plan's flights and the emulator's
+    follower use: after it, flying compiled compiles nothing more."""
+    from ftlbo_mav.ardupilot import compiled
+    from ftlbo_mav.ardupilot import flight_path as fp
+
+    fp.compile_now()
+    fly, follow = set(compiled.fly.signatures), set(compiled._follow.signatures)
+    with fp.stepwise_budget(0.0):
+        points = np.array([[0.0, 0.0, 5.0], [25.0, 5.0, 5.0], [40.0, 30.0, 7.0]])
+        fp.fly_path(points, speed_m_s=5.0, holds_s=[0, 2, 0])
+        fp.fly_path(points + [0.0, 0.0, 0.5], speed_m_s=5.0, airframe=None)
+    compiled.CompiledFollower(points[0]).step(0.0025, points[1], points[2], np.zeros(3))
+    assert set(compiled.fly.signatures) == fly
+    assert set(compiled._follow.signatures) == follow
+
+
+def test_a_loop_compiled_by_another_process_is_ready_from_its_cache(tmp_path):
+    """What :func:`ftlbo_mav.compiling.compile_later` relies on, with a small loop: a
+    process that compiles it (``python -m ftlbo_mav.compiling module:function``) leaves it
+    in numba's cache, where :func:`ftlbo_mav.compiling.ready` finds it for the next."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    (tmp_path / "small_loop.py").write_text(
+        "from ftlbo_mav.compiling import njit\n\n"
+        "@njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n\n"
+        "def compile_now():\n    twice(1.0)\n")
+    root = Path(__file__).resolve().parents[2]
+    env = {"PYTHONPATH": f"{tmp_path}:{root}", "PATH": "/usr/bin:/bin"}
+    check = ("import small_loop; from ftlbo_mav import compiling; "
+             "print(compiling.ready(small_loop.twice))")
+
+    def run(*args):
+        return subprocess.run([sys.executable, *args], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, timeout=120)
+
+    assert run("-c", check).stdout.split() == ["False"]
+    assert run("-m", "ftlbo_mav.compiling", "small_loop:compile_now").returncode == 0
+    assert run("-c", check).stdout.split() == ["True"]
 
 
 @pytest.mark.parametrize("name", ["nha-trang-orchard", "orchard-survey", "six-tree-slalom"])

@@ -22,17 +22,22 @@ def test_the_compiled_search_is_the_full_array(monkeypatch, seed):
     assert (full_i[-10:] < 1500).all()
 
 
-def test_once_numba_is_loaded_the_compiled_search_runs_at_smaller_sizes(monkeypatch):
+def test_once_numba_is_loaded_and_cached_the_compiled_search_runs_at_smaller_sizes(monkeypatch):
     calls = []
+    from ftlbo_mav import compiling
     from ftlbo_mav.planning import _proximity_jit
 
     real = _proximity_jit._nearest
     monkeypatch.setattr(_proximity_jit, "_nearest", lambda *a: calls.append(1) or real(*a))
     xy = np.column_stack([np.arange(300.0), np.zeros(300)])
     centres = np.column_stack([np.arange(100.0), np.ones(100)])
-    monkeypatch.setattr(proximity, "numba_loaded", lambda: False)
+    monkeypatch.setattr(compiling, "loaded", lambda: False)
     proximity.nearest_samples(xy, centres)
     assert not calls
-    monkeypatch.setattr(proximity, "numba_loaded", lambda: True)
+    monkeypatch.setattr(compiling, "loaded", lambda: True)
+    monkeypatch.setattr(compiling, "ready", lambda *f: False)  # cache cold
+    proximity.nearest_samples(xy, centres)
+    assert not calls  # compiling would cost more than the arrays
+    monkeypatch.setattr(compiling, "ready", lambda *f: True)
     d, _ = proximity.nearest_samples(xy, centres)
     assert calls and np.allclose(d, 1.0)
