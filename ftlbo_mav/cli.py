@@ -118,8 +118,8 @@ def _parse_formats(_ctx, _param, value: str | None) -> tuple[str, ...]:
 
 def _with_fleet(scn, sysids_text: str, connect) -> object:
     """``scn`` with each UAV's copter as read from the vehicles (``plan --fleet``)."""
+    from .link.addresses import default_urls_for, parse_sysids
     from .link.commands import _urls
-    from .link.endpoints import default_urls_for, parse_sysids
     from .link.fleet_read import read_fleet
 
     sysids = parse_sysids(sysids_text)

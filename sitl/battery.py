@@ -40,7 +40,8 @@ from pathlib import Path
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ftlbo_mav.errors import FtlboError
-from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
+from ftlbo_mav.link.discovery import discover, wait_ready
+from ftlbo_mav.link.endpoints import open_links
 
 from .battery_log import (
     FIELDS,

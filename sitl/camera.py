@@ -26,7 +26,8 @@ from pymavlink.dialects.v20 import ardupilotmega as R
 from ftlbo_mav.ardupilot.storage import WireItem
 from ftlbo_mav.errors import FtlboError
 from ftlbo_mav.link.codec import from_wire, to_wire
-from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
+from ftlbo_mav.link.discovery import discover, wait_ready
+from ftlbo_mav.link.endpoints import open_links
 from ftlbo_mav.link.mission_protocol import Timing, download_mission, upload_mission
 from ftlbo_mav.mission.files import digest, read_mission_text
 

@@ -31,7 +31,8 @@ from pathlib import Path
 from ftlbo_mav.ardupilot.storage import WireItem
 from ftlbo_mav.errors import FtlboError
 from ftlbo_mav.link.codec import from_wire, to_wire
-from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
+from ftlbo_mav.link.discovery import discover, wait_ready
+from ftlbo_mav.link.endpoints import open_links
 from ftlbo_mav.link.mission_protocol import Timing, download_mission, upload_mission
 
 from .launcher import SitlSwarm

@@ -17,9 +17,9 @@ from .. import clock
 from ..ardupilot.firmware import firmware_entry
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, PORT, SYSIDS, FiniteFloat
-from ..errors import FtlboError
+from ..errors import BadInput, FtlboError
+from ..link.addresses import default_urls_for, parse_sysids
 from ..link.commands import _timing, _urls, timing_options
-from ..link.endpoints import BadInput, default_urls_for, parse_sysids
 from ..link.signing import load_key
 from ..mission.files import OutputFolder, check_writable
 from .control import DEFAULT_CONTROL_PORT, ControlServer, request_abort

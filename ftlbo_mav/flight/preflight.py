@@ -17,7 +17,7 @@ from ..ardupilot.firmware import any_firmware_warning, firmware_problem
 from ..ardupilot.navigation import vehicle_param_differences
 from ..errors import FtlboError
 from ..link.codec import mission_differences
-from ..link.endpoints import is_ready, readiness_problems
+from ..link.discovery import is_ready, readiness_problems
 from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
 from ..link.params import read_params

@@ -18,21 +18,15 @@ import click
 from ..ardupilot.copters import FLIGHT_PARAMS
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, SYSIDS, FiniteFloat
-from ..errors import MissionFileError
+from ..errors import BadInput, MissionFileError
 from ..mission.export import check_plan_folder, read_plan_json
 from ..mission.fence_files import read_fence_set, write_fence_set
 from ..mission.params_file import write_params
 from ..mission.waypoints import read_waypoints, write_waypoints
+from .addresses import default_urls_for, parse_sysids
 from .codec import storage_warnings
-from .endpoints import (
-    BadInput,
-    LinkError,
-    default_urls_for,
-    describe_missing,
-    discover,
-    open_links,
-    parse_sysids,
-)
+from .discovery import describe_missing, discover
+from .endpoints import LinkError, open_links
 from .geofence import download_fence_set
 from .mission_protocol import Timing, download_mission
 from .params import read_params
