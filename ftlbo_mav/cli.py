@@ -21,8 +21,9 @@ from .cli_types import LINK_URL, SYSIDS
 from .energy import BATTERY_VIOLATION
 from .errors import BadInput
 from .gnss import classes_within
-from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files, read_plan
+from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files
 from .mission.files import OutputFolder
+from .mission.plan_reader import read_plan
 from .planning.optimizers import OPTIMIZERS
 from .planning.planner import AUTO_TARGET, fleet_lags
 from .planning.planner import plan as plan_scenario
