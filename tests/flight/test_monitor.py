@@ -91,8 +91,8 @@ def test_the_keeper_summary_of_a_large_swarm_is_one_short_line():
 
 
 def test_each_vehicles_battery_is_shown_recorded_and_summed_up():
-    from ftlbo_mav.flight.report import battery_summary
     from ftlbo_mav.flight.record import FlightRecord
+    from ftlbo_mav.flight.report import battery_summary
 
     planned = load_planned_flight(EXAMPLE.with_suffix(""))
     monitor = Monitor(planned)
