@@ -320,7 +320,7 @@ def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
 def positions_now(planned: PlannedFlight, st: Sequence, *, memo: dict | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Every vehicle's position (``(N, 3)`` ENU) brought to one instant from its last
-    report (:class:`~.vehicle.Status` each, every one with a position), how long ago each
+    report (:class:`~.status.Status` each, every one with a position), how long ago each
     report arrived and how old it is (``(N,)`` seconds, ours), and that instant on the
     vehicles' clock. ``memo``: a dict that keeps the last answer, given again while the
     time and every report are the same (the watch and the keeper ask at one instant)."""

@@ -7,7 +7,7 @@ import numpy as np
 
 from ftlbo_mav.flight.monitor import LiveView, Monitor
 from ftlbo_mav.flight.planned import load_planned_flight
-from ftlbo_mav.flight.vehicle import Status
+from ftlbo_mav.flight.status import Status
 
 from ..conftest import EXAMPLE
 
