@@ -1,7 +1,7 @@
 """Emulated copters inside the ground station's process, on its virtual clock.
 
 :class:`InProcessSimulator` is :class:`~ftlbo_mav.sim.server.Simulator` without sockets:
-the same vehicles (:class:`~ftlbo_mav.sim.server.VehicleRunner`: the same faults,
+the same vehicles (:class:`~ftlbo_mav.sim.runner.VehicleRunner`: the same faults,
 variation, wind, GPS error and truth record), stepped every 20 ms of a
 :class:`~ftlbo_mav.clock.VirtualClock` by a call the clock makes in its turn. The ground
 station reaches vehicle i at ``emu:KEY/i`` (its SERIAL1 at ``emu:KEY/i/SERIAL1``), a
@@ -26,7 +26,8 @@ from pymavlink import mavutil
 
 from .. import clock
 from ..link import addresses, endpoints
-from .server import TICK_S, Simulator, VehicleRunner
+from .runner import VehicleRunner
+from .server import TICK_S, Simulator
 
 _keys = itertools.count(1)
 
