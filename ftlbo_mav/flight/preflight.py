@@ -25,9 +25,9 @@ from ..link.transfer import Timing
 from .battery import preflight_problem as battery_preflight
 from .fit import fit_fleet
 from .fleet import concurrently
-from .launch import gate_as_onboard
 from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
+from .start import gate_as_onboard
 from .vehicle import FlightVehicle
 
 NAVIGATION_SETTLE_S = 5.0
