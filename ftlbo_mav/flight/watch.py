@@ -2,6 +2,9 @@
 the departure watch (:mod:`.departures`) whose events the policy (:mod:`.policy`)
 answers.
 
+Kept whole: one loop and what it reads each cycle; the departures, the policy and the
+keeper it drives are modules of their own.
+
 :class:`FlightWatch` turns what the vehicles say into events once per cycle (``poll``)
 and has the policy answer them; :func:`watch` is the loop after the synchronized start.
 """
