@@ -43,7 +43,8 @@ from click.testing import CliRunner  # noqa: E402
 from ftlbo_mav.ardupilot.copters import PROFILES  # noqa: E402
 from ftlbo_mav.cli import main as cli  # noqa: E402
 from ftlbo_mav.flight.planned import load_planned_flight  # noqa: E402
-from ftlbo_mav.link.endpoints import discover, open_links  # noqa: E402
+from ftlbo_mav.link.discovery import discover  # noqa: E402
+from ftlbo_mav.link.endpoints import open_links  # noqa: E402
 from ftlbo_mav.link.params import read_params  # noqa: E402
 from ftlbo_mav.link.transfer import Timing  # noqa: E402
 from ftlbo_mav.scenario import load_scenario  # noqa: E402

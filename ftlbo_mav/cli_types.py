@@ -1,7 +1,7 @@
 """Option types of the command line: numbers that must be finite, ports, connection
 strings, system id lists. Each converts and checks a value where it enters, so that no
 command has to; the rules themselves live with what they describe (system ids and
-connection strings in :mod:`ftlbo_mav.link.endpoints`)."""
+connection strings in :mod:`ftlbo_mav.link.addresses`)."""
 
 from __future__ import annotations
 
@@ -45,12 +45,12 @@ class HostPort(click.ParamType):
 
 class LinkUrl(click.ParamType):
     """A pymavlink connection string (one or several separated by spaces), its port checked
-    (:func:`~ftlbo_mav.link.endpoints.check_url`)."""
+    (:func:`~ftlbo_mav.link.addresses.check_url`)."""
 
     name = "URL"
 
     def convert(self, value, param, ctx):
-        from .link.endpoints import check_url
+        from .link.addresses import check_url
 
         option = param.opts[0] if param is not None and param.opts else "URL"
         try:
@@ -63,12 +63,12 @@ class LinkUrl(click.ParamType):
 
 class SysidList(click.ParamType):
     """``1..3`` or ``1,2,5`` -> ``[1, 2, 3]``
-    (:func:`~ftlbo_mav.link.endpoints.parse_sysids`); the text is kept for messages."""
+    (:func:`~ftlbo_mav.link.addresses.parse_sysids`); the text is kept for messages."""
 
     name = "IDS"
 
     def convert(self, value, param, ctx):
-        from .link.endpoints import parse_sysids
+        from .link.addresses import parse_sysids
 
         try:
             parse_sysids(str(value))

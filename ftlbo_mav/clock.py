@@ -1,5 +1,9 @@
 """The ground station's clock: the wall clock, or a simulated one shared with the emulator.
 
+Kept whole: the virtual clock and the waiting primitives that park on it are one mechanism
+(each primitive is a few lines over the clock's turn-taking); apart they would reach into
+each other's internals.
+
 Everything on the ground that waits or tells the time (the links' reader threads, the
 vehicles' status pumps, the watch, the keeper, the uploads) does it through this module:
 :func:`monotonic`, :func:`time`, :func:`sleep`, and the waiting primitives

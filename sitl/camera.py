@@ -26,11 +26,13 @@ from pymavlink.dialects.v20 import ardupilotmega as R
 from ftlbo_mav.ardupilot.storage import WireItem
 from ftlbo_mav.errors import FtlboError
 from ftlbo_mav.link.codec import from_wire, to_wire
-from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
+from ftlbo_mav.link.discovery import discover, wait_ready
+from ftlbo_mav.link.endpoints import open_links
 from ftlbo_mav.link.mission_protocol import Timing, download_mission, upload_mission
 from ftlbo_mav.mission.files import digest, read_mission_text
 
 from .launcher import SitlSwarm
+from .recording import fly_from_hover, version, wire_to_json
 
 ROOT = Path(__file__).resolve().parents[1]
 SURVEY_UAV1 = ROOT / "missions" / "field-survey" / "uav1.waypoints"
@@ -73,12 +75,6 @@ def camera_items(home: tuple[float, float]) -> list[tuple[str, WireItem]]:
     return items
 
 
-def _json(w: WireItem) -> dict:
-    from .record import wire_to_json
-
-    return wire_to_json(w)
-
-
 def record_storage(channel, home, *, timing: Timing) -> dict:
     named = camera_items(home)
     upload_mission(channel, [from_wire(w) for _, w in named], timing=timing)
@@ -87,15 +83,14 @@ def record_storage(channel, home, *, timing: Timing) -> dict:
         raise FtlboError(f"read back {len(back)} items of {len(named)}")
     return {"description": "DO_SET_CAM_TRIGG_DIST items uploaded (MISSION_ITEM_INT) after a "
                            "home, a takeoff and a waypoint, and read back (MISSION_REQUEST_INT)",
-            "items": [{"name": name, "sent": _json(w), "read_back": _json(to_wire(b))}
+            "items": [{"name": name, "sent": wire_to_json(w),
+                       "read_back": wire_to_json(to_wire(b))}
                       for (name, w), b in zip(named, back)]}
 
 
 def record_survey(link, sysid: int, *, timing: Timing, timeout_s: float = 330.0) -> dict:
     from ftlbo_mav.flight.vehicle import FlightVehicle
     from ftlbo_mav.mission.waypoints import read_waypoints
-
-    from .record import fly_from_hover
 
     items = read_waypoints(SURVEY_UAV1)
     with link.channel(sysid) as channel:
@@ -144,8 +139,6 @@ def record_survey(link, sysid: int, *, timing: Timing, timeout_s: float = 330.0)
 def record_camera(binary: str | None, defaults: list, out: Path) -> dict:
     """Start the SITL copter, record both parts; returns the ``camera.json`` content."""
     from ftlbo_mav.mission.waypoints import read_waypoints
-
-    from .record import version
 
     home_item = read_waypoints(SURVEY_UAV1)[0]
     home = (home_item.lat_deg, home_item.lon_deg, 0.0)

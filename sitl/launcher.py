@@ -21,7 +21,9 @@ from pathlib import Path
 from typing import Self
 
 from ftlbo_mav.errors import BadInput
-from ftlbo_mav.link.endpoints import LinkError, default_urls, open_links, wait_ready
+from ftlbo_mav.link.addresses import default_urls
+from ftlbo_mav.link.discovery import wait_ready
+from ftlbo_mav.link.endpoints import LinkError, open_links
 
 IDENTITY_PARAMS = "SYSID_THISMAV {sysid}\n"
 

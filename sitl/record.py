@@ -24,43 +24,23 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from pathlib import Path
 
-from pymavlink.dialects.v20 import ardupilotmega as R
-
 from ftlbo_mav.ardupilot.storage import WireItem
 from ftlbo_mav.errors import FtlboError
 from ftlbo_mav.link.codec import from_wire, to_wire
-from ftlbo_mav.link.endpoints import discover, open_links, wait_ready
+from ftlbo_mav.link.discovery import discover, wait_ready
+from ftlbo_mav.link.endpoints import open_links
 from ftlbo_mav.link.mission_protocol import Timing, download_mission, upload_mission
 
 from .launcher import SitlSwarm
+from .recording import HOME, fly_from_hover, version, wire_from_json, wire_to_json
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT / "tests" / "data" / "ardupilot-4.5.6" / "mission_items.json"
 EXAMPLE_UAV1 = ROOT / "missions" / "nha-trang-orchard" / "uav1.waypoints"
-HOME = (12.2332099, 109.1145051, 0.0)  # where the shared recordings were made
-FIELDS = ("seq", "frame", "command", "current", "autocontinue", "param1", "param2",
-          "param3", "param4", "x", "y", "z")
-
-
-def _num(v):
-    return float(v) if isinstance(v, str) else v
-
-
-def _json_num(v):
-    return str(v) if isinstance(v, float) and not math.isfinite(v) else v
-
-
-def wire_from_json(d: dict) -> WireItem:
-    return WireItem(**{k: _num(d[k]) for k in FIELDS})
-
-
-def wire_to_json(w: WireItem) -> dict:
-    return {k: _json_num(getattr(w, k)) for k in FIELDS} | {"mission_type": 0}
 
 
 def reference_items(path: Path = REFERENCE) -> list[tuple[str, WireItem]]:
@@ -81,36 +61,6 @@ def record_items(channel, *, timing: Timing) -> dict:
                            "(MISSION_REQUEST_INT) by sitl/record.py",
             "items": [{"name": name, "sent": wire_to_json(w), "read_back": wire_to_json(
                 to_wire(b))} for (name, w), b in zip(named, back)]}
-
-
-def version(channel, timeout_s: float = 5.0) -> str:
-    """The vehicle's banner ("ArduCopter V4.5.6 (bbf0b066)"), from its STATUSTEXT."""
-    channel.send(R.MAVLink_command_long_message(
-        channel.sysid, 1, R.MAV_CMD_DO_SEND_BANNER, 0, 0, 0, 0, 0, 0, 0, 0))
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        msg = channel.recv(0.2)
-        if msg is not None and msg.get_type() == "STATUSTEXT" and "V" in msg.text:
-            return msg.text.strip()
-    return "unknown version"
-
-
-def fly_from_hover(v, takeoff_alt_m: float, *, settle_m: float, timeout_s: float,
-                   start) -> bool:
-    """Fly vehicle ``v``'s stored mission as the shared recordings did: GUIDED, arm, take
-    off to ``takeoff_alt_m``, hover until within ``settle_m`` of it and still, then item 2
-    current and AUTO (``start()`` runs just before the switch); True once it has landed
-    (disarmed) within ``timeout_s``."""
-    v.set_mode("GUIDED", timeout_s=60)
-    v.arm(budget_s=90)
-    v.takeoff(takeoff_alt_m)
-    v.wait_for(lambda s: abs(s.alt_m - takeoff_alt_m) < settle_m and abs(s.climb_m_s) < 0.1,
-               60)
-    time.sleep(1.0)
-    v.set_current(2)
-    start()
-    v.set_mode("AUTO")
-    return v.wait_for(lambda s: not s.armed, timeout_s)
 
 
 def record_flight(link, sysid: int, *, timing: Timing, timeout_s: float = 300.0) -> dict:

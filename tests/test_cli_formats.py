@@ -10,7 +10,7 @@ import numpy as np
 from click.testing import CliRunner
 
 from ftlbo_mav.cli import main
-from ftlbo_mav.mission.export import read_plan
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.mission.qgc_plan import read_plan_file
 from ftlbo_mav.mission.waypoints import read_waypoints
 from ftlbo_mav.plots import FIGURES

@@ -91,7 +91,7 @@ def test_shipped_example_missions_match_their_plan(example_path):
 def test_a_large_swarm_says_what_it_wrote_in_a_line_per_kind(capsys, tmp_path):
     from pathlib import Path
 
-    from ftlbo_mav.cli import _say_written
+    from ftlbo_mav.cli_plan import _say_written
 
     paths = [tmp_path / f"uav{n}{s}" for s in (".waypoints", ".fence") for n in range(1, 51)]
     _say_written(paths + [tmp_path / "plan.json"])

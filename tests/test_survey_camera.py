@@ -12,9 +12,9 @@ from click.testing import CliRunner
 
 from ftlbo_mav.cli import main
 from ftlbo_mav.errors import ScenarioError
-from ftlbo_mav.mission.export import read_plan
 from ftlbo_mav.mission.items import CMD_DO_SET_CAM_TRIGG_DIST, CMD_NAV_WAYPOINT
 from ftlbo_mav.mission.photos import coverage, mission_photos
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.mission.waypoints import read_waypoints
 from ftlbo_mav.scenario import parse_scenario
 

@@ -11,7 +11,7 @@ from click.testing import CliRunner
 
 from ftlbo_mav.cli import main
 from ftlbo_mav.errors import ScenarioError
-from ftlbo_mav.mission.export import read_plan
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.mission.waypoints import read_waypoints
 from ftlbo_mav.scenario import AUTO, parse_scenario
 

@@ -5,13 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from .. import clock
-from ..link.endpoints import (
-    LinkError,
-    describe_missing,
-    discover,
-    mavlink1_problem,
-    open_links,
-)
+from ..link.discovery import describe_missing, discover, mavlink1_problem
+from ..link.endpoints import LinkError, open_links
 from .vehicle import FlightVehicle
 
 

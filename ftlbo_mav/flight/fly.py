@@ -4,7 +4,7 @@
    fence, has a 3D GPS fix and passes its pre-arm checks; nothing is armed otherwise.
 2. Take-off (:mod:`.launch`): GUIDED, arm, take off, all at once; wait until every vehicle
    hovers at its altitude and has stopped climbing.
-3. Synchronized start (:mod:`.launch`): every current item set to where the legs begin,
+3. Synchronized start (:mod:`.start`): every current item set to where the legs begin,
    then AUTO in one burst.
 4. Watch (:mod:`.watch`) until every vehicle has landed or ended its mission, the
    formation keeper (:mod:`.keeper`) pausing leaders briefly on the legs, the departure
@@ -24,18 +24,12 @@ from ..link.transfer import Timing
 from .departures import WatchOptions
 from .fleet import Fleet, concurrently
 from .keeper import FormationKeeper, KeeperOptions, planned_speed
-from .launch import (
-    align_at_start,
-    first_leg,
-    restore_gates,
-    start_together,
-    take_off,
-    takeoff_item,
-)
+from .launch import align_at_start, take_off, takeoff_item
 from .outcome import FlightLeftPlan, abort, aborted
 from .planned import PlannedFlight
 from .policy import FaultPolicy
 from .preflight import PreflightError, preflight
+from .start import first_leg, restore_gates, start_together
 from .vehicle import FlightAborted, FlightError, FlightVehicle
 from .watch import FlightWatch, LeftPlan, finished, keep_formation, watch, watch_abort
 

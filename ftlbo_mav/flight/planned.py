@@ -13,9 +13,9 @@ from ..energy import battery_from_document
 from ..errors import FtlboError, MissionFileError
 from ..geo import LocalFrame
 from ..gnss import NO_BUDGET, NavigationBudget, budget_from_document
-from ..mission.export import check_plan_folder, plan_from_document, read_plan_json
 from ..mission.fence_files import FenceSet, read_fence_set
 from ..mission.items import CMD_DO_CHANGE_SPEED, CMD_NAV_TAKEOFF, CMD_NAV_WAYPOINT, MissionItem
+from ..mission.plan_reader import check_plan_folder, plan_from_document, read_plan_json
 from ..mission.waypoints import read_waypoints
 from .battery import MissionBattery
 
@@ -105,7 +105,7 @@ class PlannedFlight:
 
 def load_planned_flight(folder: str | Path) -> PlannedFlight:
     """``folder``'s plan and its mission files, checked to belong together
-    (:func:`~ftlbo_mav.mission.export.check_plan_folder`); :class:`PlanFolderError`."""
+    (:func:`~ftlbo_mav.mission.plan_reader.check_plan_folder`); :class:`PlanFolderError`."""
     folder = Path(folder)
     try:
         doc, doc_path = read_plan_json(folder)

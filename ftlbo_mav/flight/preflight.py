@@ -17,7 +17,7 @@ from ..ardupilot.firmware import any_firmware_warning, firmware_problem
 from ..ardupilot.navigation import vehicle_param_differences
 from ..errors import FtlboError
 from ..link.codec import mission_differences
-from ..link.endpoints import is_ready, readiness_problems
+from ..link.discovery import is_ready, readiness_problems
 from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
 from ..link.params import read_params
@@ -25,9 +25,9 @@ from ..link.transfer import Timing
 from .battery import preflight_problem as battery_preflight
 from .fit import fit_fleet
 from .fleet import concurrently
-from .launch import gate_as_onboard
 from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
+from .start import gate_as_onboard
 from .vehicle import FlightVehicle
 
 NAVIGATION_SETTLE_S = 5.0

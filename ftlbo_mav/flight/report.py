@@ -1,20 +1,30 @@
-"""After a flight: summary numbers and a picture of planned versus flown.
+"""After a flight: its report. Summary numbers, a picture of planned versus flown, the
+files ``fly`` and ``monitor`` leave, the lines they print.
 
-:func:`summarize` is pure; :func:`render_report_png` draws with matplotlib's Agg back end
-and returns PNG bytes (the caller writes them atomically).
+:func:`summarize`, :func:`link_summary`, :func:`battery_summary` and
+:func:`summary_lines` are pure; :func:`render_report_png` draws with matplotlib's Agg
+back end and returns PNG bytes; :func:`write_flight_report` writes flight.csv,
+summary.json and report.png (photos.csv, progress.json) all or nothing.
 """
 
 from __future__ import annotations
 
 import io
+import json
+from pathlib import Path
 
 import numpy as np
 
+from ..ardupilot.firmware import firmware_entry
 from ..ardupilot.flight_path import fly_paths
 from ..formation import min_separation as planned_separation
+from ..mission.files import OutputFolder
 from ..mission.items import CMD_NAV_WAYPOINT
 from .metrics import formation_error, min_clearance, min_separation
+from .monitor import Monitor
 from .planned import PlannedFlight
+from .progress import flown, progress_document
+from .resume import PROGRESS_FILE
 
 AIRBORNE_M = 0.5
 
@@ -155,3 +165,183 @@ def render_report_png(planned: PlannedFlight, times, positions, seqs, summary: d
     fig.savefig(buf, format="png")
     plt.close(fig)
     return buf.getvalue()
+
+
+def write_flight_report(planned: PlannedFlight, monitor: Monitor, out_dir: Path,
+                        sysids: list[int], *, keeper=None, outcome: list[str] | None = None,
+                        events: list[str] | None = None, rtcm=None,
+                        progress: bool = False, budget=None,
+                        told: tuple[float, str] | None = None, png: bool = True) -> dict:
+    """flight.csv, summary.json and report.png in ``out_dir`` (photos.csv when a vehicle
+    reported photos; with ``progress``, ``fly``'s progress.json: how far each UAV got
+    along its plan, what ``fly --resume`` carries on from); returns the summary.
+    ``events``: the departures seen, one line each; ``outcome``: per vehicle, what
+    happened and what was done when the flight left its plan; ``png``: draw report.png."""
+    times, positions, seqs = monitor.record.grid(sysids, planned.frame)
+    summary = summarize(planned, times, positions, seqs)
+    summary["position_rate_hz"] = {str(s): round(monitor.record.rate_hz(s), 2) for s in sysids}
+    summary["departures"] = list(events or [])
+    if outcome is not None:
+        summary["outcome"] = list(outcome)
+    if keeper is not None:
+        summary["keeper"] = {"enabled": keeper.options.enabled,
+                             "off_reason": keeper.off_reason,
+                             "link_gaps": keeper.log.link_gaps,
+                             "rough_link_s": round(keeper.log.rough_s, 1),
+                             "worst_jitter_s": round(keeper.log.worst_jitter_s, 3),
+                             "worst_gap_s": round(keeper.log.worst_gap_s, 2),
+                             "vehicles": keeper.log.as_dict(planned.names)}
+    # fly asked for AUTOPILOT_VERSION at its pre-flight
+    if any(v.status.firmware_version is not None for v in monitor.vehicles):
+        summary["firmware"] = {v.name: firmware_entry(
+            vehicle_type=v.status.vehicle_type, autopilot=v.status.autopilot,
+            version=v.status.firmware_version) | {"sysid": v.sysid}
+            for v in monitor.vehicles}
+    if rtcm is not None:
+        summary["rtcm"] = rtcm.summary()
+    battery = battery_summary(planned, monitor.record, sysids)
+    if battery:
+        summary["battery"] = battery
+    summary["link"] = link_summary(monitor, sysids, planned.names, budget=budget,
+                                   told=told)
+    files = {"flight.csv": monitor.record.to_csv()}
+    if monitor.record.photos:
+        files["photos.csv"] = monitor.record.photos_csv()
+        summary["photos"] = {planned.names[n]: len(monitor.record.photos_of(s))
+                             for n, s in enumerate(sysids) if n < planned.count}
+    if progress:
+        flown_now = flown(planned, monitor.record, sysids)
+        summary["progress"] = {"last_point": planned.paths.shape[1] - 1,
+                               "uavs": {p.name: round(p.point, 2) for p in flown_now}}
+        files[PROGRESS_FILE] = json.dumps(progress_document(planned, flown_now),
+                                          indent=1) + "\n"
+    files["summary.json"] = json.dumps(summary, indent=2) + "\n"
+    if len(times) and png:
+        files["report.png"] = render_report_png(planned, times, positions, seqs, summary)
+    with OutputFolder(out_dir, replaces=[r"report\.png", r"photos\.csv", r"progress\.json"]
+                      ) as out:  # all, or none
+        out.write_all(files)
+    return summary
+
+
+def link_summary(monitor: Monitor, sysids: list[int], names, *, budget=None,
+                 told: tuple[float, str] | None = None) -> dict:
+    """summary.json's ``link``: the link ``fly`` was told of (``--link``), what the flight
+    asked of it (:mod:`ftlbo_mav.link.budget`) and what it used: bytes a second from each
+    vehicle over the flight (flight.csv's ``link_bytes``), sent by this station, in all and
+    as a share of the link (per second of the vehicles' clock: an emulator run faster
+    than real time is measured as it flies); the ground radio's last RADIO_STATUS."""
+    record = monitor.record
+    down = {names[n] if n < len(names) else str(s): record.link_bytes_per_s(s)
+            for n, s in enumerate(sysids)}
+    links = {id(v.link): v.link for v in monitor.vehicles if hasattr(v, "link")}.values()
+    span = max((s.t for s in record.samples), default=0.0) - min(
+        (s.t for s in record.samples), default=0.0)
+    span *= record.clock_rate()  # in the vehicles' seconds, as the streams are
+    up = (sum(getattr(k, "bytes_out", 0) for k in links) / span) if span > 0 else None
+    used = (sum(v for v in down.values() if v is not None) + (up or 0.0)
+            if any(v is not None for v in down.values()) else None)
+    out = {"told": None if told is None else {"name": told[1], "bytes_per_s": told[0]},
+           "asked": None if budget is None else {
+               "position_hz": budget.position_hz, "status_hz": budget.status_hz,
+               "down_bytes_per_s_each": round(budget.down, 1),
+               "up_bytes_per_s_each": round(budget.up, 1), "total": round(budget.total, 1)},
+           "measured": {"down_bytes_per_s": {k: None if v is None else round(v, 1)
+                                             for k, v in down.items()},
+                        "up_bytes_per_s": None if up is None else round(up, 1),
+                        "total": None if used is None else round(used, 1),
+                        "share_of_link": (round(used / told[0], 3)
+                                          if used is not None and told else None)}}
+    radio = next((k.radio_status for k in links
+                  if getattr(k, "radio_status", None) is not None), None)
+    if radio is not None:
+        out["radio"] = {"txbuf": radio.txbuf, "rssi": radio.rssi, "remrssi": radio.remrssi,
+                        "rxerrors": radio.rxerrors, "slowdown_ms": max(
+                            getattr(k, "slowdown_ms", 0) for k in links)}
+    return out
+
+
+def battery_summary(planned: PlannedFlight, record, sysids: list[int]) -> dict:
+    """summary.json's ``battery``: per vehicle the charge it reported first and last (per
+    cent, SYS_STATUS) and what it used; with the plan's ``[battery]``, that in mAh beside
+    the mission's predicted charge. Empty when no vehicle reported its battery."""
+    out = {}
+    plan = planned.battery
+    for n, sysid in enumerate(sysids):
+        seen = record.battery(sysid)
+        if seen is None:
+            continue
+        first, last = seen
+        entry = {"first_pct": first, "last_pct": last, "used_pct": first - last}
+        if plan is not None and n < len(plan.total_mah):
+            entry["used_mah"] = round((first - last) / 100.0 * plan.battery.capacity_mah, 1)
+            entry["predicted_mah"] = round(plan.total_mah[n], 1)
+        out[planned.names[n] if n < len(planned.names) else str(sysid)] = entry
+    return out
+
+
+def summary_lines(summary: dict, out_dir: Path) -> list[str]:
+    """What ``fly`` and ``monitor`` print after a flight, from its summary: formation
+    error, separation and clearance, the keeper, the link, RTCM, how far the UAVs got."""
+    lines: list[str] = []
+
+    def m(key):
+        v = summary.get(key)
+        return "n/a" if v is None else f"{v:.2f} m"
+
+    lines.append(f"formation error on the legs: {m('formation_error_rms_legs_m')} RMS, "
+                  f"{m('formation_error_max_legs_m')} worst; smallest separation "
+                  f"{m('min_separation_legs_m')} on the legs, {m('min_separation_airborne_m')} in "
+                  f"the air (planned {m('planned_min_separation_m')}); "
+                  f"smallest clearance {m('min_clearance_m')} (predicted "
+                  f"{m('predicted_min_clearance_m')})")
+    keeper = summary.get("keeper")
+    if keeper and keeper["off_reason"]:
+        lines.append(f"formation keeper off: {keeper['off_reason']}")
+    elif keeper and keeper["enabled"]:
+        waited = {n: v for n, v in keeper["vehicles"].items() if v["pauses"]}
+        lines.append("formation keeper: " + (keeper_line(waited) if waited
+                                              else "no vehicle needed to wait") + (
+            f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else "")
+            + (f"; no pauses for {keeper['rough_link_s']:.0f} s: the link's delays varied by "
+               f"up to {keeper['worst_jitter_s']:.2f} s and its reports stopped for up to "
+               f"{keeper.get('worst_gap_s', 0.0):.1f} s (a pause could not be timed or "
+               "undone)" if keeper.get("rough_link_s") else ""))
+    link = summary.get("link") or {}
+    measured = link.get("measured") or {}
+    if measured.get("total") is not None:
+        share = measured.get("share_of_link")
+        lines.append(f"link used: {measured['total']:,.0f} B/s both ways"
+                      + (f", {100 * share:.0f} % of {link['told']['name']}" if share else "")
+                      + (f"; radio txbuf {link['radio']['txbuf']} %, {link['radio']['rxerrors']} "
+                         f"errors" if link.get("radio") else ""))
+    rtcm = summary.get("rtcm")
+    if rtcm:
+        lines.append(f"RTCM corrections: {rtcm['frames']} frames, {rtcm['bytes']} bytes "
+                      f"({rtcm['bytes_per_s']:.0f} bytes/s), {rtcm['dropped']} dropped")
+    progress = summary.get("progress")
+    if progress and min(progress["uavs"].values(), default=0) < progress["last_point"]:
+        lines.append("got along the plan to path points " + ", ".join(
+            f"{n} {p:.2f}" for n, p in progress["uavs"].items())
+            + f" of {progress['last_point']}: to carry on from there, `ftlbo-mav fly "
+            f"{out_dir.parent} --resume`" + ("" if out_dir.name == "flight" else
+                                            f" --progress {out_dir / PROGRESS_FILE}"))
+    lines.append(f"flight log, summary and report in {out_dir}/")
+    return lines
+
+
+def keeper_line(waited: dict, *, listed: int = 6) -> str:
+    """Each waiting vehicle's pauses; past ``listed`` vehicles, the ranges and the ones
+    that waited longest (summary.json keeps every vehicle)."""
+    def one(n, v):
+        return (f"{n} waited {v['pauses']}x ({v['seconds_paused']:.1f} s paused, largest "
+                f"lead {v['largest_lead_m']:+.2f} m)")
+
+    if len(waited) <= listed:
+        return "; ".join(one(n, v) for n, v in waited.items())
+    pauses = [v["pauses"] for v in waited.values()]
+    paused = [v["seconds_paused"] for v in waited.values()]
+    longest = sorted(waited.items(), key=lambda nv: -nv[1]["seconds_paused"])[:3]
+    return (f"{len(waited)} vehicles waited {min(pauses)}-{max(pauses)}x "
+            f"({min(paused):.1f}-{max(paused):.1f} s paused); longest: "
+            + "; ".join(one(n, v) for n, v in longest) + " (every vehicle in summary.json)")

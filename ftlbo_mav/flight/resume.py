@@ -15,9 +15,10 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..errors import BadInput, MissionFileError
-from ..mission.export import PLAN_OUTPUTS, plan_files, plan_from_document, read_plan_json
+from ..mission.export import PLAN_OUTPUTS, plan_files
 from ..mission.files import OutputFolder
 from ..mission.items import mission_settings
+from ..mission.plan_reader import plan_from_document, read_plan_json
 from ..planning.planner import Plan
 from ..planning.planner import plan as plan_scenario
 from ..planning.resume import ResumePoint, plan_resume, resume_point

@@ -1,9 +1,9 @@
 """One vehicle seen from the ground: its live status and the commands a flight needs.
 
 A :class:`FlightVehicle` owns a channel of a :class:`~ftlbo_mav.link.endpoints.Link`
-and a reader thread that keeps :class:`Status` up to date (HEARTBEAT, GLOBAL_POSITION_INT,
-MISSION_CURRENT, COMMAND_ACK, STATUSTEXT; on a simulated clock no thread: whoever reads a
-message updates the status); it asks the vehicle for those streams on its
+and a reader thread that keeps its :class:`~.status.Status` up to date (HEARTBEAT,
+GLOBAL_POSITION_INT, MISSION_CURRENT, COMMAND_ACK, STATUSTEXT; on a simulated clock no
+thread: whoever reads a message updates the status); it asks the vehicle for those streams on its
 link, since ArduPilot sends only HEARTBEAT unasked (:mod:`ftlbo_mav.ardupilot.streams`).
 Commands are sent with a timeout and a retry budget and fail with :class:`FlightError`
 naming the vehicle and the step.
@@ -11,10 +11,7 @@ naming the vehicle and the step.
 
 from __future__ import annotations
 
-import math
-from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as R
 
@@ -25,12 +22,10 @@ from ..errors import FtlboError
 from ..link.endpoints import LinkError
 from ..link.firmware import version_request
 from .navigation import report_jump
+from .status import Status
 
-GAP_REPORTS = 400  # 40 s of positions at 10 Hz
 REBOOT_BACK_S = 5.0  # a position report this much older than the last: the vehicle rebooted
 CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
-CLOCK_REPORTS = 20  # a report's time is judged against the least delayed of this many
-DELAY_REPORTS = 50  # a link's delays are judged over this many reports (5 s at 10 Hz)
 
 
 class FlightError(FtlboError):
@@ -60,159 +55,6 @@ POSITION_ONLY = (R.POSITION_TARGET_TYPEMASK_VX_IGNORE | R.POSITION_TARGET_TYPEMA
                  | R.POSITION_TARGET_TYPEMASK_YAW_IGNORE
                  | R.POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE)
 """SET_POSITION_TARGET_*'s type_mask for a position alone."""
-
-
-def quantile(values, q: float) -> float:
-    """``numpy.quantile(values, q)`` (its default, linear method) on a few plain floats,
-    without numpy's set-up: the same number, computed as numpy computes it."""
-    a = sorted(float(v) for v in values)
-    n = len(a)
-    index = (n - 1) * q  # numpy's "linear" virtual index
-    lo = min(max(math.floor(index), 0), n - 1)
-    hi = min(lo + 1, n - 1)
-    t = index - math.floor(index)
-    diff = a[hi] - a[lo]
-    return a[hi] - diff * (1.0 - t) if t >= 0.5 else a[lo] + diff * t  # numpy's _lerp
-
-
-class GapLog:
-    """The silences between position reports: ``(arrival, seconds since the one before)``
-    of the last ``maxlen`` reports (arrivals in order), and the longest since a time
-    without a scan (the keeper asks 20 times a second over 200 reports): a queue of the
-    reports that no later one matches, longest first."""
-
-    def __init__(self, maxlen: int) -> None:
-        self._all: deque = deque(maxlen=maxlen)
-        self._peaks: deque = deque()  # (count, arrival, gap), gaps strictly decreasing
-        self._count = 0
-
-    def append(self, item: tuple[float, float]) -> None:
-        t, gap = item
-        self._all.append(item)
-        self._count += 1
-        while self._peaks and self._peaks[-1][2] <= gap:
-            self._peaks.pop()
-        self._peaks.append((self._count, t, gap))
-        oldest = self._count - len(self._all) + 1  # the reports still kept
-        while self._peaks[0][0] < oldest:
-            self._peaks.popleft()
-
-    def extend(self, items) -> None:
-        for item in items:
-            self.append(item)
-
-    def longest_since(self, since: float) -> float | None:
-        """The longest gap that arrived at ``since`` or later (None: none did)."""
-        for _n, t, gap in self._peaks:
-            if t >= since:
-                return gap
-        return None
-
-    def __iter__(self):
-        return iter(self._all)
-
-    def __reversed__(self):
-        return reversed(self._all)
-
-    def __len__(self) -> int:
-        return len(self._all)
-
-
-@dataclass
-class Status:
-    """What the vehicle last said about itself; ``t`` values are ``clock.monotonic()``."""
-
-    mode: str = "?"
-    armed: bool = False
-    lat_deg: float | None = None
-    lon_deg: float | None = None
-    alt_m: float = 0.0
-    climb_m_s: float = 0.0
-    ground_speed_m_s: float = 0.0
-    velocity_enu: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    seq: int = -1
-    position_t: float = 0.0
-    position_boot_s: float = 0.0
-    # when the vehicle's clock read 0 on the ground clock, from the least-delayed of its
-    # recent reports: a report's own time on the ground clock is clock_offset_s +
-    # position_boot_s / clock_rate (reports can arrive in bursts, so the arrival time
-    # overstates how fresh a position is)
-    clock_offset_s: float | None = None
-    # vehicle seconds per ground second (1 but on a simulator run faster than real time:
-    # an emulator's time scale, SITL's --speedup), from the reports of the last while
-    clock_rate: float = 1.0
-    _recent: deque = field(default_factory=lambda: deque(maxlen=CLOCK_REPORTS))
-    # each position report's delay beyond the least delayed of its neighbours (the
-    # vehicle's seconds), the last DELAY_REPORTS: how much a link's latency varies
-    delays: deque = field(default_factory=lambda: deque(maxlen=DELAY_REPORTS))
-    _rate_since: tuple[float, float] | None = None  # (ground, vehicle) seconds
-    _jitter: tuple | None = None  # ((report time, count), jitter_s) last computed
-    # silences between position reports: (arrival, seconds since the one before, both
-    # ground), the last GAP_REPORTS
-    gaps: GapLog = field(default_factory=lambda: GapLog(GAP_REPORTS))
-    heartbeat_t: float = 0.0
-    heard_t: float = 0.0  # the last message of any kind from the vehicle
-    # every STATUSTEXT as (arrival time, severity, text), the last 50; text_count counts
-    # them all, so a watcher knows which ones are new
-    text_log: list[tuple[float, int, str]] = field(default_factory=list)
-    text_count: int = 0
-    acks: dict[int, int] = field(default_factory=dict)
-    params: dict[str, float] = field(default_factory=dict)
-    # the last GPS_RAW_INT and EKF_STATUS_REPORT as received (flight/navigation.py
-    # reads them: gps_report, ekf_report)
-    gps_raw: object | None = None
-    ekf_raw: object | None = None
-    gps_jump_m: float = 0.0  # the largest GPS jump while armed (flight/navigation.py)
-    # SYS_STATUS: the charge left (per cent; None: not reported, -1 on the wire) and the
-    # current drawn (A)
-    battery_pct: int | None = None
-    battery_current_a: float = 0.0
-    photos: int = 0  # CAMERA_FEEDBACK messages received
-    # what the vehicle says it is: HEARTBEAT type and autopilot, AUTOPILOT_VERSION's
-    # flight_sw_version (asked for at pre-flight; ardupilot/firmware.py judges them)
-    vehicle_type: int | None = None
-    autopilot: int | None = None
-    firmware_version: int | None = None
-    # SYSTEM_TIME: its UTC clock (AP_RTC, from its GPS) less its boot clock, seconds;
-    # None until it has one
-    utc_offset_s: float | None = None
-
-    def vehicle_now(self, now: float) -> float | None:
-        """Its boot clock at ground time ``now`` (seconds; None before a position report)."""
-        if self.clock_offset_s is None:
-            return None
-        return (now - self.clock_offset_s) * self.clock_rate
-
-    def utc_now(self, now: float) -> float | None:
-        """Its UTC clock at ground time ``now`` (seconds since the epoch), or None."""
-        boot = self.vehicle_now(now)
-        return None if boot is None or self.utc_offset_s is None else boot + self.utc_offset_s
-
-    def longest_gap_s(self, now: float, window_s: float) -> float:
-        """The longest silence between position reports in the last ``window_s`` of the
-        vehicle's seconds (and the one going on now), in its seconds."""
-        rate = self.clock_rate
-        since = now - window_s / rate
-        longest = now - self.position_t if self.position_t else 0.0
-        recent = self.gaps.longest_since(since)
-        if recent is not None:
-            longest = max(longest, recent)
-        return longest * rate
-
-    def jitter_s(self) -> float | None:
-        """The 90th percentile of the recent reports' delays beyond the least delayed
-        (the vehicle's seconds); None before there are 20."""
-        if len(self.delays) < 20:
-            return None
-        key = (self.position_t, len(self.delays))  # a delay is added with each report
-        if self._jitter is None or self._jitter[0] != key:
-            self._jitter = (key, quantile(self.delays, 0.9))
-        return self._jitter[1]
-
-    @property
-    def texts(self) -> list[str]:
-        """The last 20 STATUSTEXTs' words."""
-        return [text for _t, _severity, text in self.text_log[-20:]]
 
 
 class FlightVehicle:

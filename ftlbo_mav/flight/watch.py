@@ -2,6 +2,9 @@
 the departure watch (:mod:`.departures`) whose events the policy (:mod:`.policy`)
 answers.
 
+Kept whole: one loop and what it reads each cycle; the departures, the policy and the
+keeper it drives are modules of their own.
+
 :class:`FlightWatch` turns what the vehicles say into events once per cycle (``poll``)
 and has the policy answer them; :func:`watch` is the loop after the synchronized start.
 """
@@ -320,7 +323,7 @@ def finished(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
 def positions_now(planned: PlannedFlight, st: Sequence, *, memo: dict | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Every vehicle's position (``(N, 3)`` ENU) brought to one instant from its last
-    report (:class:`~.vehicle.Status` each, every one with a position), how long ago each
+    report (:class:`~.status.Status` each, every one with a position), how long ago each
     report arrived and how old it is (``(N,)`` seconds, ours), and that instant on the
     vehicles' clock. ``memo``: a dict that keeps the last answer, given again while the
     time and every report are the same (the watch and the keeper ask at one instant)."""

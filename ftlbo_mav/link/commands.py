@@ -18,21 +18,15 @@ import click
 from ..ardupilot.copters import FLIGHT_PARAMS
 from ..cli_errors import user_errors
 from ..cli_types import LINK_URL, SYSIDS, FiniteFloat
-from ..errors import MissionFileError
-from ..mission.export import check_plan_folder, read_plan_json
+from ..errors import BadInput, MissionFileError
 from ..mission.fence_files import read_fence_set, write_fence_set
 from ..mission.params_file import write_params
+from ..mission.plan_reader import check_plan_folder, read_plan_json
 from ..mission.waypoints import read_waypoints, write_waypoints
+from .addresses import default_urls_for, parse_sysids
 from .codec import storage_warnings
-from .endpoints import (
-    BadInput,
-    LinkError,
-    default_urls_for,
-    describe_missing,
-    discover,
-    open_links,
-    parse_sysids,
-)
+from .discovery import describe_missing, discover
+from .endpoints import LinkError, open_links
 from .geofence import download_fence_set
 from .mission_protocol import Timing, download_mission
 from .params import read_params
@@ -68,7 +62,7 @@ def mission_files(folder: Path) -> list[Path]:
     is a ``uav0.waypoints`` (or ``uav01``): the numbers start at 1, one per ``--sysid``.
 
     A folder with a ``plan.json`` must hold exactly the mission files it was written with
-    (:func:`~ftlbo_mav.mission.export.check_plan_folder`): never a mix of two plans."""
+    (:func:`~ftlbo_mav.mission.plan_reader.check_plan_folder`): never a mix of two plans."""
     if (folder / "plan.json").exists():
         doc, source = read_plan_json(folder)
         return check_plan_folder(folder, doc, source=source)

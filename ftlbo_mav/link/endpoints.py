@@ -1,20 +1,22 @@
-"""Where the vehicles are: connection strings, system id lists, discovery by HEARTBEAT.
+"""One MAVLink connection and the vehicles on it: :class:`Link` and its :class:`Channel` s.
+
+Kept whole: a Link's reader and the Channels it fills are one mechanism (what arrives is
+sorted by sender into each vehicle's channel); splitting them would only cut it in two.
 
 A :class:`Link` is one pymavlink connection (``tcp:127.0.0.1:5760``, ``udpin:0.0.0.0:14550``,
-a serial port...) with a reader thread that sorts what arrives by the sender's system id.
-One link may carry one vehicle (SITL's TCP ports) or several (a telemetry radio, a
-router's UDP output). :func:`discover` finds which link each requested id speaks on, and
-:meth:`Link.channel` gives the mission protocol the messages of that one vehicle.
+a serial port, an emulator in this process...) with a reader thread that sorts what
+arrives by the sender's system id. One link may carry one vehicle (SITL's TCP ports) or
+several (a telemetry radio, a router's UDP output). :meth:`Link.channel` gives the mission
+protocol the messages of one vehicle. Connection strings are checked in
+:mod:`.addresses`; :mod:`.discovery` finds which link each vehicle speaks on.
 """
 
 from __future__ import annotations
 
-import contextlib
-import os
 import queue
 import re
 import threading
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 # MAVLink 2 is chosen in ftlbo_mav/__init__.py, before pymavlink is imported.
@@ -24,14 +26,14 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from .. import clock
-from ..ardupilot.streams import READINESS, StreamRequests, radio_slowdown
+from ..ardupilot.streams import StreamRequests, radio_slowdown
 from ..errors import BadInput, FtlboError
-from .firmware import version_request
+from .addresses import in_process
 
 GCS_SYSID = 255
 GCS_COMPID = mavlink2.MAV_COMP_ID_MISSIONPLANNER  # 190
-FIRST_TCP_PORT = 5760  # SITL instance i listens on 5760 + 10 * i
 ASK_EVERY_S = 0.1  # how often the reader looks for telemetry to ask for (again)
+MAVLINK1_MAGIC = 0xFE  # a MAVLink 1 frame's first byte (MAVLink 2: 0xFD)
 
 
 class LinkError(FtlboError):
@@ -41,106 +43,6 @@ class LinkError(FtlboError):
 class LinkDown(LinkError, ConnectionResetError):
     """A message could not be sent: the link is closed or broken (and not yet back).
     Also a ConnectionResetError, for callers that handle a broken socket as such."""
-
-
-MAX_SYSID = 254  # 255 is the ground station's
-
-
-def parse_sysids(text: str) -> list[int]:
-    """``"1..3"`` -> ``[1, 2, 3]``; ``"1,2,5"`` -> ``[1, 2, 5]``; ``"4"`` -> ``[4]``.
-
-    Ids are MAVLink system ids 1..254 (255 is the ground station's), without repeats; each
-    number is range-checked before a range is expanded.
-    """
-    text = text.strip()
-    ids: list[int] = []
-
-    def checked(number: str) -> int:
-        value = int(number)
-        if not 1 <= value <= MAX_SYSID:
-            raise BadInput(f"--sysid {text}: system ids are 1..{MAX_SYSID}, got {value}")
-        return value
-
-    for part in text.split(","):
-        part = part.strip()
-        m = re.fullmatch(r"(\d{1,12})\s*\.\.\s*(\d{1,12})", part)
-        if m:
-            lo, hi = checked(m.group(1)), checked(m.group(2))
-            if hi < lo:
-                raise BadInput(f"--sysid {text}: range {part} runs backwards")
-            ids.extend(range(lo, hi + 1))
-        elif re.fullmatch(r"\d{1,12}", part):
-            ids.append(checked(part))
-        else:
-            raise BadInput(f"--sysid {text}: expected a range like 1..3 or a list like 1,2,5")
-    if len(set(ids)) != len(ids):
-        raise BadInput(f"--sysid {text}: an id is repeated")
-    return ids
-
-
-_NETWORK_URL = re.compile(r"(tcp|tcpin|udp|udpin|udpout|udpbcast|wsserver|ws):(.*):([^:]*)")
-
-
-def check_url(url: str, *, option: str = "--connect") -> str:
-    """A pymavlink connection string whose port (``tcp:HOST:PORT``, ``udpin:...``, ...) is
-    a number 0..65535 (1..65535 where it is connected to); :class:`BadInput` otherwise.
-    Serial ports and files pass unchanged, as do the connection strings of an emulator
-    in this process (``emu:KEY/INDEX``, :mod:`ftlbo_mav.sim.inprocess`)."""
-    if _in_process(url.strip()) is not None:
-        return url.strip()
-    m = _NETWORK_URL.fullmatch(url.strip())
-    if not m:
-        _check_other_url(url, option)
-        return url
-    kind, host, port = m.groups()
-    listens = kind in ("tcpin", "udpin", "udp", "wsserver")
-    if not host:
-        raise BadInput(f"{option} {url}: no host; expected {kind}:HOST:PORT")
-    if not port.isdigit() or not (0 if listens else 1) <= int(port) <= 65535:
-        raise BadInput(f"{option} {url}: port {port!r} is not a port number "
-                       f"({0 if listens else 1}..65535)")
-    return url
-
-
-_EXAMPLES = ("tcp:HOST:PORT, udpin:0.0.0.0:PORT, udpout:HOST:PORT or a serial device "
-             "with its baud rate (/dev/ttyUSB0,57600)")
-_SERIAL = re.compile(r"(/dev/[^,:]+|COM\d+)(,\d+)?")
-
-
-def _check_other_url(url: str, option: str) -> None:
-    """What is not ``KIND:HOST:PORT``: a serial device, or what pymavlink would read as
-    something else (a bare ``HOST:PORT`` is UDP to it; an existing file is a log to
-    replay, or under ``/bin/`` a program to run), named as the mistake it is."""
-    text = url.strip()
-    if _SERIAL.fullmatch(text):
-        return
-    scheme, colon, rest = text.partition(":")
-    if colon:
-        if scheme and ":" not in rest:
-            if not rest.isdigit():
-                raise BadInput(f"{option} {url}: {scheme!r} is not a kind of link (tcp, "
-                               f"udpin, udpout, ...) and {rest!r} not a port; expected "
-                               f"{_EXAMPLES}")
-            if not 1 <= int(rest) <= 65535:
-                raise BadInput(f"{option} {url}: port {rest} is not a port number (1..65535)")
-            return  # HOST:PORT, UDP as pymavlink reads it
-        raise BadInput(f"{option} {url}: not a connection string; expected {_EXAMPLES}")
-    if os.path.exists(text) and not text.startswith("/dev/"):
-        raise BadInput(f"{option} {url}: is a file, not a link to a vehicle; expected "
-                       f"{_EXAMPLES}")
-    if not text.startswith("/dev/") and not re.fullmatch(r"COM\d+", text):
-        raise BadInput(f"{option} {url}: not a connection string; expected {_EXAMPLES}")
-
-
-def default_urls(count: int) -> list[str]:
-    """SITL's and the emulator's layout: vehicle i on ``tcp:127.0.0.1:5760 + 10*i``."""
-    return [f"tcp:127.0.0.1:{FIRST_TCP_PORT + 10 * i}" for i in range(count)]
-
-
-def default_urls_for(sysids: Sequence[int]) -> list[str]:
-    """Where SITL and the emulator put these system ids: id s (instance s-1) on
-    ``tcp:127.0.0.1:5760 + 10*(s-1)``."""
-    return [f"tcp:127.0.0.1:{FIRST_TCP_PORT + 10 * (s - 1)}" for s in sysids]
 
 
 @dataclass(frozen=True)
@@ -162,19 +64,10 @@ def _is_vehicle(msg) -> bool:
     return msg.type != mavlink2.MAV_TYPE_GCS and msg.autopilot != mavlink2.MAV_AUTOPILOT_INVALID
 
 
-IN_PROCESS: dict[str, Callable] = {}
-"""Emulators in this process (:mod:`ftlbo_mav.sim.inprocess`), by the start of their
-connection strings (``emu:KEY``): each opens a connection to one of its vehicles."""
-
-
-def _in_process(url: str) -> Callable | None:
-    return IN_PROCESS.get(url.split("/", 1)[0]) if url.startswith("emu:") else None
-
-
 def _open(url: str, *, timeout_s: float):
     """Open a pymavlink connection, retrying refused TCP connects until ``timeout_s``."""
     deadline = clock.monotonic() + timeout_s
-    if url.startswith("emu:") and _in_process(url) is None:
+    if url.startswith("emu:") and in_process(url) is None:
         raise LinkError(f"{url}: no emulator of that name in this process")
     device, baud = url, 115200
     serial = re.fullmatch(r"(/dev/[^,:]+|COM\d+),(\d+)", url)
@@ -182,7 +75,7 @@ def _open(url: str, *, timeout_s: float):
         device, baud = serial.group(1), int(serial.group(2))
     while True:
         try:
-            if (connect := _in_process(url)) is not None:
+            if (connect := in_process(url)) is not None:
                 return connect(url, source_system=GCS_SYSID, source_component=GCS_COMPID)
             return mavutil.mavlink_connection(
                 device,
@@ -581,139 +474,3 @@ def open_links(urls: Sequence[str], *, signing_key: bytes | None = None,
             link.close()
         raise
     return links
-
-
-HEARTBEAT_ASK_AGAIN_S = 0.4
-""":func:`discover` asks the vehicles not heard yet for a HEARTBEAT at once and once more
-after this (a lossy radio may lose the first ask), or as soon as the link first hears a
-vehicle when it had heard none (a ``udpin`` link learns where to send from the first
-packet it receives). ArduPilot sends HEARTBEAT at 1 Hz, so waiting for the last of three
-copters took 0.5-1 s of every upload; asked, it answers at once. Each ask also asks for
-AUTOPILOT_VERSION (kept in :attr:`Link.versions`), which every command that found the
-vehicles asks next (the firmware check): one round trip fewer."""
-
-
-def heartbeat_request(sysid: int, attempt: int = 0):
-    """COMMAND_LONG MAV_CMD_REQUEST_MESSAGE for HEARTBEAT: ArduPilot answers with
-    COMMAND_ACK and one HEARTBEAT (GCS_Common.cpp ``handle_command_request_message``; its
-    message map has MAVLINK_MSG_ID_HEARTBEAT -> MSG_HEARTBEAT). ``attempt`` counts resends
-    in the confirmation field."""
-    return mavlink2.MAVLink_command_long_message(
-        sysid, 1, mavlink2.MAV_CMD_REQUEST_MESSAGE, min(attempt, 255),
-        mavlink2.MAVLINK_MSG_ID_HEARTBEAT, 0, 0, 0, 0, 0, 0)
-
-
-def discover(links: Iterable[Link], sysids: Sequence[int], *,
-             timeout_s: float = 5.0) -> tuple[dict[int, Link], list[int]]:
-    """Which link each requested vehicle speaks on, by its HEARTBEAT system id.
-
-    Returns ``(found, missing)``: ``found[sysid]`` is the first link that heard it;
-    ``missing`` lists the ids not heard within ``timeout_s``. The ids not heard yet are
-    asked for a HEARTBEAT at :data:`HEARTBEAT_ASKS_S` on every link (a link a vehicle is
-    not on ignores a request addressed to it); ids not requested are ignored, so nothing
-    is ever sent to them.
-    """
-    links = list(links)
-    deadline = clock.monotonic() + timeout_s
-    asks: dict[int, tuple[int, float, bool]] = {}  # id(link): (asks, when, it had heard)
-    found: dict[int, Link] = {}
-    while True:
-        for sysid in sysids:
-            if sysid not in found:
-                for link in links:
-                    if sysid in link.heartbeats:
-                        found[sysid] = link
-                        break
-        missing = [s for s in sysids if s not in found]
-        now = clock.monotonic()
-        if not missing or now >= deadline:
-            return found, missing
-        for link in links:
-            count, when, heard = asks.get(id(link), (0, 0.0, False))
-            due = count == 0 or (count == 1 and (
-                now - when >= HEARTBEAT_ASK_AGAIN_S or (link.heartbeats and not heard)))
-            if not due:
-                continue
-            asks[id(link)] = (count + 1, now, bool(link.heartbeats))
-            wanted = [(s, s in missing) for s in sysids
-                      if s not in link.versions and (s in missing or s in link.heartbeats)]
-            try:
-                for sysid, unheard in wanted:
-                    if unheard:
-                        link.send(heartbeat_request(sysid, count))
-                    link.send(version_request(sysid, count))
-            except LinkDown:
-                continue  # that link is gone: its vehicles stay missing
-        clock.sleep(0.02)  # the links' reader threads fill in ``heartbeats``
-
-
-def is_ready(link: Link, sysid: int) -> bool:
-    """A 3D GPS fix (GPS_RAW_INT) and passing pre-arm checks (SYS_STATUS health bit)."""
-    state = link.readiness.get(sysid, {})
-    return state.get("gps_fix", 0) >= mavlink2.GPS_FIX_TYPE_3D_FIX and state.get("prearm", False)
-
-
-def readiness_problems(link: Link, sysid: int) -> list[str]:
-    """Why vehicle ``sysid`` is not ready to arm, as far as its telemetry tells."""
-    state = link.readiness.get(sysid, {})
-    why = []
-    if state.get("gps_fix", 0) < mavlink2.GPS_FIX_TYPE_3D_FIX:
-        why.append(f"no 3D GPS fix (fix type {state.get('gps_fix', 'unknown')})")
-    if not state.get("prearm", False):
-        why.append("pre-arm checks failing" if "prearm" in state else "pre-arm state unknown")
-    silent = link.missing_streams(sysid)
-    if silent:
-        why.append("not receiving " + ", ".join(silent) + " although requested")
-    return why
-
-
-def wait_ready(links: Sequence[Link], sysids: Sequence[int], *, timeout_s: float) -> None:
-    """Wait until every vehicle has a GPS fix and is ready to arm; LinkError naming the
-    ones that are not after ``timeout_s``. GPS_RAW_INT and SYS_STATUS are requested from
-    each vehicle on its link (ArduPilot sends neither unasked) and stopped again at the
-    end: the port keeps a rate it was asked for after this link has gone (SITL's SERIAL0
-    carried them, 4 messages a second a copter, through the shared radio that came next:
-    30 % of 6,000 B/s for ten copters)."""
-    found, missing = discover(links, sysids, timeout_s=timeout_s)
-    for s, link in found.items():
-        link.want(s, READINESS)
-    try:
-        _wait_ready(found, missing, sysids, timeout_s=timeout_s)
-    finally:
-        for s, link in found.items():
-            with contextlib.suppress(LinkError):
-                link.unwant(s, READINESS)
-
-
-def _wait_ready(found: dict[int, Link], missing: list[int], sysids: Sequence[int], *,
-                timeout_s: float) -> None:
-    deadline = clock.monotonic() + timeout_s
-    while True:
-        waiting = [s for s in sysids if s not in missing and not is_ready(found[s], s)]
-        if not waiting and not missing:
-            return
-        if missing or clock.monotonic() >= deadline:
-            what = [f"{s} (no HEARTBEAT)" for s in missing] + [
-                f"{s} ({'; '.join(readiness_problems(found[s], s))})" for s in waiting]
-            raise LinkError(f"not ready after {timeout_s:g} s: system id {', '.join(what)}")
-        clock.sleep(0.1)
-
-
-MAVLINK1_MAGIC = 0xFE  # a MAVLink 1 frame's first byte (MAVLink 2: 0xFD)
-
-
-def mavlink1_problem(sysid: int, url: str) -> str:
-    """One line for a vehicle whose link speaks MAVLink 1 only, and what to change."""
-    return (f"system id {sysid} speaks MAVLink 1 only on {url} (its HEARTBEATs come as "
-            "MAVLink 1 frames): ftlbo-mav needs MAVLink 2 (fence and rally points, "
-            "mission types, signing); set SERIALn_PROTOCOL = 2 for the port of this link "
-            "(a 3DR Solo on its original firmware: update it to ArduCopter 4, whose "
-            "CubeSolo build speaks MAVLink 2); nothing was sent")
-
-
-def describe_missing(sysid: int, links: Sequence[Link], timeout_s: float) -> str:
-    heard = sorted({s for link in links for s in link.heartbeats})
-    where = ", ".join(link.url for link in links)
-    also = f" (heard: {', '.join(map(str, heard))})" if heard else " (heard no vehicle at all)"
-    return (f"system id {sysid}: no HEARTBEAT within {timeout_s:g} s on {where}{also}; "
-            "check the id (SYSID_THISMAV) and that the vehicle is on this link")

@@ -21,7 +21,7 @@ def version_request(sysid: int, attempt: int = 0):
 def request_version(channel, *, timeout_s: float = 1.0, retries: int = 2) -> int | None:
     """The vehicle's AUTOPILOT_VERSION ``flight_sw_version``, or None when it does not
     answer within ``retries + 1`` requests of ``timeout_s`` each. One its link heard
-    already (asked when the vehicles were found: :func:`.endpoints.discover`) is not
+    already (asked when the vehicles were found: :func:`.discovery.discover`) is not
     asked again; one on its way is taken when it comes."""
     known = channel.link.versions
     for attempt in range(retries + 1):

@@ -8,7 +8,8 @@ from collections.abc import Sequence
 from ..ardupilot.copters import FLIGHT_PARAMS, Copter, release_for
 from ..ardupilot.firmware import Firmware
 from ..errors import BadInput
-from .endpoints import LinkError, describe_missing, discover, mavlink1_problem, open_links
+from .discovery import describe_missing, discover, mavlink1_problem
+from .endpoints import LinkError, open_links
 from .firmware import request_version
 from .params import read_params
 from .transfer import Timing

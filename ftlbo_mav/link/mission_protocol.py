@@ -1,5 +1,8 @@
 """The MAVLink mission protocol, ground-station side: upload, download, clear.
 
+Kept whole: one protocol (MAVLink's mission microservice), its three transfers sharing one
+state machine base, timing and retries.
+
 Each transfer is a small state machine that takes messages and the time and returns the
 messages to send (no sockets here); :func:`run_transfer` drives one over a *channel*,
 anything with ``send(msg)``, ``recv(timeout_s) -> msg | None``, ``sysid``, ``own_sysid``,

@@ -27,7 +27,8 @@ from ..errors import BadInput
 from ..mission.fence_files import FenceSet
 from ..mission.items import MissionItem
 from .codec import mission_differences
-from .endpoints import Heartbeat, describe_missing, discover, mavlink1_problem, open_links
+from .discovery import describe_missing, discover, mavlink1_problem
+from .endpoints import Heartbeat, open_links
 from .firmware import request_version
 from .geofence import upload_fence_set
 from .mission_protocol import (

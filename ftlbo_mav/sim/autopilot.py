@@ -1,5 +1,9 @@
 """The emulated copter's flight: modes, arming, takeoff, missions, landing.
 
+Kept whole: what every mode shares is one state machine (ArduCopter's mode.cpp, motors.cpp
+and the scheduler's battery, fence and camera steps); each mode's own flight is already a
+module of :mod:`.modes`.
+
 Pure state machine: :meth:`Autopilot.handle` takes a decoded command and returns replies;
 :meth:`Autopilot.advance` moves the copter to a given (emulated) time and returns what
 ArduCopter would announce (MISSION_CURRENT, MISSION_ITEM_REACHED, STATUSTEXT). Positions

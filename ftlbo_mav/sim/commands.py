@@ -13,8 +13,7 @@ import click
 from ..ardupilot.storage import SITL_MISSION_CAPACITY
 from ..cli_errors import user_errors
 from ..cli_types import HOST_PORT, PORT, FiniteFloat
-from ..errors import FtlboError
-from ..link.endpoints import BadInput
+from ..errors import BadInput, FtlboError
 from ..link.signing import load_key
 from .server import MAX_TIME_SCALE
 

@@ -1,11 +1,11 @@
 """Emulated copters inside the ground station's process, on its virtual clock.
 
 :class:`InProcessSimulator` is :class:`~ftlbo_mav.sim.server.Simulator` without sockets:
-the same vehicles (:class:`~ftlbo_mav.sim.server.VehicleRunner`: the same faults,
+the same vehicles (:class:`~ftlbo_mav.sim.runner.VehicleRunner`: the same faults,
 variation, wind, GPS error and truth record), stepped every 20 ms of a
 :class:`~ftlbo_mav.clock.VirtualClock` by a call the clock makes in its turn. The ground
 station reaches vehicle i at ``emu:KEY/i`` (its SERIAL1 at ``emu:KEY/i/SERIAL1``), a
-connection string that :func:`~ftlbo_mav.link.endpoints.check_url` and
+connection string that :func:`~ftlbo_mav.link.addresses.check_url` and
 :class:`~ftlbo_mav.link.endpoints.Link` take like ``tcp:HOST:PORT``: pymavlink's own
 parser reads the vehicles' bytes, so ``fly`` and ``upload`` run unchanged. A command is
 handled the moment it is written (the copters first stepped up to that instant, as
@@ -27,8 +27,9 @@ from pymavlink import mavutil
 from .. import clock
 from ..ardupilot import flight_path
 from ..ardupilot.compiled import follower_ready
-from ..link import endpoints
-from .server import TICK_S, Simulator, VehicleRunner
+from ..link import addresses, endpoints
+from .runner import VehicleRunner
+from .server import TICK_S, Simulator
 
 _keys = itertools.count(1)
 
@@ -147,13 +148,13 @@ class InProcessSimulator:
         compiled = follower_ready() or not flight_path.compile_in_background()
         for v in self.vehicles:
             v.autopilot.compiled = compiled
-        endpoints.IN_PROCESS[self.key] = self._connect
+        addresses.IN_PROCESS[self.key] = self._connect
         self._running = True
         vc.call_later(0.0, self._tick, name=f"{self.key} emulator")
         return self
 
     def __exit__(self, *exc) -> None:
-        endpoints.IN_PROCESS.pop(self.key, None)
+        addresses.IN_PROCESS.pop(self.key, None)
         self._running = False
         for c in list(self._connections):
             c._dropped()

@@ -1,5 +1,8 @@
 """An emulated ArduCopter: what it says about itself and how it answers, as messages.
 
+Kept whole: one vehicle's GCS_MAVLINK (what it answers and what it streams, per link, read
+from one state); its flight is :mod:`.autopilot`, its mission protocol :mod:`.mission_server`.
+
 :class:`Vehicle` takes decoded messages, the link they came on and the time, and returns
 messages (no sockets): ``handle`` for what arrives (the replies for that link), ``tick``
 for what time brings, per link. Mission transfers go to the

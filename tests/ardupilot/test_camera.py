@@ -19,9 +19,9 @@ from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ftlbo_mav.ardupilot import storage
 from ftlbo_mav.ardupilot.camera import DistanceTrigger, track_photos
-from ftlbo_mav.mission.export import read_plan
 from ftlbo_mav.mission.files import digest, read_mission_text
 from ftlbo_mav.mission.photos import mission_photos
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.mission.waypoints import read_waypoints
 
 from .test_storage import _same, wire

@@ -183,7 +183,7 @@ def test_planned_speed_is_the_missions_or_unknown():
 
 def test_auto_starts_at_the_first_real_leg_and_keeps_the_cruise_speed():
     from ftlbo_mav.flight.fly import first_leg
-    from ftlbo_mav.flight.launch import start_gate
+    from ftlbo_mav.flight.start import start_gate
     from ftlbo_mav.geo import LocalFrame
     from ftlbo_mav.mission.items import build_mission
 

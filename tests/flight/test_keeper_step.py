@@ -10,7 +10,7 @@ import numpy as np
 
 from ftlbo_mav.flight.keeper import KeeperOptions
 from ftlbo_mav.flight.planned import load_planned_flight
-from ftlbo_mav.flight.vehicle import Status
+from ftlbo_mav.flight.status import Status
 from ftlbo_mav.flight.watch import MAX_REPORT_DELAY_S, keep_formation
 
 ROOT = Path(__file__).resolve().parents[2]

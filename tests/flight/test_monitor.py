@@ -7,7 +7,7 @@ import numpy as np
 
 from ftlbo_mav.flight.monitor import LiveView, Monitor
 from ftlbo_mav.flight.planned import load_planned_flight
-from ftlbo_mav.flight.vehicle import Status
+from ftlbo_mav.flight.status import Status
 
 from ..conftest import EXAMPLE
 
@@ -78,21 +78,21 @@ def test_a_swarm_larger_than_the_screen_gets_a_summary_that_fits():
 
 
 def test_the_keeper_summary_of_a_large_swarm_is_one_short_line():
-    from ftlbo_mav.flight.commands import _keeper_line
+    from ftlbo_mav.flight.report import keeper_line
 
     waited = {f"uav{i}": {"pauses": i % 4 + 1, "seconds_paused": 0.1 * i,
                           "largest_lead_m": -0.01 * i} for i in range(1, 51)}
-    line = _keeper_line(waited)
+    line = keeper_line(waited)
     assert line.startswith("50 vehicles waited 1-4x (0.1-5.0 s paused); longest: uav50 ")
     assert line.count("waited") == 4 and len(line) < 300
-    few = _keeper_line(dict(list(waited.items())[:2]))
+    few = keeper_line(dict(list(waited.items())[:2]))
     assert few == ("uav1 waited 2x (0.1 s paused, largest lead -0.01 m); "
                    "uav2 waited 3x (0.2 s paused, largest lead -0.02 m)")
 
 
 def test_each_vehicles_battery_is_shown_recorded_and_summed_up():
-    from ftlbo_mav.flight.commands import battery_summary
     from ftlbo_mav.flight.record import FlightRecord
+    from ftlbo_mav.flight.report import battery_summary
 
     planned = load_planned_flight(EXAMPLE.with_suffix(""))
     monitor = Monitor(planned)

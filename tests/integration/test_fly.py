@@ -20,7 +20,8 @@ from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, abort, start_together, take_off
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.preflight import preflight
-from ftlbo_mav.link.endpoints import discover, open_links
+from ftlbo_mav.link.discovery import discover
+from ftlbo_mav.link.endpoints import open_links
 from ftlbo_mav.link.params import read_params, set_params
 from ftlbo_mav.link.transfer import Timing
 from ftlbo_mav.scenario import load_scenario

@@ -24,8 +24,9 @@ from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.progress import flown, progress_from_document
 from ftlbo_mav.flight.record import FlightRecord
-from ftlbo_mav.mission.export import plan_missions, read_plan
+from ftlbo_mav.mission.export import plan_missions
 from ftlbo_mav.mission.photos import plan_photos
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.scenario import load_scenario
 from ftlbo_mav.sim.homes import scenario_homes
 

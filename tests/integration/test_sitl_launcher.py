@@ -65,7 +65,7 @@ def test_the_recorder_writes_a_recording_the_storage_tests_read(tmp_path):
     if not ports_free(1):
         pytest.skip("TCP 5760 in use (SITL or `ftlbo-mav sim` running)")
     from ftlbo_mav.ardupilot import storage
-    from sitl import record
+    from sitl import record, recording
 
     binary = tmp_path / "arducopter"
     binary.write_text(f"#!/bin/sh\ncd {ROOT}\nexec {sys.executable} {FAKE} \"$@\"\n")
@@ -75,7 +75,7 @@ def test_the_recorder_writes_a_recording_the_storage_tests_read(tmp_path):
     items = doc["main_upload"]["items"]
     assert len(items) == len(record.reference_items()) and "sitl/record.py" in doc["about"]
     for it in items[1:]:
-        sent, back = record.wire_from_json(it["sent"]), record.wire_from_json(it["read_back"])
+        sent, back = recording.wire_from_json(it["sent"]), recording.wire_from_json(it["read_back"])
         assert storage.stored(sent).params == back.params or any(
             math.isnan(a) for a in back.params)
 

@@ -7,8 +7,9 @@ import hashlib
 import pytest
 
 from ftlbo_mav.ardupilot.firmware import AUTOPILOT_VERSION_ID
+from ftlbo_mav.errors import BadInput
+from ftlbo_mav.link.addresses import default_urls, default_urls_for, parse_sysids
 from ftlbo_mav.link.commands import mission_files
-from ftlbo_mav.link.endpoints import BadInput, default_urls, default_urls_for, parse_sysids
 from ftlbo_mav.link.signing import SigningKeyError, key_from_text, load_key
 
 
@@ -81,7 +82,7 @@ class _QuietLink:
 def test_discover_asks_only_the_requested_vehicles_not_heard_yet_for_a_heartbeat():
     from pymavlink.dialects.v20 import ardupilotmega as R
 
-    from ftlbo_mav.link.endpoints import discover
+    from ftlbo_mav.link.discovery import discover
 
     link = _QuietLink(heard=[1], answers=[2, 3])
     found, missing = discover([link], [1, 2], timeout_s=5.0)
@@ -108,7 +109,7 @@ def test_a_version_heard_when_the_vehicles_were_found_is_not_asked_again():
 
 
 def test_discover_asks_a_silent_vehicle_twice_then_waits_for_its_own_heartbeat():
-    from ftlbo_mav.link.endpoints import discover
+    from ftlbo_mav.link.discovery import discover
 
     link = _QuietLink()
     found, missing = discover([link], [4], timeout_s=0.6)

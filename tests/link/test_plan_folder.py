@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from ftlbo_mav.cli import main
-from ftlbo_mav.mission.export import check_plan_folder, read_plan_json
+from ftlbo_mav.mission.plan_reader import check_plan_folder, read_plan_json
 
 ROOT = Path(__file__).resolve().parents[2]
 PLANNED = ROOT / "missions" / "nha-trang-orchard"

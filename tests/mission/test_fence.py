@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ftlbo_mav.mission.export import read_plan
 from ftlbo_mav.mission.fence import FenceSettings, exclusion_radius_m, plan_fences
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.mission.qgc_plan import plan_document
 
 STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"

@@ -12,8 +12,9 @@ import pyogrio
 import pytest
 from pyogrio import raw
 
-from ftlbo_mav.mission.export import read_plan, write_plan
+from ftlbo_mav.mission.export import write_plan
 from ftlbo_mav.mission.fence_files import read_fence_set
+from ftlbo_mav.mission.plan_reader import read_plan
 
 STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"
 TYPES = {1: "Point", 2: "LineString", 3: "Polygon"}

@@ -18,8 +18,9 @@ from pathlib import Path
 
 import pytest
 
-from ftlbo_mav.mission.export import read_plan, write_plan
+from ftlbo_mav.mission.export import write_plan
 from ftlbo_mav.mission.fence_files import read_fence_set
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.mission.waypoints import read_waypoints
 
 STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"

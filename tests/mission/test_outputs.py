@@ -12,7 +12,8 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from ftlbo_mav.mission.export import FORMATS, read_plan, write_plan
+from ftlbo_mav.mission.export import FORMATS, write_plan
+from ftlbo_mav.mission.plan_reader import read_plan
 
 STORED = Path(__file__).resolve().parents[1] / "data" / "orchard-plan"
 

@@ -8,9 +8,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from ftlbo_mav.mission.export import plan_missions, read_plan
+from ftlbo_mav.mission.export import plan_missions
 from ftlbo_mav.mission.items import CMD_DO_SET_CAM_TRIGG_DIST
 from ftlbo_mav.mission.photos import plan_photos
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.planning.planner import plan as plan_scenario
 from ftlbo_mav.planning.resume import (
     NothingToResume,

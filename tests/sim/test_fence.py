@@ -16,9 +16,9 @@ from ftlbo_mav.link.mission_protocol import (
     download_mission,
     upload_mission,
 )
-from ftlbo_mav.mission.export import read_plan
 from ftlbo_mav.mission.fence import plan_fences
 from ftlbo_mav.mission.fence_files import FenceSet
+from ftlbo_mav.mission.plan_reader import read_plan
 from ftlbo_mav.scenario import load_scenario
 from ftlbo_mav.sim.autopilot import Autopilot, LocalTangent
 from ftlbo_mav.sim.homes import scenario_homes

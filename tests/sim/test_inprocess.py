@@ -10,7 +10,9 @@ from ftlbo_mav import clock
 from ftlbo_mav.clock import VirtualClock
 from ftlbo_mav.errors import BadInput
 from ftlbo_mav.flight.planned import load_planned_flight
-from ftlbo_mav.link.endpoints import Link, LinkError, check_url, discover
+from ftlbo_mav.link.addresses import check_url
+from ftlbo_mav.link.discovery import discover
+from ftlbo_mav.link.endpoints import Link, LinkError
 from ftlbo_mav.link.swarm import upload_swarm
 from ftlbo_mav.sim.inprocess import InProcessSimulator
 

@@ -7,7 +7,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ftlbo_mav.flight.vehicle import GapLog, Status, quantile
+from ftlbo_mav.flight.status import GapLog, Status, quantile
 
 
 @settings(max_examples=300, deadline=None)

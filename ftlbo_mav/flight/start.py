@@ -1,0 +1,303 @@
+"""The synchronized start: every vehicle begins its legs at one moment.
+
+Every vehicle's current item is set to where its legs begin (:func:`first_leg`). With a
+start gate in every mission (a NAV_DELAY after the start point, :func:`start_gate`, which
+``plan`` writes) and every vehicle's GPS clock known, the gates are written with one
+instant of GPS time (:func:`choose_start`) and the legs begin then, whatever the radio
+did to each AUTO; otherwise they begin as one burst of AUTOs arrives, confirmed only
+afterwards (:func:`start_together`). The gates are restored after the flight
+(:func:`restore_gates`). Take-off and the move to the start points come before, in
+:mod:`.launch`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as R
+
+from .. import clock
+from ..errors import FtlboError
+from ..geo import LocalFrame
+from ..link.codec import item_differences
+from ..link.mission_protocol import MissionTransferError, Timing, read_items, write_items
+from ..mission import items
+from ..mission.items import (
+    CMD_DO_CHANGE_SPEED,
+    CMD_NAV_DELAY,
+    CMD_NAV_WAYPOINT,
+)
+from .fleet import concurrently
+from .launch import ground_distance, takeoff_item, wait_while
+from .outcome import aborted
+from .planned import PlannedFlight
+from .vehicle import FlightAborted, FlightError, FlightVehicle
+
+
+def first_leg(mission, frame: LocalFrame, *, hold_m: float = 0.5) -> tuple[int, list]:
+    """``(seq, speed items)``: where AUTO starts, and the DO_CHANGE_SPEED items it skips
+    (to be sent as commands once AUTO runs).
+
+    After the takeoff each vehicle already hovers at its start point, which is also the
+    mission's first waypoint. Starting AUTO there makes ArduCopter fly a zero-length leg
+    first, whose jerk-limited S-curve lasts about a second and differs from copter to
+    copter with its residual altitude error (on SITL the higher copter began the real legs
+    0.4 s late: 0.44 m RMS formation error; starting at the first real leg: 0.09 m). So AUTO
+    starts after the start point: at the start gate (the NAV_DELAY ``plan`` writes there,
+    :func:`~ftlbo_mav.mission.items.start_gate`), else at the DO_CHANGE_SPEED that follows
+    it, which ArduCopter runs as the mission resumes, before the first leg
+    (AP_Mission::set_current_cmd loads it with the next navigation command, and
+    AP_Mission::resume starts both), else at the first real leg.
+
+    A DO_CHANGE_SPEED *before* the start point (missions of other tools) is skipped with
+    it and returned: a speed sent before AUTO is lost (ModeAuto::init clears
+    desired_speed_override and AC_WPNav::wp_and_spline_init goes back to WPNAV_SPEED), so
+    it must be sent after the switch.
+    """
+    seq, _alt = takeoff_item(mission)
+    home = mission[0]
+    takeoff = next(it for it in mission if it.seq == seq)
+    speeds, passed_start = [], False
+    for it in mission[seq + 1:]:
+        if it.command in (CMD_DO_CHANGE_SPEED, CMD_NAV_DELAY):
+            if passed_start:
+                return it.seq, speeds
+            if it.command == CMD_DO_CHANGE_SPEED:
+                speeds.append(it)
+                continue
+        at_start = (it.command == CMD_NAV_WAYPOINT and it.param1 == 0
+                    and ground_distance(frame, it, home) <= hold_m
+                    and abs(it.alt_m - takeoff.alt_m) <= hold_m)
+        if at_start and not passed_start and it.seq + 1 < len(mission):
+            passed_start = True
+            continue
+        return it.seq, speeds
+    return seq + 1, []
+
+
+def start_gate(mission, frame: LocalFrame) -> int | None:
+    """The seq of the mission's start gate (the NAV_DELAY right after its start point,
+    where :func:`first_leg` starts AUTO), or None: a mission without one starts when its
+    AUTO arrives."""
+    return _gate_at(mission, first_leg(mission, frame)[0])
+
+
+def _gate_at(mission, seq: int) -> int | None:
+    """``seq`` when the mission's item there is a start gate (a NAV_DELAY), else None."""
+    item = next((it for it in mission if it.seq == seq), None)
+    return seq if item is not None and item.command == CMD_NAV_DELAY else None
+
+
+START_LEAD_S = 0.5
+"""Ground seconds at least between choosing the start time and the start."""
+START_LEAD_RTTS = 6
+"""... and round trips of the slowest vehicle (timed on its set-current): the gate's write
+and read-back (3), AUTO (1) and two to spare (a frame lost on the way)."""
+GATE_TIMING = Timing()
+RESTORE_TIMING = Timing(timeout_s=1.0, retries=3)  # after the flight: best effort
+START_ATTEMPTS = 3
+FIRST_RTT_MAX_S = 0.4
+CLOCKS_AGREE_S = 0.2
+"""Vehicles' UTC clocks further apart than this (on the ground's estimate) are not one
+GPS time: the start is then the radio's burst."""
+MOVING_M_S = 0.5  # a copter this fast has begun its legs, whatever its last MISSION_CURRENT
+LATE_AFTER_S = 1.5
+"""Ground seconds after the start time by which every vehicle must report its legs begun
+(MISSION_CURRENT past the gate, at 2 Hz); one that does not missed the time."""
+
+
+MAX_LEAD_S = 45
+"""The gate gives the second of the minute only (a gate left behind by a flight that could
+not restore it holds a copter flown by another ground station a minute at most), so the
+start is never further ahead than this many of the vehicles' seconds."""
+
+
+@dataclass(frozen=True)
+class TimedStart:
+    """The legs begin when every vehicle's GPS clock reads ``utc_s`` (whole seconds since
+    the epoch), ``ground_t`` on the ground's monotonic clock."""
+
+    utc_s: int
+    ground_t: float
+
+    @property
+    def hms(self) -> tuple[int, int, int]:
+        """The gate's fields: hour and minute not given, the second of the minute."""
+        return -1, -1, self.utc_s % 60
+
+
+def choose_start(vehicles: Sequence[FlightVehicle], *, rtt_s: float, now: float
+                 ) -> TimedStart | str:
+    """When the legs begin: the next whole second of GPS time at least ``START_LEAD_S``
+    and ``START_LEAD_RTTS`` round trips ahead (in the vehicles' seconds), or why there can
+    be no timed start (a vehicle without a clock, clocks that disagree)."""
+    utc = [v.status.utc_now(now) for v in vehicles]
+    missing = [v.name for v, u in zip(vehicles, utc) if u is None]
+    if missing:
+        return f"no GPS time (SYSTEM_TIME) from {', '.join(missing)}"
+    if max(utc) - min(utc) > CLOCKS_AGREE_S:
+        return "the vehicles' GPS clocks differ by {:.2f} s ({})".format(
+            max(utc) - min(utc), ", ".join(f"{v.name} {u % 60:.2f}" for v, u in zip(
+                vehicles, utc)))
+    rate = max(v.status.clock_rate for v in vehicles)
+    lead = max(START_LEAD_S, START_LEAD_RTTS * rtt_s) * rate
+    if lead > MAX_LEAD_S - 1:
+        return (f"the start would be {lead:.0f} of the vehicles' seconds ahead (round trip "
+                f"{rtt_s:.2f} s), more than a gate can say ({MAX_LEAD_S} s)")
+    utc_s = math.ceil(max(utc) + lead)
+    ground = [v.status.clock_offset_s + (utc_s - v.status.utc_offset_s) / v.status.clock_rate
+              for v in vehicles]
+    return TimedStart(utc_s, float(np.mean(ground)))
+
+
+def _write_gate(planned: PlannedFlight, vehicle: FlightVehicle, i: int, seq: int,
+                start: TimedStart | None, timing: Timing) -> None:
+    """Vehicle ``i``'s start gate (item ``seq``) set to ``start`` (None: back to the plan's
+    placeholder), written in place and read back."""
+    fields = items.start_gate(None if start is None else start.hms)
+    planned_gate = next(it for it in planned.missions[i] if it.seq == seq)
+    gate = replace(planned_gate, **{k: fields[k] for k in ("param1", "param2", "param3",
+                                                           "param4")})
+    try:
+        with vehicle.link.channel(vehicle.sysid) as channel:
+            write_items(channel, [gate], timing=timing)
+            (back,) = read_items(channel, [seq], timing=timing)
+    except MissionTransferError as exc:
+        raise FlightError(vehicle.name, vehicle.sysid, "start time", str(exc)) from exc
+    if differences := item_differences(gate, back):
+        raise FlightError(vehicle.name, vehicle.sysid, "start time",
+                          f"item {seq} read back as {'; '.join(differences)}")
+
+
+def _write_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], gates: list,
+                 start: TimedStart | None, timing: Timing) -> None:
+    """Every vehicle's start gate set to ``start`` at once (:func:`_write_gate`)."""
+    concurrently(lambda i: _write_gate(planned, vehicles[i], i, gates[i], start, timing),
+                 list(range(len(vehicles))))
+
+
+def gate_as_onboard(mission, onboard, frame: LocalFrame) -> list:
+    """``mission`` with its start gate's time as ``onboard`` holds it: a time a flight
+    wrote and could not take back is no difference (the next flight writes its own)."""
+    seq = start_gate(mission, frame)
+    there = next((it for it in onboard if it.seq == seq), None)
+    if seq is None or there is None or there.command != CMD_NAV_DELAY or there.param1 > 0:
+        return list(mission)
+    return [replace(it, param2=there.param2, param3=there.param3, param4=there.param4)
+            if it.seq == seq else it for it in mission]
+
+
+def restore_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
+                  which: Sequence[int], *,
+                  timing: Timing = RESTORE_TIMING) -> list[str]:
+    """The start gates of vehicles ``which`` written back to the plan's placeholder (no
+    time) after a flight, so that the mission flies in any ground station as planned;
+    the vehicles it could not reach, with why."""
+    gates = [start_gate(m, planned.frame) for m in planned.missions]
+    failed = []
+
+    def one(i: int) -> None:
+        try:
+            _write_gate(planned, vehicles[i], i, gates[i], None, timing)
+        except (FtlboError, OSError) as exc:  # best effort: said, never raised
+            failed.append(f"{vehicles[i].name}: {exc}")
+
+    concurrently(one, [i for i in which if gates[i] is not None])
+    return failed
+
+
+def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
+                   say: Callable[[str], None] = lambda _s: None,
+                   poll: Callable[[], None] = lambda: None, timing: Timing = GATE_TIMING
+                   ) -> float:
+    """Set every current item to where its legs begin (:func:`first_leg`), then AUTO in
+    one burst. Returns the ground's monotonic time at which the legs began.
+
+    With a start gate in every mission (``plan`` writes one) and every vehicle's GPS
+    clock known, the legs begin at one instant of GPS time, the same for every copter
+    whatever the radio did to its AUTO (:func:`choose_start`, ModeAuto::do_nav_delay):
+    through a shared radio the burst's AUTOs arrive tens to hundreds of milliseconds
+    apart, lost ones later, and every 0.1 s between two copters is 0.5 m of formation at
+    5 m/s for the whole flight (SITL behind the rough-day radio without the keeper: 0.37-
+    0.40 m worst). A vehicle whose legs have not begun ``LATE_AFTER_S`` after that time
+    missed it (its AUTO came late: ArduCopter would wait for that time the next day) and
+    is started at once. Otherwise the legs begin as the burst arrives."""
+    starts = [first_leg(m, planned.frame) for m in planned.missions]
+    gates = [_gate_at(m, seq) for m, (seq, _speeds) in zip(planned.missions, starts)]
+
+    t = clock.monotonic()
+    concurrently(lambda pair: pair[0].set_current(pair[1][0]), list(zip(vehicles, starts)))
+    rtt = clock.monotonic() - t
+    if aborted(vehicles):
+        raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
+    # (a lost acknowledgement makes that seconds: a first guess, bounded; a start time
+    # written too late is chosen again)
+    timed = _timed_start(planned, vehicles, gates, rtt_s=min(rtt, FIRST_RTT_MAX_S),
+                         timing=timing, say=say)
+    if timed is None and all(g is not None for g in gates):
+        # the radio's timing: AUTO starts past the gates (which may hold a time)
+        concurrently(lambda pair: pair[0].set_current(pair[1] + 1), list(zip(vehicles, gates)))
+    t = clock.monotonic()
+    for v in vehicles:
+        v.send_mode("AUTO")
+    concurrently(lambda v: v.set_mode("AUTO"), vehicles)
+
+    def cruise(pair) -> None:  # skipped speeds: only AUTO keeps them (first_leg)
+        v, (_seq, speeds) = pair
+        for it in speeds:
+            v.command(R.MAV_CMD_DO_CHANGE_SPEED, it.param1, it.param2, it.param3,
+                      step="cruise speed")
+
+    concurrently(cruise, list(zip(vehicles, starts)))
+    if timed is None:
+        return t
+    _start_late_ones(vehicles, gates, timed, say=say, poll=poll)
+    return timed.ground_t
+
+
+def _timed_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
+                 gates: list[int | None], *, rtt_s: float, timing: Timing,
+                 say: Callable[[str], None]) -> TimedStart | None:
+    """Choose the start time and write it to every gate, again (up to
+    ``START_ATTEMPTS`` times, further ahead) when the writing took so long that the AUTOs
+    might not arrive before it; None: no timed start (said why)."""
+    if not all(g is not None for g in gates):
+        return None
+    for _attempt in range(START_ATTEMPTS):
+        chosen = choose_start(vehicles, rtt_s=rtt_s, now=clock.monotonic())
+        if isinstance(chosen, str):
+            say(f"starting on the radio's timing, not at one GPS time: {chosen}")
+            return None
+        t = clock.monotonic()
+        _write_gates(planned, vehicles, gates, chosen, timing)
+        took = clock.monotonic() - t
+        left = chosen.ground_t - clock.monotonic()
+        if left >= max(START_LEAD_S / 2, took / 2):  # AUTO: one way, a resend to spare
+            say(f"the legs begin at second {chosen.hms[2]:02d} of the minute, GPS time "
+                f"(in {left:.1f} s)")
+            return chosen
+        rtt_s = max(rtt_s, took / 3)  # the write and read-back: three round trips
+        say(f"the start time took {took:.1f} s to write, {left:.1f} s before it: "
+            "choosing a later one")
+    say(f"starting on the radio's timing: the start time could not be written in time "
+        f"({START_ATTEMPTS} attempts)")
+    return None
+
+
+def _start_late_ones(vehicles: Sequence[FlightVehicle], gates: list[int], start: TimedStart,
+                     *, say: Callable[[str], None], poll: Callable[[], None]) -> None:
+    """Wait until every vehicle's legs have begun (MISSION_CURRENT past its gate), at most
+    ``LATE_AFTER_S`` after the start; a vehicle still at its gate then is started at once
+    (its current item moved past the gate)."""
+    waiting = wait_while(vehicles, lambda: [
+        i for i, v in enumerate(vehicles)
+        if v.status.seq == gates[i] and v.status.ground_speed_m_s < MOVING_M_S],
+        start.ground_t + LATE_AFTER_S, poll, step_s=0.05)
+    for i in waiting:
+        v = vehicles[i]
+        say(f"{v.name} (sysid {v.sysid}): its legs had not begun {LATE_AFTER_S:g} s after "
+            "the start time (its AUTO came late, or its clock is not GPS time): started now")
+        v.set_current(gates[i] + 1)
