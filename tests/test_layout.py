@@ -180,8 +180,6 @@ LEFT_FOR_LATER = {
     "ftlbo_mav/planning/geometric.py",
     "ftlbo_mav/planning/planner.py",
     "ftlbo_mav/planning/_geometric_jit.py",
-    "ftlbo_mav/ardupilot/scurve.py",
-    "ftlbo_mav/ardupilot/compiled.py",
 }
 
 

@@ -19,7 +19,11 @@ AC_PosControl.cpp (update_xy_controller), AP_Math/control.cpp (sqrt_controller,
 shape_vel_accel, limit_accel_xy), ArduCopter/mode_auto.cpp (the waypoint sequence).
 
 numba compiles on first use and caches the machine code beside this file (or in its user
-cache when that is read-only), so only the first plan after an install pays the compile.
+cache when that is read-only); while it is not cached, callers fly stepwise and have it
+compiled in the background (:mod:`..compiling`, :func:`.flight_path.compile_now`).
+
+Kept whole: one loop and the functions it inlines, each mirroring one method of the
+model's objects in their order; held to them line by line, they read best in one place.
 """
 
 from __future__ import annotations

@@ -10,6 +10,10 @@ cosine over ``tj`` seconds (its "snap" limit), holds at ``Jm`` in between.
 
 Any consistent units work; its users (:mod:`.wpnav`: the emulator and the planner's
 prediction of the flown path) use metres and seconds.
+
+Kept whole: one class, method for method ArduPilot's SCurve (planning a leg's pieces,
+changing its speeds, reading it at a time, handing over to the next leg per release), and
+the helpers that build its pieces; split, a reader would hold SCurve.cpp beside two files.
 """
 
 from __future__ import annotations
