@@ -108,7 +108,7 @@ def plan(
                           relay=relay)
     # auto: the legs with few corners (AUTO_LOOSE_TARGET), and the legs nearest their
     # bounds (AUTO_TARGET); the one the copters are predicted to fly better is kept
-    # (_better: feasible, fewer stops, the shorter flight): more corners can make a
+    # (.repair.better: feasible, fewer stops, the shorter flight): more corners can make a
     # shorter path a slower flight, or corners cut into the clearance moved out
     loose = until_kept(scenario, len(base.radii), attempt_with(AUTO_LOOSE_TARGET, True),
                        relay=relay)
