@@ -109,7 +109,7 @@ compiled; 50 UAVs among 320 trees, 16,000 discs: 0.35 s and 0.06 s)."""
 COMPILED_RIM_LOADED_FROM = 500
 """Discs from which :func:`formation_discs` keeps its discs compiled when numba is loaded
 already and the loop cached (:func:`..compiling.cheap`): the same discs (tests/planning/
-test_geometric.py), and a plan whose first tangent graph loaded numba finds the seed
+test_discs.py), and a plan whose first tangent graph loaded numba finds the seed
 routes' discs without a Python walk around each circle (10 UAVs among 320 trees: 3,200
 discs, 0.06 s in numpy, some 5 ms compiled)."""
 
