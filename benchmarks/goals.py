@@ -344,7 +344,7 @@ def homeward_rows(*, deadline: float) -> list[dict]:
     from ftlbo_mav.ardupilot.flight_path import fly_path
     from ftlbo_mav.flight.homeward import return_world
     from ftlbo_mav.flight.planned import load_planned_flight
-    from ftlbo_mav.planning import geometric
+    from ftlbo_mav.planning import tangents
     from ftlbo_mav.planning.homeward import KeepOut, plan_return
 
     def timed(planned, stops, out=()) -> tuple[float, object]:
@@ -356,7 +356,7 @@ def homeward_rows(*, deadline: float) -> list[dict]:
         for _ in range(3):
             # as in a flight: nothing of these routes flown or judged before
             flight_path._FLOWN = flight_path._Flown()
-            geometric._LAST_BITANGENTS.clear()
+            tangents._LAST_BITANGENTS.clear()
             t = time.perf_counter()
             result = plan_return(stops, homes, world, keep_out=out, roadmaps=roads)
             walls.append(time.perf_counter() - t)

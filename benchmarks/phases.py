@@ -36,7 +36,7 @@ def measure(scenario: Path, out: Path) -> dict:
     import ftlbo_mav.cli  # noqa: F401  (what `ftlbo-mav plan` imports first)
     from ftlbo_mav.ardupilot import flight_path
     from ftlbo_mav.mission.export import write_plan
-    from ftlbo_mav.planning import geometric
+    from ftlbo_mav.planning import tangents
     from ftlbo_mav.planning.planner import plan
     from ftlbo_mav.scenario import load_scenario
 
@@ -52,7 +52,7 @@ def measure(scenario: Path, out: Path) -> dict:
     files = time.perf_counter() - t
     # the same plan again, nothing kept: no flights to take up, no graph's bitangents
     flight_path._FLOWN = flight_path._Flown()
-    geometric._LAST_BITANGENTS.clear()
+    tangents._LAST_BITANGENTS.clear()
     t = time.perf_counter()
     plan(loaded)
     again = time.perf_counter() - t

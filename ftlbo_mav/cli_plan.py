@@ -23,8 +23,9 @@ from .gnss import classes_within
 from .mission.export import FORMATS, PLAN_OUTPUTS, plan_files
 from .mission.files import OutputFolder
 from .planning.optimizers import OPTIMIZERS
-from .planning.planner import AUTO_TARGET, fleet_lags
+from .planning.planner import AUTO_TARGET
 from .planning.planner import plan as plan_scenario
+from .planning.repair import fleet_lags
 from .scenario import AUTO, load_scenario
 from .scenario.model import MAX_ITERATIONS, MAX_SEED, MAX_STUDENTS, MAX_WAYPOINTS, MIN_STUDENTS
 from .scenario.reader import scenario_inputs

@@ -28,7 +28,7 @@ from .mission.export import plan_missions
 from .mission.files import OutputFolder
 from .mission.gis import OBSTACLE_COLOUR, uav_colour
 from .mission.photos import UavPhotos, plan_photos
-from .planning.planner import Plan
+from .planning.plans import Plan
 
 DPI = 110
 CENTROID_STYLE = dict(color="black", linestyle="--", linewidth=1.6, marker="o", markersize=3.5)

@@ -86,7 +86,8 @@ def test_copters_that_fly_apart_are_said_at_plan_time(tmp_path, small_text):
     WPNAV_SPEED (the Solo 3 m/s, the others 10), and the Solo falls behind; the plan says
     which UAVs, how far and when, as a note (fly's formation keeper waits for it). Three
     Solos fly alike."""
-    from ftlbo_mav.planning.planner import fleet_lags, plan
+    from ftlbo_mav.planning.planner import plan
+    from ftlbo_mav.planning.repair import fleet_lags
 
     solo_two = '[vehicle.uav2]\nprofile = "3dr-solo"\n'
     apart = fleet_lags(plan(parse_scenario(small_text + solo_two)))

@@ -25,7 +25,7 @@ and, the formation as a whole on its legs (positions brought to one instant, giv
 while every report is fresh):
 
 - a UAV farther from its slot than the plan's bound (``formation_bound`` in plan.json,
-  :attr:`~ftlbo_mav.planning.planner.Plan.formation_bound_m`) for ``hold_s``:
+  :attr:`~ftlbo_mav.planning.plans.Plan.formation_bound_m`) for ``hold_s``:
   ``formation``, the UAV farthest from its slot the one that left;
 - two UAVs closer than ``min_separation`` for ``separation_hold_s``: ``separation``, the
   one of the pair farther from its slot the one that left;

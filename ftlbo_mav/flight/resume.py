@@ -19,8 +19,8 @@ from ..mission.export import PLAN_OUTPUTS, plan_files
 from ..mission.files import OutputFolder
 from ..mission.items import mission_settings
 from ..mission.plan_reader import plan_from_document, read_plan_json
-from ..planning.planner import Plan
 from ..planning.planner import plan as plan_scenario
+from ..planning.plans import Plan
 from ..planning.resume import ResumePoint, plan_resume, resume_point
 from .planned import PlannedFlight
 from .progress import progress_from_document

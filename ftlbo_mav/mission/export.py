@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..planning.cost import CostTerms
-from ..planning.planner import Leg, Plan
+from ..planning.plans import Leg, Plan
 from .fence import UavFence, plan_fences
 from .files import OutputFolder, digest
 from .geodetic import GeodeticPlan, geodetic_view
@@ -70,7 +70,7 @@ def plan_missions(plan: Plan, *, geodetic: GeodeticPlan | None = None) -> list[U
 
 def lane_points(plan: Plan) -> list[tuple[int, int]]:
     """Each survey lane's entry and exit as indices into the plan's paths
-    (:meth:`~ftlbo_mav.planning.planner.Plan.lane_points`)."""
+    (:meth:`~ftlbo_mav.planning.plans.Plan.lane_points`)."""
     return plan.lane_points()
 
 

@@ -54,7 +54,7 @@ from .items import (
 from .rally import rally_points_enu
 
 if TYPE_CHECKING:
-    from ..planning.planner import Plan
+    from ..planning.plans import Plan
 
 ACTION_BRAKE = 4      # FENCE_ACTION: brake, or land if brake fails (AC_Fence.h)
 TYPE_ALT_MAX_POLYGON = 1 | 4  # FENCE_TYPE bits: alt max, polygon (incl. circles)

@@ -2,7 +2,7 @@
 
 The planner works in the scenario's local ENU frame; the files a user opens (``.waypoints``,
 ``.plan``, ``plan.json``, GeoJSON, KML) speak latitude and longitude. :func:`geodetic_view`
-converts a :class:`~ftlbo_mav.planning.planner.Plan` once, and the writers take the view.
+converts a :class:`~ftlbo_mav.planning.plans.Plan` once, and the writers take the view.
 Altitudes are metres above home (MAVLink GLOBAL_RELATIVE_ALT), as in the missions.
 """
 
@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from ..planning.planner import Plan
+    from ..planning.plans import Plan
 
 CIRCLE_VERTICES = 72
 

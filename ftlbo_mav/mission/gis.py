@@ -34,7 +34,7 @@ from .items import (
 from .photos import UavPhotos
 
 if TYPE_CHECKING:  # for annotations only
-    from ..planning.planner import Plan
+    from ..planning.plans import Plan
     from .fence import UavFence
     from .items import UavMission
 

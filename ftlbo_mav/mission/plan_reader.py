@@ -1,4 +1,4 @@
-"""A plan folder read back: ``plan.json`` -> :class:`~ftlbo_mav.planning.planner.Plan`.
+"""A plan folder read back: ``plan.json`` -> :class:`~ftlbo_mav.planning.plans.Plan`.
 
 The inverse of :mod:`.export`: :func:`read_plan` (:func:`read_plan_json` then
 :func:`plan_from_document`) rebuilds the scenario and the paths from what ``plan.json``
@@ -23,7 +23,7 @@ from ..errors import MissionFileError
 from ..gnss import budget_from_document
 from ..inputs import read_user_text
 from ..planning.cost import CostTerms
-from ..planning.planner import Leg, Plan
+from ..planning.plans import Leg, Plan
 from ..planning.problem import problem_from_scenario
 from ..scenario import (
     AUTO,

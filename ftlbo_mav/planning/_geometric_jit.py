@@ -1,7 +1,23 @@
-"""The tangent graph's costly test compiled (numba): millions of candidate segments against
-thousands of discs, through a grid of the discs (:func:`.geometric.segments_clear` from
-:data:`.geometric.GRID_CLEAR_FROM`). Imported only for such problems, so that a small plan
-does not pay numba's start-up."""
+"""The tangent graph's loops compiled (numba), each the same arithmetic as its numpy twin,
+for problems of thousands of discs and millions of candidate segments. Imported only for
+such problems (or when numba is loaded and the loop cached: :func:`..compiling.cheap`), so
+that a small plan does not pay numba's start-up.
+
+- the discs (:mod:`.discs`): which touch (:func:`touching_pairs`), which lie on the rim
+  of a cylinder's blob (:func:`rim_discs`);
+- the candidate segments (:mod:`.tangents`): the discs in a grid (:func:`disc_grid`),
+  segments walked through it (:func:`clear_through_grid`, from
+  :data:`.tangents.GRID_CLEAR_FROM`), every disc pair's bitangents judged in one pass
+  (:func:`bitangent_verdicts`, :func:`candidate_verdicts`, :func:`bitangent_angles`);
+- the graph (:mod:`.geometric`): its arcs judged (:func:`arcs_free`) and searched
+  (:func:`dijkstra`).
+
+Kept whole: to numba and to the user a module of compiled loops is one unit, and these
+are the one tangent graph's: :mod:`..compiling` names this module ("the tangent graph's
+loops") and says so on stderr, once per module, before its first compile after an
+install; three modules would say three lines, and nothing for a module its table does
+not name. Its three parts follow the three modules whose twins they are.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +27,205 @@ import numpy as np
 from numba import prange
 
 from ..compiling import njit
+
+# -- the discs (.discs) ----------------------------------------------------------------
+
+
+@njit(cache=True)
+def _spans_cover(centre, half, n):
+    """Whether the open intervals ``(centre[:n], half[:n])`` of one circle cover the whole
+    of it (:func:`.discs._circle_covered`, the same walk); ``centre`` is reused."""
+    two_pi = 2.0 * math.pi
+    if n == 0:
+        return False
+    a = np.empty(n)
+    b = np.empty(n)
+    for m in range(n):
+        h = half[m]
+        if h >= math.pi:
+            return True
+        a[m] = (centre[m] - h) % two_pi
+        b[m] = a[m] + 2 * h
+    for m in range(1, n):  # sort the spans as Python sorts its tuples (a, then b)
+        x, y = a[m], b[m]
+        k = m - 1
+        while k >= 0 and (a[k] > x or (a[k] == x and b[k] > y)):
+            a[k + 1], b[k + 1] = a[k], b[k]
+            k -= 1
+        a[k + 1], b[k + 1] = x, y
+    begin, reach = a[0], b[0]
+    for step in range(1, 2 * n):  # spans[1:], then every span a turn later
+        if step < n:
+            x, y = a[step], b[step]
+        else:
+            x, y = a[step - n] + two_pi, b[step - n] + two_pi
+        if x >= reach - 1e-9:
+            return False
+        reach = max(reach, y)
+        if reach > begin + two_pi + 1e-9:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _touch(xi, yi, ri, xj, yj, rj):
+    """:func:`.discs._touching`'s test, ``hypot(dx, dy) <= ri + rj + 1e-6``, decided
+    on the squares where they are clear of round-off by far, by ``hypot`` itself near the
+    edge."""
+    dx, dy = xj - xi, yj - yi
+    d2 = dx * dx + dy * dy
+    reach = ri + rj + 1e-6
+    if d2 < reach * reach * (1.0 - 1e-9):
+        return True
+    if d2 > reach * reach * (1.0 + 1e-9):
+        return False
+    return math.hypot(dx, dy) <= reach
+
+
+@njit(cache=True)
+def _partners(i, centres, radii, gx, gy, nx, ny, starts, items, out_j, at):
+    """The discs touching disc ``i`` among the 3 x 3 cells around its own, written to
+    ``out_j[at:]`` when ``at >= 0``; their count."""
+    n = 0
+    for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+        for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+            c = yy * nx + xx
+            for m in range(starts[c], starts[c + 1]):
+                j = items[m]
+                if j != i and _touch(centres[i, 0], centres[i, 1], radii[i], centres[j, 0],
+                                     centres[j, 1], radii[j]):
+                    if at >= 0:
+                        out_j[at + n] = j
+                    n += 1
+    return n
+
+
+@njit(cache=True)
+def _centre_grid(centres, cell):
+    """Each disc in the square cell of side ``cell`` holding its centre: its cell
+    ``gx``, ``gy``, the grid's ``nx``, ``ny`` and the discs of each cell, ascending, as
+    ``starts (nx*ny + 1,)`` and ``items``."""
+    C = centres.shape[0]
+    lo0, lo1 = centres[:, 0].min(), centres[:, 1].min()
+    gx = np.empty(C, np.int64)
+    gy = np.empty(C, np.int64)
+    for k in range(C):
+        gx[k] = int((centres[k, 0] - lo0) / cell)
+        gy[k] = int((centres[k, 1] - lo1) / cell)
+    nx, ny = gx.max() + 1, gy.max() + 1
+    counts = np.zeros(nx * ny + 1, np.int64)
+    for k in range(C):
+        counts[gy[k] * nx + gx[k] + 1] += 1
+    starts = np.cumsum(counts)
+    items = np.empty(C, np.int64)
+    fill = starts[:-1].copy()
+    for k in range(C):
+        c = gy[k] * nx + gx[k]
+        items[fill[c]] = k
+        fill[c] += 1
+    return gx, gy, nx, ny, starts, items
+
+
+@njit(cache=True, parallel=True)
+def touching_pairs(centres, radii, cell):
+    """Every ordered pair ``(i, j)``, ``i != j``, of discs that touch or overlap
+    (:func:`_touch`), ordered by ``i`` then ``j``: each disc in the square cell of side
+    ``cell`` (at least twice the largest radius) holding its centre, its partners among
+    the discs of the 3 x 3 cells around. Two passes over the discs in parallel (count,
+    then fill), no candidate arrays."""
+    C = centres.shape[0]
+    gx, gy, nx, ny, starts, items = _centre_grid(centres, cell)
+    found = np.zeros(C + 1, np.int64)
+    none = np.empty(0, np.int64)
+    for i in prange(C):
+        found[i + 1] = _partners(i, centres, radii, gx, gy, nx, ny, starts, items, none, -1)
+    first = np.cumsum(found)
+    pair_i = np.empty(first[-1], np.int64)
+    pair_j = np.empty(first[-1], np.int64)
+    for i in prange(C):
+        n = _partners(i, centres, radii, gx, gy, nx, ny, starts, items, pair_j, first[i])
+        pair_i[first[i]:first[i] + n] = i
+        pair_j[first[i]:first[i] + n].sort()
+    return pair_i, pair_j
+
+
+@njit(cache=True, parallel=True)
+def rim_discs(centres, radii, lower, upper, cell, tol):
+    """``keep (C,)``, ``rim (C,)``: the discs :func:`.discs.formation_discs` keeps,
+    found without pair arrays. ``keep``: a disc inside another is dropped (of equal ones
+    the first is kept); ``rim``: then a kept disc whose circle the other kept discs and
+    the rectangle ``lower``..``upper`` cover wholly (:func:`.discs._covered_arcs`,
+    :func:`.discs._forbidden_arrays`, :func:`_spans_cover`: the same arithmetic).
+    Each disc's partners come from the 3 x 3 cells of side ``cell`` (at least twice the
+    largest radius) around its own."""
+    C = centres.shape[0]
+    gx, gy, nx, ny, starts, items = _centre_grid(centres, cell)
+    keep = np.ones(C, np.bool_)
+    for i in prange(C):
+        xi, yi, ri = centres[i, 0], centres[i, 1], radii[i]
+        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+                c = yy * nx + xx
+                for m in range(starts[c], starts[c + 1]):
+                    j = items[m]
+                    if j == i or not _touch(xi, yi, ri, centres[j, 0], centres[j, 1],
+                                            radii[j]):
+                        continue
+                    d = math.hypot(centres[j, 0] - xi, centres[j, 1] - yi)
+                    if d + ri <= radii[j] + tol and (d + radii[j] > ri + tol or i > j):
+                        keep[i] = False
+    out = keep.copy()
+    for i in prange(C):
+        if not keep[i]:
+            continue
+        xi, yi, ri = centres[i, 0], centres[i, 1], radii[i]
+        n = 0
+        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+                c = yy * nx + xx
+                n += starts[c + 1] - starts[c]
+        centre = np.empty(n + 4)
+        half = np.empty(n + 4)
+        n = 0
+        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
+            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
+                c = yy * nx + xx
+                for m in range(starts[c], starts[c + 1]):
+                    j = items[m]
+                    if j == i or not keep[j]:
+                        continue
+                    vx, vy = centres[j, 0] - xi, centres[j, 1] - yi
+                    d = math.hypot(vx, vy)
+                    rj = radii[j]
+                    if d >= ri + rj or d + rj <= ri:  # apart, or j inside i
+                        continue
+                    if d + ri <= rj:  # i's whole circle inside j
+                        centre[n], half[n] = 0.0, math.pi
+                    else:
+                        cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
+                        centre[n] = math.atan2(vy, vx)
+                        half[n] = math.acos(min(max(cos_a, -1.0), 1.0))
+                    n += 1
+        for side in range(4):  # west, east, south, north
+            if side == 0:
+                normal, h = math.pi, xi - lower[0]
+            elif side == 1:
+                normal, h = 0.0, upper[0] - xi
+            elif side == 2:
+                normal, h = -0.5 * math.pi, yi - lower[1]
+            else:
+                normal, h = 0.5 * math.pi, upper[1] - yi
+            if h <= -ri:  # the whole circle beyond the side
+                centre[n], half[n] = 0.0, math.pi
+                n += 1
+            elif h < ri:
+                centre[n], half[n] = normal, math.acos(h / ri)
+                n += 1
+        out[i] = not _spans_cover(centre, half, n)
+    return keep, out
+
+
+# -- the candidate segments (.tangents) ------------------------------------------------
 
 
 @njit(cache=True)
@@ -114,7 +329,7 @@ def _walk_clear(ax, ay, qx, qy, centres, radii, starts, items, lo0, lo1, cell, n
 @njit(cache=True, parallel=True)
 def clear_through_grid(p, q, centres, radii, starts, items, lo0, lo1, cell, nx, ny, tol):
     """``(E,)``: True where the segment ``p[e] -> q[e]`` enters no disc's interior (the
-    test of :func:`.geometric.segments_clear`, the same arithmetic), each segment walked
+    test of :func:`.tangents.segments_clear`, the same arithmetic), each segment walked
     through the grid (:func:`_walk_clear`)."""
     E = p.shape[0]
     clear = np.ones(E, np.bool_)
@@ -128,7 +343,7 @@ def clear_through_grid(p, q, centres, radii, starts, items, lo0, lo1, cell, nx, 
 def _pair_tangents(xa, ya, ra, xb, yb, rb, tol):
     """What the bitangents of discs ``a`` and ``b`` share: ``phi`` (the direction from
     ``a`` to ``b``), whether the outer and the inner pair exist and their half-angles
-    (:func:`.geometric._bitangents`, the same arithmetic)."""
+    (:func:`.tangents._bitangents`, the same arithmetic)."""
     vx, vy = xb - xa, yb - ya
     d = math.hypot(vx, vy)
     phi = math.atan2(vy, vx)
@@ -142,7 +357,7 @@ def _pair_tangents(xa, ya, ra, xb, yb, rb, tol):
 @njit(cache=True)
 def _kind_angles(phi, alpha_outer, alpha_inner, kind):
     """The tangent angles on ``a`` and on ``b`` of bitangent ``kind``: 0, 1 the outer (+,
-    -), 2, 3 the inner (+, -) as :func:`.geometric._bitangents` makes them."""
+    -), 2, 3 the inner (+, -) as :func:`.tangents._bitangents` makes them."""
     alpha = alpha_outer if kind < 2 else alpha_inner
     ai = phi + alpha if kind % 2 == 0 else phi + -1.0 * alpha
     aj = ai if kind < 2 else ai + math.pi
@@ -166,8 +381,8 @@ def bitangent_verdicts(begin, end, centres, radii, marked, lower, upper, starts,
     """``ok (4, end - begin)``: for the disc pairs ``begin`` to ``end`` (exclusive) of
     ``np.triu_indices(C, 1)``'s order, which of their four bitangents (rows as
     :func:`_kind_angles`) exist, have neither end in a ``marked`` bin
-    (:func:`.geometric._buried_bins`), have both ends in the rectangle ``lower``..``upper``
-    (:func:`.geometric._in_rectangle`) and enter no disc (:func:`_walk_clear`). Only the
+    (:func:`.tangents._buried_bins`), have both ends in the rectangle ``lower``..``upper``
+    (:func:`.discs._in_rectangle`) and enter no disc (:func:`_walk_clear`). Only the
     verdicts are written (a byte a candidate, not two angles of eight): the pairs are
     walked in blocks, row by row, with no pair arrays; :func:`bitangent_angles` gives the
     angles of the clear ones."""
@@ -218,7 +433,7 @@ def candidate_verdicts(i, j, kind, centres, radii, marked, lower, upper, starts,
                        lo1, cell, nx, ny, tol):
     """``ok (K,)``: :func:`bitangent_verdicts`' tests for the bitangents ``kind[k]`` of the
     pairs ``(i[k], j[k])`` alone (the ones clear among the same discs a little smaller:
-    :func:`.geometric._known_bitangents`)."""
+    :func:`.tangents._known_bitangents`)."""
     bins = marked.shape[1]
     two_pi = 2.0 * math.pi
     width = two_pi / bins
@@ -265,6 +480,9 @@ def bitangent_angles(i, j, kind, centres, radii, tol):
             tol)
         angle_i[k], angle_j[k] = _kind_angles(phi, alpha_outer, alpha_inner, kind[k])
     return angle_i, angle_j
+
+
+# -- the graph (.geometric) ------------------------------------------------------------
 
 
 @njit(cache=True)
@@ -353,197 +571,3 @@ def dijkstra(indptr, indices, weights, straight, source, leg_penalty):
                     break
                 hd[pos], hn[pos] = nd, v
     return dist, prev, via
-
-
-@njit(cache=True)
-def _spans_cover(centre, half, n):
-    """Whether the open intervals ``(centre[:n], half[:n])`` of one circle cover the whole
-    of it (:func:`.geometric._circle_covered`, the same walk); ``centre`` is reused."""
-    two_pi = 2.0 * math.pi
-    if n == 0:
-        return False
-    a = np.empty(n)
-    b = np.empty(n)
-    for m in range(n):
-        h = half[m]
-        if h >= math.pi:
-            return True
-        a[m] = (centre[m] - h) % two_pi
-        b[m] = a[m] + 2 * h
-    for m in range(1, n):  # sort the spans as Python sorts its tuples (a, then b)
-        x, y = a[m], b[m]
-        k = m - 1
-        while k >= 0 and (a[k] > x or (a[k] == x and b[k] > y)):
-            a[k + 1], b[k + 1] = a[k], b[k]
-            k -= 1
-        a[k + 1], b[k + 1] = x, y
-    begin, reach = a[0], b[0]
-    for step in range(1, 2 * n):  # spans[1:], then every span a turn later
-        if step < n:
-            x, y = a[step], b[step]
-        else:
-            x, y = a[step - n] + two_pi, b[step - n] + two_pi
-        if x >= reach - 1e-9:
-            return False
-        reach = max(reach, y)
-        if reach > begin + two_pi + 1e-9:
-            return True
-    return False
-
-
-@njit(cache=True)
-def _touch(xi, yi, ri, xj, yj, rj):
-    """:func:`.geometric._touching`'s test, ``hypot(dx, dy) <= ri + rj + 1e-6``, decided
-    on the squares where they are clear of round-off by far, by ``hypot`` itself near the
-    edge."""
-    dx, dy = xj - xi, yj - yi
-    d2 = dx * dx + dy * dy
-    reach = ri + rj + 1e-6
-    if d2 < reach * reach * (1.0 - 1e-9):
-        return True
-    if d2 > reach * reach * (1.0 + 1e-9):
-        return False
-    return math.hypot(dx, dy) <= reach
-
-
-@njit(cache=True)
-def _partners(i, centres, radii, gx, gy, nx, ny, starts, items, out_j, at):
-    """The discs touching disc ``i`` among the 3 x 3 cells around its own, written to
-    ``out_j[at:]`` when ``at >= 0``; their count."""
-    n = 0
-    for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
-        for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
-            c = yy * nx + xx
-            for m in range(starts[c], starts[c + 1]):
-                j = items[m]
-                if j != i and _touch(centres[i, 0], centres[i, 1], radii[i], centres[j, 0],
-                                     centres[j, 1], radii[j]):
-                    if at >= 0:
-                        out_j[at + n] = j
-                    n += 1
-    return n
-
-
-@njit(cache=True)
-def _centre_grid(centres, cell):
-    """Each disc in the square cell of side ``cell`` holding its centre: its cell
-    ``gx``, ``gy``, the grid's ``nx``, ``ny`` and the discs of each cell, ascending, as
-    ``starts (nx*ny + 1,)`` and ``items``."""
-    C = centres.shape[0]
-    lo0, lo1 = centres[:, 0].min(), centres[:, 1].min()
-    gx = np.empty(C, np.int64)
-    gy = np.empty(C, np.int64)
-    for k in range(C):
-        gx[k] = int((centres[k, 0] - lo0) / cell)
-        gy[k] = int((centres[k, 1] - lo1) / cell)
-    nx, ny = gx.max() + 1, gy.max() + 1
-    counts = np.zeros(nx * ny + 1, np.int64)
-    for k in range(C):
-        counts[gy[k] * nx + gx[k] + 1] += 1
-    starts = np.cumsum(counts)
-    items = np.empty(C, np.int64)
-    fill = starts[:-1].copy()
-    for k in range(C):
-        c = gy[k] * nx + gx[k]
-        items[fill[c]] = k
-        fill[c] += 1
-    return gx, gy, nx, ny, starts, items
-
-
-@njit(cache=True, parallel=True)
-def touching_pairs(centres, radii, cell):
-    """Every ordered pair ``(i, j)``, ``i != j``, of discs that touch or overlap
-    (:func:`_touch`), ordered by ``i`` then ``j``: each disc in the square cell of side
-    ``cell`` (at least twice the largest radius) holding its centre, its partners among
-    the discs of the 3 x 3 cells around. Two passes over the discs in parallel (count,
-    then fill), no candidate arrays."""
-    C = centres.shape[0]
-    gx, gy, nx, ny, starts, items = _centre_grid(centres, cell)
-    found = np.zeros(C + 1, np.int64)
-    none = np.empty(0, np.int64)
-    for i in prange(C):
-        found[i + 1] = _partners(i, centres, radii, gx, gy, nx, ny, starts, items, none, -1)
-    first = np.cumsum(found)
-    pair_i = np.empty(first[-1], np.int64)
-    pair_j = np.empty(first[-1], np.int64)
-    for i in prange(C):
-        n = _partners(i, centres, radii, gx, gy, nx, ny, starts, items, pair_j, first[i])
-        pair_i[first[i]:first[i] + n] = i
-        pair_j[first[i]:first[i] + n].sort()
-    return pair_i, pair_j
-
-
-@njit(cache=True, parallel=True)
-def rim_discs(centres, radii, lower, upper, cell, tol):
-    """``keep (C,)``, ``rim (C,)``: the discs :func:`.geometric.formation_discs` keeps,
-    found without pair arrays. ``keep``: a disc inside another is dropped (of equal ones
-    the first is kept); ``rim``: then a kept disc whose circle the other kept discs and
-    the rectangle ``lower``..``upper`` cover wholly (:func:`.geometric._covered_arcs`,
-    :func:`.geometric._forbidden_arrays`, :func:`_spans_cover`: the same arithmetic).
-    Each disc's partners come from the 3 x 3 cells of side ``cell`` (at least twice the
-    largest radius) around its own."""
-    C = centres.shape[0]
-    gx, gy, nx, ny, starts, items = _centre_grid(centres, cell)
-    keep = np.ones(C, np.bool_)
-    for i in prange(C):
-        xi, yi, ri = centres[i, 0], centres[i, 1], radii[i]
-        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
-            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
-                c = yy * nx + xx
-                for m in range(starts[c], starts[c + 1]):
-                    j = items[m]
-                    if j == i or not _touch(xi, yi, ri, centres[j, 0], centres[j, 1],
-                                            radii[j]):
-                        continue
-                    d = math.hypot(centres[j, 0] - xi, centres[j, 1] - yi)
-                    if d + ri <= radii[j] + tol and (d + radii[j] > ri + tol or i > j):
-                        keep[i] = False
-    out = keep.copy()
-    for i in prange(C):
-        if not keep[i]:
-            continue
-        xi, yi, ri = centres[i, 0], centres[i, 1], radii[i]
-        n = 0
-        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
-            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
-                c = yy * nx + xx
-                n += starts[c + 1] - starts[c]
-        centre = np.empty(n + 4)
-        half = np.empty(n + 4)
-        n = 0
-        for yy in range(max(gy[i] - 1, 0), min(gy[i] + 2, ny)):
-            for xx in range(max(gx[i] - 1, 0), min(gx[i] + 2, nx)):
-                c = yy * nx + xx
-                for m in range(starts[c], starts[c + 1]):
-                    j = items[m]
-                    if j == i or not keep[j]:
-                        continue
-                    vx, vy = centres[j, 0] - xi, centres[j, 1] - yi
-                    d = math.hypot(vx, vy)
-                    rj = radii[j]
-                    if d >= ri + rj or d + rj <= ri:  # apart, or j inside i
-                        continue
-                    if d + ri <= rj:  # i's whole circle inside j
-                        centre[n], half[n] = 0.0, math.pi
-                    else:
-                        cos_a = (ri * ri + d * d - rj * rj) / (2 * ri * d)
-                        centre[n] = math.atan2(vy, vx)
-                        half[n] = math.acos(min(max(cos_a, -1.0), 1.0))
-                    n += 1
-        for side in range(4):  # west, east, south, north
-            if side == 0:
-                normal, h = math.pi, xi - lower[0]
-            elif side == 1:
-                normal, h = 0.0, upper[0] - xi
-            elif side == 2:
-                normal, h = -0.5 * math.pi, yi - lower[1]
-            else:
-                normal, h = 0.5 * math.pi, upper[1] - yi
-            if h <= -ri:  # the whole circle beyond the side
-                centre[n], half[n] = 0.0, math.pi
-                n += 1
-            elif h < ri:
-                centre[n], half[n] = normal, math.acos(h / ri)
-                n += 1
-        out[i] = not _spans_cover(centre, half, n)
-    return keep, out

@@ -43,18 +43,13 @@ import numpy as np
 
 from ..ardupilot.flight_path import STEP_S
 from ..gnss import true_distance
-from .geometric import (
-    Discs,
-    _in_rectangle,
-    centroid_rectangle,
-    segments_clear,
-    shortest_route,
-    shortest_routes,
-)
+from .discs import Discs, _in_rectangle, centroid_rectangle
+from .geometric import shortest_route, shortest_routes
 from .predicted import FlightModel, keep_clearance, predict
 from .problem import PlanningProblem
 from .proximity import nearest_samples
 from .seeds import RouteChains
+from .tangents import segments_clear
 from .window import leg_window
 
 ROUTE_SLACK = 0.02

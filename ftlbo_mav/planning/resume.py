@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import BadInput
 from ..scenario import GeoPoint, Scenario, ViaPoint
-from .planner import Plan
+from .plans import Plan
 
 ON_LANE_M = 2.5
 """A photo further than this from every lane's line is no lane's (the copter turning

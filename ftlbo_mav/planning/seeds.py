@@ -13,16 +13,10 @@ import math
 
 import numpy as np
 
-from .geometric import (
-    Arc,
-    Discs,
-    Route,
-    centroid_rectangle,
-    segments_clear,
-    shortest_routes,
-    straighter_routes,
-)
+from .discs import Discs, centroid_rectangle
+from .geometric import Arc, Route, shortest_routes, straighter_routes
 from .problem import PlanningProblem
+from .tangents import segments_clear
 
 
 def _arc_vertices(arc: Arc, radius: float, count: int) -> np.ndarray:

@@ -33,7 +33,7 @@ import numpy as np
 from ..energy import BATTERY_VIOLATION
 from ..errors import BadInput
 from ..scenario import GeoPoint, Scenario
-from .planner import Plan
+from .plans import Plan
 
 DETOUR = 1.3
 """The way from home to a sortie's first lane (and back from its last) is estimated as

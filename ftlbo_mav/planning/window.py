@@ -9,7 +9,7 @@ leg's problem with
 - the area cut down to the ellipse's bounding box (the centroid's box, the UAVs' area
   around it), so the optimizer's waypoints, and with them every candidate's segments
   (the box is convex and holds start and goal), stay inside it, and
-- only the cylinders one of whose formation discs (:func:`.geometric.formation_discs`:
+- only the cylinders one of whose formation discs (:func:`.discs.formation_discs`:
   centre ``c_k - offset_n``, radius ``R_k``) reaches into that box.
 
 For every path inside the box the window and the whole problem agree on every
@@ -35,8 +35,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .cost import _axes
-from .geometric import Discs, Route, centroid_rectangle, segments_clear
+from .discs import Discs, centroid_rectangle
+from .geometric import Route
 from .problem import PlanningProblem
+from .tangents import segments_clear
 
 WINDOW_FROM = 200
 """Cylinders from which legs are planned in their windows (below: among all)."""
@@ -109,7 +111,7 @@ def _all(problem: PlanningProblem) -> Window:
 
 
 def every_disc(problem: PlanningProblem) -> Discs:
-    """Every formation disc of ``problem``, none left out (:func:`.geometric.formation_discs`
+    """Every formation disc of ``problem``, none left out (:func:`.discs.formation_discs`
     drops the ones that change no route, at a cost; a segment clear of these is clear of
     those)."""
     N, K = problem.uav_count, len(problem.radii)

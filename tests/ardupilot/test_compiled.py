@@ -176,7 +176,8 @@ def test_a_loop_compiled_by_another_process_is_ready_from_its_cache(tmp_path):
 def test_the_shipped_plans_fly_the_same_compiled_and_stepwise(name):
     # issue 30: old (the objects' loop) and new (compiled) agree within 1 mm on the
     # shipped plans, every UAV's mission as planned (its speed, its holds)
-    from ftlbo_mav.planning.planner import flight_model, plan
+    from ftlbo_mav.planning.planner import plan
+    from ftlbo_mav.planning.repair import flight_model
     from ftlbo_mav.scenario import load_scenario
 
     from ..conftest import ROOT

@@ -7,13 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from ftlbo_mav.planning.discs import formation_discs
 from ftlbo_mav.planning.feasibility import violations
-from ftlbo_mav.planning.geometric import (
-    formation_discs,
-    lower_bound,
-    shortest_route,
-    shortest_routes,
-)
+from ftlbo_mav.planning.geometric import lower_bound, shortest_route, shortest_routes
 from ftlbo_mav.planning.problem import PlanningProblem, problem_from_scenario
 from ftlbo_mav.planning.seeds import route_waypoints, seed_waypoints
 from ftlbo_mav.scenario import load_scenario
@@ -175,7 +171,8 @@ def grid_shortest(problem: PlanningProblem, step: float) -> float:
     inside the area: a feasible path, so never shorter than the true shortest route."""
     import heapq
 
-    from ftlbo_mav.planning.geometric import centroid_rectangle, segments_clear
+    from ftlbo_mav.planning.discs import centroid_rectangle
+    from ftlbo_mav.planning.tangents import segments_clear
 
     lo, hi = centroid_rectangle(problem)
     xs = np.arange(lo[0], hi[0] + 1e-9, step)
@@ -240,69 +237,6 @@ def test_no_clear_grid_path_is_shorter_than_the_bound(seed):
         assert grid < 1.05 * bound  # and the bound is not far too low
 
 
-def _all_discs(problem: PlanningProblem):
-    """Every (UAV, cylinder) disc, none dropped."""
-    from ftlbo_mav.planning.geometric import Discs
-
-    N, K = problem.uav_count, len(problem.radii)
-    centres = (problem.centres[None, :, :] - problem.offsets[:, None, :2]).reshape(-1, 2)
-    return Discs(centres, np.tile(problem.radii, N), np.tile(np.arange(K), N),
-                 np.repeat(np.arange(N), K))
-
-
-def test_a_large_formation_keeps_only_the_rim_of_each_blob_and_the_same_route():
-    """Issue 21: discs whose circle lies inside other discs change nothing; dropping them
-    keeps 200-UAV graphs small. The route is the one over every disc."""
-    from ftlbo_mav.planning.geometric import _Graph, centroid_rectangle
-
-    i = np.arange(24)
-    offsets = np.column_stack([(i % 6) * 2.0 - 5.0, (i // 6) * 2.0 - 3.0, np.zeros(24)])
-    rng = np.random.default_rng(5)
-    problem = field(offsets=offsets, centres=rng.uniform(-12, 12, (3, 2)),
-                    radii=rng.uniform(1.5, 2.5, 3), start=np.array([-22.0, -1.0, 4.0]),
-                    goal=np.array([22.0, 1.0, 4.0]))
-    kept, every = formation_discs(problem), _all_discs(problem)
-    assert len(kept.radii) < 0.75 * len(every.radii)  # the inner discs went
-    lower, upper = centroid_rectangle(problem)
-    angles = np.linspace(0, 2 * np.pi, 720, endpoint=False)
-    ring = np.column_stack([np.cos(angles), np.sin(angles)])
-    kept_set = {(round(c[0], 9), round(c[1], 9)) for c in kept.centres}
-    for c, r in zip(every.centres, every.radii):
-        pts = c + r * ring
-        others = np.hypot(*(pts[:, None] - every.centres[None]).transpose(2, 0, 1))
-        inside = (others < every.radii[None] - 1e-9).sum(axis=1)  # its own: on, not in
-        outside = ~np.all((pts >= lower) & (pts <= upper), axis=1)
-        covered = np.all((inside > 0) | outside)
-        assert ((round(c[0], 9), round(c[1], 9)) not in kept_set) == covered
-    graph = _Graph(problem, every)
-    dist, _, _ = graph.dijkstra(0)
-    route = shortest_route(problem)
-    assert route is not None and route.length == pytest.approx(dist[1], rel=1e-9)
-
-
-def test_the_grid_finds_the_same_touching_pairs_as_the_sort():
-    from ftlbo_mav.planning import geometric as G
-
-    rng = np.random.default_rng(5)
-    for count, side in ((1500, 300.0), (1000, 40.0)):  # sparse, and piled on each other
-        centres = rng.uniform(0.0, side, (count, 2))
-        radii = rng.uniform(0.5, 5.0, count)
-        i, j = G._touching_pairs_grid(centres, radii)
-        order = np.argsort(centres[:, 0], kind="stable")  # the sort by east, as below
-        xs = centres[order, 0]
-        reach = radii[order] + radii.max() + 1e-6
-        a, b = G._ranges(np.searchsorted(xs, xs - reach), np.searchsorted(xs, xs + reach,
-                                                                          side="right"))
-        si, sj = G._touching(centres, radii, order[a], order[b])
-        assert set(zip(i.tolist(), j.tolist())) == set(zip(si.tolist(), sj.tolist()))
-        assert len(i) == len(si) and np.all(np.diff(i) >= 0)
-        from ftlbo_mav.planning._geometric_jit import touching_pairs
-
-        ci, cj = touching_pairs(centres, radii, 2.0 * radii.max() + 1e-6)  # compiled
-        np.testing.assert_array_equal(ci, i)
-        np.testing.assert_array_equal(cj, j)
-
-
 def triangle_among_trees(seed: int, *, trees: int) -> PlanningProblem:
     """A 100 m x 60 m field of random trees (radius + clearance 1-3 m), none near start
     or goal, three UAVs in a triangle crossing it from west to east."""
@@ -315,62 +249,12 @@ def triangle_among_trees(seed: int, *, trees: int) -> PlanningProblem:
                  area_lower=np.array([0.0, 0.0]), area_upper=np.array([100.0, 60.0]))
 
 
-@pytest.mark.parametrize("seed", [0, 1])
-def test_the_graph_made_a_chunk_at_a_time_is_the_same_graph(monkeypatch, seed):
-    from ftlbo_mav.planning import geometric as G
-
-    problem = triangle_among_trees(seed, trees=60)
-    monkeypatch.setattr(G, "ARRAY_GRAPH_LOADED_FROM", 10**9)  # lists, to count the edges
-    monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 10**9)
-    whole = G.shortest_routes(problem, count=4)
-    graph = G._Graph(problem, G.formation_discs(problem))
-    monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 1)
-    monkeypatch.setattr(G, "_PAIR_CHUNK", 97)  # many chunks
-    chunked = G.shortest_routes(problem, count=4)
-    again = G._Graph(problem, G.formation_discs(problem))
-    assert len(again.points) == len(graph.points)
-    assert sum(map(len, again.edges)) == sum(map(len, graph.edges))
-    assert [r.length for r in chunked] == pytest.approx([r.length for r in whole], rel=1e-12)
-    np.testing.assert_allclose(chunked[0].nodes, whole[0].nodes, atol=1e-9)
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_the_seed_margins_graph_from_the_discs_own_bitangents_is_the_same(monkeypatch, seed):
-    """The discs grown by the seed routes' margin test only the bitangents clear among the
-    discs themselves (geometric._known_bitangents): the same clear bitangents as testing
-    every pair among the grown discs, on random fields of 150 trees."""
-    from ftlbo_mav.planning import geometric as G
-    from ftlbo_mav.planning.seeds import seed_margin
-
-    problem = triangle_among_trees(seed, trees=150)
-    monkeypatch.setattr(G, "CHUNKED_GRAPH_FROM", 1)
-    lower, upper = G.centroid_rectangle(problem)
-    own = G.formation_discs(problem)
-    grown = G.formation_discs(problem, margin=seed_margin(problem))
-
-    def clear(discs) -> set:
-        chunks = G._known_bitangents(discs, G._buried_bins(discs), G._grid(discs), lower,
-                                     upper)
-        return {(int(a), int(b), int(k)) for i, _ai, j, _aj, kind in chunks
-                for a, b, k in zip(i, j, kind)}
-
-    G._LAST_BITANGENTS.clear()
-    exact = clear(grown)  # every pair tested
-    G._LAST_BITANGENTS.clear()
-    clear(own)
-    reused = clear(grown)  # only the own discs' clear ones tested again
-    assert reused == exact and len(exact) > 1000
-    # (the growth can merge blobs and keep another set of rim discs: then all are tested)
-    if np.array_equal(own.centres, grown.centres):
-        assert G._LAST_BITANGENTS[0][0][1] == own.radii.tobytes()  # tested again, not kept
-
-
 @pytest.mark.parametrize("penalty", [0.0, 5.0])
 def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
     from ftlbo_mav.planning import geometric as G
 
     problem = triangle_among_trees(7, trees=45)
-    discs = G.formation_discs(problem)
+    discs = formation_discs(problem)
     monkeypatch.setattr(G, "ARRAY_GRAPH_LOADED_FROM", 10**9)  # lists even with numba loaded
     lists = G._Graph(problem, discs)
     monkeypatch.setattr(G, "ARRAY_GRAPH_FROM", 1)
@@ -384,53 +268,3 @@ def test_the_graph_in_arrays_is_searched_as_the_lists_are(monkeypatch, penalty):
         np.testing.assert_array_equal(p1, p2)
         assert [v1[n] for n in range(len(d1))] == [v2[n] for n in range(len(d2))]
     assert G.shortest_routes(problem, count=4)[0].length > 0
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_the_compiled_rim_is_the_discs_the_arrays_keep(monkeypatch, seed):
-    """From COMPILED_RIM_FROM discs formation_discs keeps its discs compiled, with no pair
-    arrays: the same discs, in the same order, as the arrays of every touching pair and
-    the walks around each circle; with UAVs stacked on one offset (equal discs), trees of
-    every size (discs inside others) and trees cut by the area's sides."""
-    from ftlbo_mav.planning import geometric as G
-
-    rng = np.random.default_rng(seed)
-    grid = np.stack(np.meshgrid(np.arange(6) * 2.0, np.arange(4) * 2.0), -1).reshape(-1, 2)
-    offsets = np.column_stack([np.concatenate([grid, grid[:5]]), np.zeros(len(grid) + 5)])
-    problem = field(offsets=offsets, centres=rng.uniform(-35.0, 35.0, (60, 2)),
-                    radii=rng.uniform(0.3, 6.0, 60))
-    monkeypatch.setattr(G, "COMPILED_RIM_FROM", 10**9)
-    arrays = G.formation_discs(problem)
-    monkeypatch.setattr(G, "COMPILED_RIM_FROM", 1)
-    compiled = G.formation_discs(problem)
-    assert 0 < len(arrays.radii) < problem.uav_count * 60
-    for name in ("centres", "radii", "cylinder", "uav"):
-        np.testing.assert_array_equal(getattr(compiled, name), getattr(arrays, name))
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_the_compiled_walk_through_the_grid_tests_as_every_disc_does(seed):
-    """The compiled test of segments against discs through the grid (each segment's cells
-    in turn) says what testing every segment against every disc says: random segments,
-    many tangent to a disc, some beyond the grid, some along a cell side, some a point."""
-    from ftlbo_mav.planning import geometric as G
-
-    rng = np.random.default_rng(seed)
-    C = 300
-    centres = rng.uniform(0.0, 100.0, (C, 2))
-    radii = rng.uniform(0.5, 4.0, C)
-    discs = G.Discs(centres, radii, np.arange(C), np.zeros(C, int))
-    k = rng.integers(0, C, 3000)
-    angle = rng.uniform(0, 2 * np.pi, 3000)
-    on_circle = centres[k] + radii[k, None] * np.column_stack([np.cos(angle), np.sin(angle)])
-    p = np.concatenate([on_circle[:1000], rng.uniform(-30.0, 130.0, (1500, 2)),
-                        np.repeat([[0.0, 50.0], [-20.0, -20.0]], 250, axis=0)])
-    q = np.concatenate([on_circle[1000:2000], rng.uniform(-30.0, 130.0, (1500, 2)),
-                        np.column_stack([rng.uniform(0.0, 100.0, 250), np.full(250, 50.0)]),
-                        np.full((250, 2), -20.0)])
-    p[-10:] = q[-10:] = on_circle[-10:]  # segments of no length on a circle
-    compiled = G._clear_through_grid(p, q, discs)
-    every = np.array([G.segments_clear(p[a:a + 1], q[a:a + 1], discs)[0]
-                      for a in range(len(p))])
-    assert 0 < every.sum() < len(p)
-    np.testing.assert_array_equal(compiled, every)
