@@ -8,6 +8,11 @@ temporary one. A quote whose command is not a ``ftlbo-mav plan`` of a shipped sc
 refused here rather than run (a flight or an upload is quoted from a dated run instead).
 A command another test runs already (:data:`CHECKED_ELSEWHERE`) is checked there, on
 its output, through :func:`assert_quotes_hold`: one plan, not two.
+
+A figure the pages call *measured* that no such quote holds is either produced by a test
+that CI runs (the paragraph names it, ``tests/...py``) or dated with the command that
+measured it (a ``YYYY-MM-DD`` and a command in backticks, in the paragraph or earlier in
+its section): :func:`test_a_measured_figure_says_when_and_how`.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from ftlbo_mav.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+ALL_PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 QUOTE = re.compile(r"<!-- output of: (?P<command>[^\n]*?) -->\n```[a-z]*\n(?P<body>.*?)```",
                    re.S)
 _SECONDS = re.compile(r"\bin \d+(?:\.\d+)? s\b")
@@ -86,3 +92,46 @@ def test_a_quoted_output_is_what_the_command_prints(command, tmp_path, monkeypat
     result = CliRunner().invoke(main, args[1:])
     assert result.exit_code == 0, result.output
     assert_quotes_hold(command, result.output)
+
+
+_MEASURED = re.compile(r"\bmeasured\b", re.I)
+_FIGURE = re.compile(r"\d(?:[\d,]*\d)?(?:\.\d+)?\s?(?:m|s|ms|%|x|MiB|GiB|min|m/s|kB/s|Hz|cm"
+                     r"|deg|degrees|seconds|minutes)\b")
+_DATE = re.compile(r"\b20\d\d-\d\d-\d\d\b")
+_COMMAND = re.compile(r"`[^`]*(?:python|ftlbo-mav|pytest|benchmarks/|ARDUPILOT_SITL"
+                      r"|/usr/bin/time)[^`]*`")
+_TEST_FILE = re.compile(r"tests/[\w/]+\.py")
+
+
+def _undated(pages: dict[str, str]) -> list[str]:
+    """The paragraphs of ``pages`` (name: text) that call a figure of their own measured
+    without naming a test that produces it or a date and a command (in the paragraph or
+    earlier in its section)."""
+    undated = []
+    for page, text in pages.items():
+        for section in re.split(r"\n(?=#)", text):
+            paragraphs = re.split(r"\n\s*\n", section)
+            for i, paragraph in enumerate(paragraphs):
+                if not (_MEASURED.search(paragraph) and _FIGURE.search(paragraph)):
+                    continue
+                context = "\n".join(paragraphs[:i + 1])
+                by_test = any((ROOT / t).is_file() for t in _TEST_FILE.findall(paragraph))
+                if not by_test and not (_DATE.search(context) and _COMMAND.search(context)):
+                    undated.append(f"{page}: {paragraph[:100]!r}")
+    return undated
+
+
+def test_a_measured_figure_says_when_and_how():
+    pages = {p.relative_to(ROOT).as_posix(): p.read_text(encoding="utf-8") for p in ALL_PAGES}
+    undated = _undated(pages)
+    assert not undated, "measured, but neither dated with its command nor a test's:\n" + (
+        "\n".join(undated))
+
+
+def test_the_measured_check_refuses_an_undated_figure():
+    figure = "Measured on SITL: 1.51 m clearance."
+    assert _undated({"a.md": figure}) == [f"a.md: {figure!r}"]
+    assert _undated({"a.md": "# Flights\n\nOn 2026-12-01, `ftlbo-mav fly out`:\n\n" + figure}) == []
+    assert _undated({"a.md": figure + " (tests/test_docs.py)"}) == []
+    assert _undated({"a.md": "# Flights\n\nOn 2026-12-01, `ftlbo-mav fly out`.\n\n# Other"
+                             "\n\n" + figure}) != []  # a date in another section is not its
