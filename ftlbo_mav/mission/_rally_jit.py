@@ -43,28 +43,53 @@ def clear_of_segments(q, a, b, sep):
 
 
 @njit(cache=True)
-def first_clear(chunk, line_a, line_b, own, own_home, places, sep):
+def first_clear(chunk, line_a, line_b, line_lo, line_hi, fan_start, edge_start, edge_a,
+                edge_n, own, own_home, places, sep):
     """The index of the first of the candidates ``chunk (C, 2)`` at least ``sep`` from
     every segment ``line_a``-``line_b`` (each ``(S, 2)``) whose own return lines (from
     the points of ``own (P, 2)`` nearer to it than ``own_home (P,)``) keep ``sep`` from
     every one of ``places (Q, 2)``; -1 if none is. The tests and arithmetic of
     :func:`.rally._first_clear`, a candidate at a time in order, each given up at its
-    first line or place too near; of the places only those within ``sep`` (a hair more)
-    of the box of its return lines are measured, as no other can be too near."""
+    first line or place too near. Only the lines that can be too near are measured: the
+    segments are in fans (``fan_start (F+1,)``), each in a convex hull of edges
+    ``edge_a``/``edge_n`` (``edge_start (F+1,)``; :class:`.rally_fans.Fans`), and a fan whose
+    hull the candidate is farther than ``sep`` beyond is skipped, as a segment whose box
+    grown by ``sep`` (``line_lo``, ``line_hi``) does not hold it; of the places only
+    those within ``sep`` (a hair more) of the box of its return lines are measured.
+    Returns the index and the work done: hull edges, segments and places measured, path
+    points looked at (:data:`.rally.WORK_PER_UAV`)."""
     used = np.empty(own.shape[0], np.int64)
     reach = sep + 1e-6
+    work = 0
     for c in range(chunk.shape[0]):
         cx, cy = chunk[c, 0], chunk[c, 1]
         ok = True
-        for s in range(line_a.shape[0]):
-            if _segment_distance(cx, cy, line_a[s, 0], line_a[s, 1],
-                                 line_b[s, 0], line_b[s, 1]) < sep:
-                ok = False
+        for f in range(fan_start.shape[0] - 1):
+            far = False
+            for e in range(edge_start[f], edge_start[f + 1]):
+                work += 1
+                if ((cx - edge_a[e, 0]) * edge_n[e, 0]
+                        + (cy - edge_a[e, 1]) * edge_n[e, 1]) > reach:
+                    far = True
+                    break
+            if far:
+                continue
+            work += fan_start[f + 1] - fan_start[f]
+            for s in range(fan_start[f], fan_start[f + 1]):
+                if (cx < line_lo[s, 0] or cx > line_hi[s, 0]
+                        or cy < line_lo[s, 1] or cy > line_hi[s, 1]):
+                    continue
+                if _segment_distance(cx, cy, line_a[s, 0], line_a[s, 1],
+                                     line_b[s, 0], line_b[s, 1]) < sep:
+                    ok = False
+                    break
+            if not ok:
                 break
         if not ok:
             continue
         m = 0
         lo0, lo1, hi0, hi1 = cx, cy, cx, cy
+        work += own.shape[0] + places.shape[0]
         for p in range(own.shape[0]):
             dx, dy = own[p, 0] - cx, own[p, 1] - cy
             if math.sqrt(dx * dx + dy * dy) < own_home[p]:
@@ -76,6 +101,7 @@ def first_clear(chunk, line_a, line_b, own, own_home, places, sep):
             qx, qy = places[j, 0], places[j, 1]
             if qx < lo0 - reach or qx > hi0 + reach or qy < lo1 - reach or qy > hi1 + reach:
                 continue
+            work += m
             for i in range(m):
                 p = used[i]
                 if _segment_distance(qx, qy, own[p, 0], own[p, 1], cx, cy) < sep:
@@ -84,5 +110,5 @@ def first_clear(chunk, line_a, line_b, own, own_home, places, sep):
             if not ok:
                 break
         if ok:
-            return c
-    return -1
+            return c, work
+    return -1, work
