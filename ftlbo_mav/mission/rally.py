@@ -163,7 +163,7 @@ class _RallyGrid:
             inner, outer = outer, 2.0 * outer
 
 
-WORK_PER_UAV = 30_000_000
+WORK_PER_UAV = 20_000_000
 """The rally search's bound, per UAV, in elementary tests: grid cells looked at in its
 rings, candidates measured against a blocked path point, and, for each batch of
 candidates tested exactly, candidates x (the others' return-line segments that can reach
@@ -198,7 +198,7 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
 def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarray,
                         clearance_m: float, area_min: np.ndarray, area_max: np.ndarray,
                         settings: RallySettings,
-                        work_per_uav: int = WORK_PER_UAV) -> RallySearch:
+                        work_per_uav: int | None = None) -> RallySearch:
     """One rally point (east, north) per UAV, or None where none fits (module notes).
 
     Chosen in UAV order, each the candidate nearest its goal that is clear of the
@@ -223,8 +223,10 @@ def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.nda
     return lines are kept with their convex hull: a batch, or a candidate, farther than
     the separation beyond one of its edges skips them all.
 
-    Bounded: each UAV's search stops after ``work_per_uav`` elementary tests
-    (:data:`WORK_PER_UAV`); that UAV then has no rally point and ``stopped`` says so."""
+    Bounded: each UAV's search stops after ``work_per_uav`` elementary tests (default
+    :data:`WORK_PER_UAV`); that UAV then has no rally point and ``stopped`` says so."""
+    if work_per_uav is None:
+        work_per_uav = WORK_PER_UAV
     inset = settings.corner_cut_m + settings.margin_m
     sep = settings.rally_separation_m
     xs = np.arange(area_min[0] + inset, area_max[0] - inset + 1e-9, settings.grid_m)
@@ -259,6 +261,7 @@ def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.nda
             allowed &= grid.outside_discs(blocked, blocked_reach)
         grid.stamp(crowd, homes[k], sep, 1)
         batch, work = 32, 0
+        own_box = (own.min(axis=0), own.max(axis=0))
         for ring, looked in grid.nearest_first(paths[k, -1, :2], allowed):
             work += looked + len(ring) * len(blocked)
             if len(blocked):  # a return line that starts within sep of a place fails
@@ -267,12 +270,13 @@ def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.nda
             while i < len(ring) and chosen[k] is None and work < work_per_uav:
                 chunk = ring[i:i + batch]
                 i += len(chunk)
-                batch = min(4 * batch, 1024)
+                batch = min(4 * batch, 4096 if compiled else 1024)
                 hit = None if compiled else fans.reaching(chunk, line_lo, line_hi, sep)
                 first, done = _first_clear(chunk, own=own, own_home=own_home, places=places,
                                            line_a=line_a, line_b=line_b, line_lo=line_lo,
                                            line_hi=line_hi, sep=sep, compiled=compiled,
-                                           hit=hit, fans=fans, work=True)
+                                           hit=hit, fans=fans, own_box=own_box,
+                                           budget=work_per_uav - work)
                 work += done
                 if first is not None:
                     chosen[k] = chunk[first]
@@ -284,8 +288,8 @@ def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.nda
             rally[k], placed[k] = chosen[k], True
             use = _norm(own - chosen[k]) < own_home
             a = own[use]
+            a = a[fans.add(a, chosen[k])]  # a fan's lines in the order of their direction
             b = np.broadcast_to(chosen[k], a.shape)
-            fans.add(np.concatenate([a, chosen[k][None]]), len(a))
             line_a, line_b = np.concatenate([line_a, a]), np.concatenate([line_b, b])
             line_lo = np.concatenate([line_lo, np.minimum(a, b) - sep])
             line_hi = np.concatenate([line_hi, np.maximum(a, b) + sep])
@@ -328,7 +332,8 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
                  places: np.ndarray, line_a: np.ndarray, line_b: np.ndarray,
                  line_lo: np.ndarray, line_hi: np.ndarray, sep: float,
                  compiled: bool = False, hit: np.ndarray | None = None,
-                 fans: Fans | None = None, work: bool = False):
+                 fans: Fans | None = None, own_box: tuple | None = None,
+                 budget: int | None = None):
     """The index of the first of the candidates ``chunk`` (C, 2) that keeps ``sep``
     between itself and the others' return lines ``line_a``-``line_b`` (S, 2) (their boxes
     grown by ``sep``: ``line_lo``, ``line_hi``) and between the others' places ``places``
@@ -339,28 +344,40 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
     the same tests, without numpy's cost per call on small arrays), as they also do when
     the candidates x lines that can reach them (``hit`` (S,), else found here from the
     boxes) are :data:`COMPILED_FROM` or more. ``fans`` (:class:`.rally_fans.Fans`) says whose the
-    lines are, for the compiled test to skip a fan's lines at once. With ``work``, returns
-    the index and the work done (:data:`WORK_PER_UAV`: in numpy, at most candidates x
-    (lines reaching them + path points + places); compiled, what it measured)."""
+    lines are, for the compiled test to skip a fan's lines at once; ``own_box`` the box
+    (lo, hi) of ``own``. With a ``budget`` of work (:data:`WORK_PER_UAV`), returns the
+    index and the work done: compiled, what it measured, given up (None) once the budget
+    is spent; in numpy, at most candidates x (lines reaching them + path points +
+    places), the batch tested whole."""
     if hit is None and not compiled:
         lo, hi = chunk.min(axis=0), chunk.max(axis=0)
         hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
     if compiled or len(chunk) * int(hit.sum()) >= COMPILED_FROM:
         from ._rally_jit import first_clear
 
-        if fans is None:
+        if fans is None:  # the lines as they come, each its own fan (no hull)
             fans = Fans()
-            fans.start.append(len(line_a))
-            fans.edge_start.append(0)
-        first, done = first_clear(np.ascontiguousarray(chunk, float), line_a, line_b,
-                                  line_lo, line_hi, *fans.arrays(), own, own_home, places,
-                                  float(sep))
+            fans.start = list(range(len(line_a) + 1))
+            fans.edge_start = [0] * (len(line_a) + 1)
+            fans.rally = np.ascontiguousarray(line_b, float).reshape(-1, 2)
+            fans.angle = np.arctan2(line_a[:, 1] - line_b[:, 1], line_a[:, 0] - line_b[:, 0])
+        chunk = np.ascontiguousarray(chunk, float)
+        # only the places within sep of the box of the path and the candidates can be
+        # too near a return line (the compiled test looks at the box of each's lines)
+        reach = sep + 1e-6
+        own_lo, own_hi = own_box if own_box is not None else (own.min(axis=0), own.max(axis=0))
+        box_lo = np.minimum(own_lo, chunk.min(axis=0)) - reach
+        box_hi = np.maximum(own_hi, chunk.max(axis=0)) + reach
+        first, done = first_clear(chunk, line_a, line_b, line_lo, line_hi, *fans.arrays(),
+                                  fans.near(chunk, sep), own, own_home,
+                                  places[_near_box(places, box_lo, box_hi)], float(sep),
+                                  -1 if budget is None else max(int(budget), 1))
         found = None if first < 0 else int(first)
-        return (found, int(done)) if work else found
+        return (found, int(done)) if budget is not None else found
     found = _first_clear_numpy(chunk, own=own, own_home=own_home, places=places,
                                line_a=line_a[hit], line_b=line_b[hit], sep=sep)
     done = len(chunk) * (int(hit.sum()) + len(own) + len(places))
-    return (found, done) if work else found
+    return (found, done) if budget is not None else found
 
 
 def _first_clear_numpy(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
