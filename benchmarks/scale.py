@@ -85,6 +85,51 @@ def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) ->
     return "\n".join(lines) + "\n"
 
 
+def circle_offsets(count: int, radius_m: float) -> np.ndarray:
+    """``count`` UAVs evenly on a circle of ``radius_m`` around the centroid, the first due
+    east, counter-clockwise: (count, 3) metres ENU."""
+    angle = 2.0 * np.pi * np.arange(count) / count
+    return np.column_stack([radius_m * np.cos(angle), radius_m * np.sin(angle),
+                            np.zeros(count)])
+
+
+def circle_scenario_text(*, uavs: int, radius_m: float = 100.0, side_m: float = 1000.0,
+                         obstacles: int = 5, seed: int = 0) -> str:
+    """Issue 51's scenario: ``uavs`` evenly on a circle of ``radius_m`` crossing a
+    ``side_m`` square field diagonally among a few trees (seeded, none on the start's or
+    the goal's formation), ``[navigation] class = "rtk-float"``."""
+    offsets = circle_offsets(uavs, radius_m)
+    half = radius_m + 10.0
+    m_lon = M_PER_DEG_LAT * np.cos(np.radians(LAT0))
+    start = np.array([half, half])
+    goal = np.array([side_m, side_m]) - half
+    rng = np.random.default_rng(seed)
+    trees = []
+    while len(trees) < obstacles:
+        centre = rng.uniform(0.0, side_m, 2)
+        radius = float(rng.uniform(2.0, 4.0))
+        if all(np.hypot(*(centre - p)) > half + radius + 2.0 for p in (start, goal)):
+            trees.append((centre, radius))
+
+    def ll(e: float, n: float) -> tuple[float, float]:
+        return LAT0 + n / M_PER_DEG_LAT, LON0 + e / m_lon
+
+    lines = [f'name = "{uavs} UAVs on a {radius_m:g} m circle, {side_m:g} m field"',
+             "[area]", f"corner_a = [{LAT0}, {LON0}]",
+             "corner_b = [{:.7f}, {:.7f}]".format(*ll(side_m, side_m)),
+             "min_altitude = 2.0", "max_altitude = 7.0",
+             "[start]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*ll(*start)),
+             "[goal]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*ll(*goal)),
+             "[formation]",
+             "offsets = [" + ", ".join(f"[{e:.2f}, {n:.2f}, 0.0]" for e, n, _ in offsets) + "]",
+             "clearance = 1.0",
+             "[navigation]", 'class = "rtk-float"']
+    for centre, radius in trees:
+        lines += ["[[obstacles]]", "lat = {:.7f}\nlon = {:.7f}".format(*ll(*centre)),
+                  f"radius = {radius:.2f}"]
+    return "\n".join(lines) + "\n"
+
+
 def compile_package() -> None:
     """Write the package's bytecode, as installing it from a wheel does: a process started
     with ``PYTHONDONTWRITEBYTECODE`` set (this machine's default) from an editable

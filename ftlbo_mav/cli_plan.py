@@ -162,6 +162,7 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
         click.echo(line)
     for line in fleet_lags(result):
         click.echo(f"note: {line}", err=True)
+    _say_rally_stopped(files.get("plan.json"))
     _say_written(paths)
     if not result.feasible:
         for line in result.violations:
@@ -178,6 +179,18 @@ def plan(scenario, out_dir, seed, iterations, students, waypoints, algorithm, al
 
 
 SORTIES_JSON = r"sorties\.json"
+
+
+def _say_rally_stopped(plan_json: str | None) -> None:
+    """One line on stderr naming the UAVs left without a rally point because the rally
+    search reached its bound (:func:`~.mission.fence.rally_search_stopped`)."""
+    import json
+
+    from .mission.fence import rally_search_stopped
+
+    line = rally_search_stopped(json.loads(plan_json)) if plan_json else None
+    if line:
+        click.echo(f"note: {line}", err=True)
 
 
 def _remove_sorties(out_dir, first: int) -> None:
@@ -234,6 +247,7 @@ def _plan_sorties(scn, whole, out_dir, *, allow_infeasible, formats, no_fence,
     for folder, p in zip(folders, sorties.plans):
         paths = write_plan(p, out / folder, allow_infeasible=allow_infeasible, formats=formats,
                            fence=not no_fence)
+        _say_rally_stopped((out / folder / "plan.json").read_text())
         click.echo(f"  wrote {len(paths)} files in {out / folder}")
     _remove_sorties(out, len(folders) + 1)  # of an earlier, longer split
     with OutputFolder(out, replaces=(*PLAN_OUTPUTS, SORTIES_JSON), last="sorties.json") as top:

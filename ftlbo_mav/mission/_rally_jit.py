@@ -43,28 +43,116 @@ def clear_of_segments(q, a, b, sep):
 
 
 @njit(cache=True)
-def first_clear(chunk, line_a, line_b, own, own_home, places, sep):
+def _directions(dx, dy, reach, angle, ranges):
+    """The index ranges (into ``ranges (2, 2)``, returned how many) of the sorted
+    directions ``angle (m,)`` (radians, [-pi, pi]) of a fan's segments from its rally
+    point that may pass within ``reach`` of a point at ``(dx, dy)`` from it: those within
+    ``asin(reach / d)`` (and 1e-9) of the point's direction; every one when ``d`` is not
+    more than ``reach``. A segment from the rally point in a direction ``D`` radians
+    from the point's is at least ``d sin D`` from it (``d`` when ``D`` > pi/2)."""
+    d = math.sqrt(dx * dx + dy * dy)
+    m = angle.shape[0]
+    if d <= reach:
+        ranges[0, 0], ranges[0, 1] = 0, m
+        return 1
+    theta = math.atan2(dy, dx)
+    half = math.asin(reach / d) + 1e-9
+    lo, hi = theta - half, theta + half
+    if lo < -math.pi:
+        ranges[0, 0], ranges[0, 1] = 0, np.searchsorted(angle, hi, side="right")
+        ranges[1, 0], ranges[1, 1] = np.searchsorted(angle, lo + 2.0 * math.pi), m
+        return 2
+    if hi > math.pi:
+        ranges[0, 0], ranges[0, 1] = 0, np.searchsorted(angle, hi - 2.0 * math.pi,
+                                                        side="right")
+        ranges[1, 0], ranges[1, 1] = np.searchsorted(angle, lo), m
+        return 2
+    ranges[0, 0] = np.searchsorted(angle, lo)
+    ranges[0, 1] = np.searchsorted(angle, hi, side="right")
+    return 1
+
+
+@njit(cache=True)
+def first_clear(chunk, line_a, line_b, line_lo, line_hi, fan_start, edge_start, edge_a,
+                edge_n, fan_rally, fan_angle, fans_near, own, own_home, places, sep,
+                budget):
     """The index of the first of the candidates ``chunk (C, 2)`` at least ``sep`` from
     every segment ``line_a``-``line_b`` (each ``(S, 2)``) whose own return lines (from
     the points of ``own (P, 2)`` nearer to it than ``own_home (P,)``) keep ``sep`` from
     every one of ``places (Q, 2)``; -1 if none is. The tests and arithmetic of
     :func:`.rally._first_clear`, a candidate at a time in order, each given up at its
-    first line or place too near; of the places only those within ``sep`` (a hair more)
-    of the box of its return lines are measured, as no other can be too near."""
+    first line or place too near. Only the lines that can be too near are measured: the
+    segments are in fans (``fan_start (F+1,)``), each in a convex hull of edges
+    ``edge_a``/``edge_n`` (``edge_start (F+1,)``; :class:`.rally_fans.Fans`), and a fan whose
+    hull the candidate is farther than ``sep`` beyond is skipped (only the fans
+    ``fans_near`` (int64) are looked at: the others' hulls are beyond every candidate's
+    reach), as a segment whose box
+    grown by ``sep`` (``line_lo``, ``line_hi``) does not hold it; of a fan's segments
+    (all ending at its ``fan_rally (F, 2)``, sorted by their direction ``fan_angle (S,)``
+    from it) only those whose direction is within ``asin(sep / d)`` (a hair more) of the
+    candidate's, ``d`` from the rally point, are measured; of the places only
+    those within ``sep`` (a hair more) of the box of its return lines are measured.
+    The line, or the place and path point, that ruled out a candidate is tried first on
+    the next (neighbours are mostly ruled out by the same): a candidate too near it
+    fails at once, which the full tests would also find, so the choice is the same.
+    Returns the index and the work done: hull edges, segments and places measured, path
+    points looked at (:data:`.rally.WORK_PER_UAV`); -1 as soon as the work passes
+    ``budget`` (not when it is negative)."""
     used = np.empty(own.shape[0], np.int64)
+    ranges = np.empty((2, 2), np.int64)
     reach = sep + 1e-6
+    work = 0
+    last_line, last_place, last_point = -1, -1, -1  # what ruled out the last candidate
     for c in range(chunk.shape[0]):
+        if 0 <= budget <= work:
+            return -1, work
         cx, cy = chunk[c, 0], chunk[c, 1]
+        work += 1
+        if last_line >= 0 and _segment_distance(
+                cx, cy, line_a[last_line, 0], line_a[last_line, 1],
+                line_b[last_line, 0], line_b[last_line, 1]) < sep:
+            continue
+        if last_place >= 0:
+            dx, dy = own[last_point, 0] - cx, own[last_point, 1] - cy
+            if math.sqrt(dx * dx + dy * dy) < own_home[last_point] and _segment_distance(
+                    places[last_place, 0], places[last_place, 1], own[last_point, 0],
+                    own[last_point, 1], cx, cy) < sep:
+                continue
         ok = True
-        for s in range(line_a.shape[0]):
-            if _segment_distance(cx, cy, line_a[s, 0], line_a[s, 1],
-                                 line_b[s, 0], line_b[s, 1]) < sep:
-                ok = False
+        for f in fans_near:
+            far = False
+            for e in range(edge_start[f], edge_start[f + 1]):
+                work += 1
+                if ((cx - edge_a[e, 0]) * edge_n[e, 0]
+                        + (cy - edge_a[e, 1]) * edge_n[e, 1]) > reach:
+                    far = True
+                    break
+            if far:
+                continue
+            f0, f1 = fan_start[f], fan_start[f + 1]
+            n_ranges = _directions(cx - fan_rally[f, 0], cy - fan_rally[f, 1], reach,
+                                   fan_angle[f0:f1], ranges)
+            work += 1
+            for r in range(n_ranges):
+                for s in range(f0 + ranges[r, 0], f0 + ranges[r, 1]):
+                    work += 1
+                    if (cx < line_lo[s, 0] or cx > line_hi[s, 0]
+                            or cy < line_lo[s, 1] or cy > line_hi[s, 1]):
+                        continue
+                    if _segment_distance(cx, cy, line_a[s, 0], line_a[s, 1],
+                                         line_b[s, 0], line_b[s, 1]) < sep:
+                        ok = False
+                        last_line, last_place = s, -1
+                        break
+                if not ok:
+                    break
+            if not ok:
                 break
         if not ok:
             continue
         m = 0
         lo0, lo1, hi0, hi1 = cx, cy, cx, cy
+        work += own.shape[0] + places.shape[0]
         for p in range(own.shape[0]):
             dx, dy = own[p, 0] - cx, own[p, 1] - cy
             if math.sqrt(dx * dx + dy * dy) < own_home[p]:
@@ -76,13 +164,15 @@ def first_clear(chunk, line_a, line_b, own, own_home, places, sep):
             qx, qy = places[j, 0], places[j, 1]
             if qx < lo0 - reach or qx > hi0 + reach or qy < lo1 - reach or qy > hi1 + reach:
                 continue
+            work += m
             for i in range(m):
                 p = used[i]
                 if _segment_distance(qx, qy, own[p, 0], own[p, 1], cx, cy) < sep:
                     ok = False
+                    last_line, last_place, last_point = -1, j, p
                     break
             if not ok:
                 break
         if ok:
-            return c
-    return -1
+            return c, work
+    return -1, work

@@ -51,7 +51,7 @@ from .items import (
     FRAME_GLOBAL_RELATIVE_ALT,
     MissionItem,
 )
-from .rally import rally_points_enu
+from .rally import WORK_PER_UAV, search_rally_points
 
 if TYPE_CHECKING:
     from ..planning.plans import Plan
@@ -122,6 +122,26 @@ def _flown_clearance(plan: Plan, k: int, kept: float) -> float:
     return min(kept, float(plan.prediction.obstacle_clearance[k]))
 
 
+RALLY_SEARCH_STOPPED = "no rally point, search stopped"
+"""How a UAV's fence note begins when its rally search reached its bound
+(:data:`~.rally.WORK_PER_UAV`): :func:`rally_search_stopped` finds them."""
+
+
+def rally_search_stopped(doc: Mapping) -> str | None:
+    """One line naming the UAVs of a ``plan.json`` document ``doc`` whose rally search
+    reached its bound (their ``fence_notes``), or None: what ``plan`` says on stderr."""
+    uavs = doc.get("uavs", [])
+    names = [u["name"] for u in uavs
+             if any(n.startswith(RALLY_SEARCH_STOPPED) for n in u.get("fence_notes", ()))]
+    if not names:
+        return None
+    shown = ", ".join(names[:12]) + (f" and {len(names) - 12} more" if len(names) > 12 else "")
+    return (f"{len(names)} of {len(uavs)} UAVs have no rally point ({shown}): the rally "
+            f"search stopped at its bound of {WORK_PER_UAV:,} tests per UAV before finding "
+            "a place clear of the others' homes, rally points and return lines; their RTL "
+            "goes home (plan.json fence_notes)")
+
+
 def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> list[UavFence]:
     """Every UAV's fence, rally point and fence parameters for ``plan`` (module notes)."""
     s = plan.scenario
@@ -165,15 +185,22 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
     # the others' homes and return lines plus two copters' combined error
     rally_settings = replace(settings, rally_separation_m=settings.rally_separation_m
                              + pair_error_m(s.navigation.horizontal_m))
-    rally = rally_points_enu(paths=paths, centres=centres[:, :2], radii=radii,
-                             clearance_m=s.true_clearance_m, area_min=lo, area_max=hi,
-                             settings=rally_settings)
+    search = search_rally_points(paths=paths, centres=centres[:, :2], radii=radii,
+                                 clearance_m=s.true_clearance_m, area_min=lo, area_max=hi,
+                                 settings=rally_settings)
+    rally = search.points
     params = fence_params(s.max_altitude_m, settings)
+    sep_m = rally_settings.rally_separation_m
     out = []
     for n, (path, point) in enumerate(zip(paths, rally)):
         own_notes = list(notes)
         items: tuple[MissionItem, ...] = ()
-        if point is None:
+        if point is None and search.stopped[n]:
+            own_notes.append(f"{RALLY_SEARCH_STOPPED}: its search reached its bound "
+                             f"({WORK_PER_UAV:,} tests) before a place {sep_m:.2f} m from "
+                             "the other UAVs' homes, rally points and return lines; RTL "
+                             "goes home")
+        elif point is None:
             sep = rally_settings.rally_separation_m
             own_notes.append(f"no rally point: no place in the area is clear of the "
                              f"obstacles and {sep:.2f} m from the other UAVs' return "

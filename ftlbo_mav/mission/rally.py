@@ -4,9 +4,13 @@ than home (pure; the rules are in :mod:`.fence`'s notes and :func:`rally_points_
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+
+from .rally_fans import Fans
+from .rally_fans import convex_hull as _hull
 
 
 class RallySettings(Protocol):
@@ -57,25 +61,6 @@ def _densify(path: np.ndarray, step_m: float) -> np.ndarray:
 def _near_box(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Mask of ``points`` (n, 2) inside the box ``lo``..``hi`` (2,), edges included."""
     return np.all((points >= lo) & (points <= hi), axis=1)
-
-
-def _hull(points: np.ndarray) -> np.ndarray:
-    """The convex hull of ``points`` (n, 2), counter-clockwise (Andrew's monotone chain)."""
-    pts = np.unique(points, axis=0)  # sorted by east, then north
-    if len(pts) < 3:
-        return pts
-
-    def half(seq):
-        out: list[np.ndarray] = []
-        for p in seq:
-            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
-                out.pop()
-            out.append(p)
-        return out
-
-    lower, upper = half(pts), half(pts[::-1])
-    return np.array(lower[:-1] + upper[:-1])
 
 
 def _near_hull(queries: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
@@ -156,7 +141,8 @@ class _RallyGrid:
 
     def nearest_first(self, goal: np.ndarray, allowed: np.ndarray):
         """Yield the cells of ``allowed`` (ny, nx) as arrays (C, 2), together
-        nearest-first from ``goal`` (2,)."""
+        nearest-first from ``goal`` (2,), each ring with the number of cells looked at
+        to find it (its window's)."""
         xs, ys = self.xs, self.ys
         if not len(xs) or not len(ys):
             return
@@ -173,13 +159,46 @@ class _RallyGrid:
             ring = np.flatnonzero((d > inner) & (d <= outer) if inner >= 0 else d <= outer)
             if len(ring):
                 ring = ring[np.argsort(d[ring], kind="stable")]
-                yield np.column_stack([wx[ring], wy[ring]])
+            yield np.column_stack([wx[ring], wy[ring]]), window.size
             inner, outer = outer, 2.0 * outer
+
+
+WORK_PER_UAV = 20_000_000
+"""The rally search's bound, per UAV, in elementary tests: grid cells looked at in its
+rings, candidates measured against a blocked path point, and, for each batch of
+candidates tested exactly, candidates x (the others' return-line segments that can reach
+the batch + the UAV's own path points). A UAV whose search reaches it before a candidate
+passes gets no rally point (RTL goes home) and :attr:`RallySearch.stopped` says so; the
+search of every UAV is then bounded (about 0.1 s of tests, compiled; a 200-UAV circle
+1 km across in well under 30 s for all), while every search that finds its point within
+it chooses as the unbounded search would. Issue 51: a 200-UAV circle crossing a 1 km
+field searched for over 300 s without it."""
+
+
+@dataclass(frozen=True)
+class RallySearch:
+    """The rally search's outcome: ``points`` one (east, north) metres or None per UAV;
+    ``stopped`` True where the UAV has none because its search reached
+    :data:`WORK_PER_UAV` first (rather than because no place in the area qualifies)."""
+
+    points: tuple[np.ndarray | None, ...]
+    stopped: tuple[bool, ...]
 
 
 def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarray,
                      clearance_m: float, area_min: np.ndarray, area_max: np.ndarray,
                      settings: RallySettings) -> list[np.ndarray | None]:
+    """One rally point (east, north) per UAV, or None where none fits or the search
+    reached its bound: :func:`search_rally_points`'s points."""
+    return list(search_rally_points(paths=paths, centres=centres, radii=radii,
+                                    clearance_m=clearance_m, area_min=area_min,
+                                    area_max=area_max, settings=settings).points)
+
+
+def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarray,
+                        clearance_m: float, area_min: np.ndarray, area_max: np.ndarray,
+                        settings: RallySettings,
+                        work_per_uav: int | None = None) -> RallySearch:
     """One rally point (east, north) per UAV, or None where none fits (module notes).
 
     Chosen in UAV order, each the candidate nearest its goal that is clear of the
@@ -198,8 +217,16 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
     batches, each against only what can reach it (the places and line segments whose
     bounding box, grown by the separation, holds the batch's box). The result is the
     first candidate in distance order that passes every test, as a search of the whole
-    grid would find it. From :data:`COMPILED_UAVS_FROM` UAVs the exact tests run compiled,
-    a candidate at a time (:func:`._rally_jit.first_clear`), to the same choice."""
+    grid would find it. From :data:`COMPILED_UAVS_FROM` UAVs (or a batch of
+    :data:`COMPILED_FROM` candidate x line pairs) the exact tests run compiled, a candidate
+    at a time (:func:`._rally_jit.first_clear`), to the same choice. Each chosen UAV's
+    return lines are kept with their convex hull: a batch, or a candidate, farther than
+    the separation beyond one of its edges skips them all.
+
+    Bounded: each UAV's search stops after ``work_per_uav`` elementary tests (default
+    :data:`WORK_PER_UAV`); that UAV then has no rally point and ``stopped`` says so."""
+    if work_per_uav is None:
+        work_per_uav = WORK_PER_UAV
     inset = settings.corner_cut_m + settings.margin_m
     sep = settings.rally_separation_m
     xs = np.arange(area_min[0] + inset, area_max[0] - inset + 1e-9, settings.grid_m)
@@ -212,6 +239,7 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
     n = len(paths)
     compiled = n >= COMPILED_UAVS_FROM
     chosen: list[np.ndarray | None] = [None] * n
+    stopped = [False] * n
     rally, placed = np.zeros((n, 2)), np.zeros(n, bool)  # chosen as an array, and which
     # how many homes and rally points each cell is closer than sep to
     crowd = np.zeros(grid.clear.shape, np.int32)
@@ -220,6 +248,7 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
     # the chosen UAVs' return lines so far: segment starts (S, 2), ends (S, 2), boxes
     line_a, line_b = np.zeros((0, 2)), np.zeros((0, 2))
     line_lo, line_hi = np.zeros((0, 2)), np.zeros((0, 2))
+    fans = Fans()  # which lines are whose, and the convex hull of each UAV's lines
     for k in range(n):
         own = flat[k]
         own_home = _norm(own - homes[k])  # (P,)
@@ -231,32 +260,40 @@ def rally_points_enu(*, paths: np.ndarray, centres: np.ndarray, radii: np.ndarra
         if len(blocked):
             allowed &= grid.outside_discs(blocked, blocked_reach)
         grid.stamp(crowd, homes[k], sep, 1)
-        batch = 32
-        for ring in grid.nearest_first(paths[k, -1, :2], allowed):
+        batch, work = 32, 0
+        own_box = (own.min(axis=0), own.max(axis=0))
+        for ring, looked in grid.nearest_first(paths[k, -1, :2], allowed):
+            work += looked + len(ring) * len(blocked)
             if len(blocked):  # a return line that starts within sep of a place fails
                 ring = ring[_clear_of_blocked(ring, blocked, blocked_reach)]
             i = 0
-            while i < len(ring) and chosen[k] is None:
+            while i < len(ring) and chosen[k] is None and work < work_per_uav:
                 chunk = ring[i:i + batch]
                 i += len(chunk)
-                batch = min(4 * batch, 1024)
-                first = _first_clear(chunk, own=own, own_home=own_home, places=places,
-                                     line_a=line_a, line_b=line_b, line_lo=line_lo,
-                                     line_hi=line_hi, sep=sep, compiled=compiled)
+                batch = min(4 * batch, 4096 if compiled else 1024)
+                hit = None if compiled else fans.reaching(chunk, line_lo, line_hi, sep)
+                first, done = _first_clear(chunk, own=own, own_home=own_home, places=places,
+                                           line_a=line_a, line_b=line_b, line_lo=line_lo,
+                                           line_hi=line_hi, sep=sep, compiled=compiled,
+                                           hit=hit, fans=fans, own_box=own_box,
+                                           budget=work_per_uav - work)
+                work += done
                 if first is not None:
                     chosen[k] = chunk[first]
-            if chosen[k] is not None:
+            if chosen[k] is not None or work >= work_per_uav:
+                stopped[k] = chosen[k] is None
                 break
         if chosen[k] is not None:
             grid.stamp(crowd, chosen[k], sep, 1)
             rally[k], placed[k] = chosen[k], True
             use = _norm(own - chosen[k]) < own_home
             a = own[use]
+            a = a[fans.add(a, chosen[k])]  # a fan's lines in the order of their direction
             b = np.broadcast_to(chosen[k], a.shape)
             line_a, line_b = np.concatenate([line_a, a]), np.concatenate([line_b, b])
             line_lo = np.concatenate([line_lo, np.minimum(a, b) - sep])
             line_hi = np.concatenate([line_hi, np.maximum(a, b) + sep])
-    return chosen
+    return RallySearch(tuple(chosen), tuple(stopped))
 
 
 def _blocked_starts(own: np.ndarray, own_home: np.ndarray, places: np.ndarray,
@@ -294,7 +331,9 @@ def _clear_of_blocked(cand: np.ndarray, blocked: np.ndarray, reach: np.ndarray) 
 def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
                  places: np.ndarray, line_a: np.ndarray, line_b: np.ndarray,
                  line_lo: np.ndarray, line_hi: np.ndarray, sep: float,
-                 compiled: bool = False) -> int | None:
+                 compiled: bool = False, hit: np.ndarray | None = None,
+                 fans: Fans | None = None, own_box: tuple | None = None,
+                 budget: int | None = None):
     """The index of the first of the candidates ``chunk`` (C, 2) that keeps ``sep``
     between itself and the others' return lines ``line_a``-``line_b`` (S, 2) (their boxes
     grown by ``sep``: ``line_lo``, ``line_hi``) and between the others' places ``places``
@@ -302,17 +341,53 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
     ``own_home`` (P,), their distances from the UAV's home); None if none does. The
     second test, the costly one, runs on a few candidates at a time, in order; or, when
     ``compiled``, both run compiled a candidate at a time (:func:`._rally_jit.first_clear`:
-    the same tests, without numpy's cost per call on small arrays)."""
-    lo, hi = chunk.min(axis=0), chunk.max(axis=0)
-    hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
-    if compiled:
+    the same tests, without numpy's cost per call on small arrays), as they also do when
+    the candidates x lines that can reach them (``hit`` (S,), else found here from the
+    boxes) are :data:`COMPILED_FROM` or more. ``fans`` (:class:`.rally_fans.Fans`) says whose the
+    lines are, for the compiled test to skip a fan's lines at once; ``own_box`` the box
+    (lo, hi) of ``own``. With a ``budget`` of work (:data:`WORK_PER_UAV`), returns the
+    index and the work done: compiled, what it measured, given up (None) once the budget
+    is spent; in numpy, at most candidates x (lines reaching them + path points +
+    places), the batch tested whole."""
+    if hit is None and not compiled:
+        lo, hi = chunk.min(axis=0), chunk.max(axis=0)
+        hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
+    if compiled or len(chunk) * int(hit.sum()) >= COMPILED_FROM:
         from ._rally_jit import first_clear
 
-        first = first_clear(chunk, line_a[hit], line_b[hit], own, own_home, places, float(sep))
-        return None if first < 0 else int(first)
+        if fans is None:  # the lines as they come, each its own fan (no hull)
+            fans = Fans()
+            fans.start = list(range(len(line_a) + 1))
+            fans.edge_start = [0] * (len(line_a) + 1)
+            fans.rally = np.ascontiguousarray(line_b, float).reshape(-1, 2)
+            fans.angle = np.arctan2(line_a[:, 1] - line_b[:, 1], line_a[:, 0] - line_b[:, 0])
+        chunk = np.ascontiguousarray(chunk, float)
+        # only the places within sep of the box of the path and the candidates can be
+        # too near a return line (the compiled test looks at the box of each's lines)
+        reach = sep + 1e-6
+        own_lo, own_hi = own_box if own_box is not None else (own.min(axis=0), own.max(axis=0))
+        box_lo = np.minimum(own_lo, chunk.min(axis=0)) - reach
+        box_hi = np.maximum(own_hi, chunk.max(axis=0)) + reach
+        first, done = first_clear(chunk, line_a, line_b, line_lo, line_hi, *fans.arrays(),
+                                  fans.near(chunk, sep), own, own_home,
+                                  places[_near_box(places, box_lo, box_hi)], float(sep),
+                                  -1 if budget is None else max(int(budget), 1))
+        found = None if first < 0 else int(first)
+        return (found, int(done)) if budget is not None else found
+    found = _first_clear_numpy(chunk, own=own, own_home=own_home, places=places,
+                               line_a=line_a[hit], line_b=line_b[hit], sep=sep)
+    done = len(chunk) * (int(hit.sum()) + len(own) + len(places))
+    return (found, done) if budget is not None else found
+
+
+def _first_clear_numpy(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
+                       places: np.ndarray, line_a: np.ndarray, line_b: np.ndarray,
+                       sep: float) -> int | None:
+    """:func:`_first_clear` in numpy, the lines ``line_a``-``line_b`` those that can
+    reach the candidates."""
     ok = np.ones(len(chunk), bool)
-    if hit.any():
-        ok &= _clear_of_lines(chunk, line_a[hit], line_b[hit], sep)
+    if len(line_a):
+        ok &= _clear_of_lines(chunk, line_a, line_b, sep)
     live = np.flatnonzero(ok)
     i, step = 0, 4
     while i < len(live):

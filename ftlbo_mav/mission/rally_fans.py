@@ -1,0 +1,100 @@
+"""The rally search's return lines kept as fans (pure): each chosen UAV's lines all end at
+its rally point and lie in the convex hull of it and the path points they start from, so
+a candidate, or a batch of them, farther than the separation beyond one edge of that hull
+is farther than that from every one of them, and none of them need be measured
+(:func:`.rally.search_rally_points`, :func:`._rally_jit.first_clear`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def convex_hull(points: np.ndarray) -> np.ndarray:
+    """The convex hull of ``points`` (n, 2), counter-clockwise (Andrew's monotone chain)."""
+    pts = np.unique(points, axis=0)  # sorted by east, then north
+    if len(pts) < 3:
+        return pts
+
+    def half(seq):
+        out: list[np.ndarray] = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
+class Fans:
+    """The chosen UAVs' return lines as fans: each UAV's lines (contiguous in the line
+    arrays, ``start`` (F+1,) their bounds) run from path points to its rally point
+    ``rally`` (F, 2), sorted by their direction from it (``angle`` (S,), radians in
+    [-pi, pi], ascending within a fan), and lie in the convex hull of those points and
+    the rally point, kept as its edges' starts ``edge_a`` (E, 2) and outward unit normals
+    ``edge_n`` (E, 2), ``edge_start`` (F+1,) each fan's. A point farther than the
+    separation beyond one edge of a fan's hull is farther than that from each of its
+    lines (a fan of fewer than three distinct corners has no edges: never skipped); a
+    point at ``d`` > sep from the rally point is within sep of a line only if the line's
+    direction is within ``asin(sep / d)`` of the point's."""
+
+    def __init__(self) -> None:
+        self.start, self.edge_start = [0], [0]
+        self.edge_a, self.edge_n = np.zeros((0, 2)), np.zeros((0, 2))
+        self.rally, self.angle = np.zeros((0, 2)), np.zeros(0)
+
+    def add(self, starts: np.ndarray, rally: np.ndarray) -> np.ndarray:
+        """The fan of the lines from ``starts`` (m, 2) to ``rally`` (2,). Returns the
+        order (m,) in which its lines must be appended to the line arrays."""
+        hull = convex_hull(np.concatenate([starts, rally[None]]))
+        a, n = np.zeros((0, 2)), np.zeros((0, 2))
+        if len(hull) >= 3:
+            a = hull
+            edge = np.roll(hull, -1, axis=0) - hull
+            n = np.column_stack([edge[:, 1], -edge[:, 0]])  # outward for a ccw hull
+            n /= np.maximum(np.hypot(n[:, 0], n[:, 1]), 1e-300)[:, None]
+        self.edge_a = np.concatenate([self.edge_a, a])
+        self.edge_n = np.concatenate([self.edge_n, n])
+        angle = np.arctan2(starts[:, 1] - rally[1], starts[:, 0] - rally[0])
+        order = np.argsort(angle, kind="stable")
+        self.angle = np.concatenate([self.angle, angle[order]])
+        self.rally = np.concatenate([self.rally, rally[None]])
+        self.start.append(self.start[-1] + len(starts))
+        self.edge_start.append(self.edge_start[-1] + len(a))
+        return order
+
+    def arrays(self) -> tuple[np.ndarray, ...]:
+        """``start``, ``edge_start`` (int64), ``edge_a``, ``edge_n``, ``rally``, ``angle``:
+        for the compiled test."""
+        return (np.asarray(self.start, np.int64), np.asarray(self.edge_start, np.int64),
+                self.edge_a, self.edge_n, self.rally, self.angle)
+
+    def far(self, lo: np.ndarray, hi: np.ndarray, sep: float) -> np.ndarray:
+        """(F,) whether each fan's hull has an edge with the box ``lo``..``hi`` (2,)
+        wholly beyond it by more than ``sep`` (a hair more): no line of it comes within
+        ``sep`` of a point in the box."""
+        if not len(self.edge_a):
+            return np.zeros(len(self.start) - 1, bool)
+        corners = np.array([lo, [lo[0], hi[1]], hi, [hi[0], lo[1]]])
+        d = ((corners[None] - self.edge_a[:, None]) * self.edge_n[:, None]).sum(-1).min(axis=1)
+        beyond = (d > sep + 1e-6).astype(np.int64)  # (E,): the box is wholly beyond the edge
+        ends = np.asarray(self.edge_start, np.int64)
+        return (np.add.reduceat(np.append(beyond, 0), ends[:-1]) * (np.diff(ends) > 0)) > 0
+
+    def near(self, chunk: np.ndarray, sep: float) -> np.ndarray:
+        """The indices (int64) of the fans that may come within ``sep`` of a candidate of
+        ``chunk`` (C, 2): for the compiled test."""
+        return np.flatnonzero(~self.far(chunk.min(axis=0), chunk.max(axis=0), sep))
+
+    def reaching(self, chunk: np.ndarray, line_lo: np.ndarray, line_hi: np.ndarray,
+                 sep: float) -> np.ndarray:
+        """(S,) mask of the lines that may come within ``sep`` of a candidate of ``chunk``
+        (C, 2): their box grown by ``sep`` (``line_lo``, ``line_hi``) holds part of the
+        chunk's box, and their fan's hull is not beyond ``sep`` from it."""
+        lo, hi = chunk.min(axis=0), chunk.max(axis=0)
+        hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
+        if not len(self.edge_a) or not hit.any():
+            return hit
+        return hit & ~np.repeat(self.far(lo, hi, sep), np.diff(self.start))
