@@ -58,10 +58,27 @@ def layout(trees: int) -> tuple[int, int]:
     return rows, max(1, round(trees / rows))
 
 
-def orchard_files(folder: Path, *, rows: int, per_row: int) -> Path:
-    """Write ``orchard.geojson`` and ``orchard.toml`` into ``folder``; the scenario's path."""
+SHAPES = {  # the formation's offsets (east, north, up) metres
+    "column": "[[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]",  # through the aisles
+    "line": "[[-4.0, 0.0, 0.0], [0.0, 0.0, 0.0], [4.0, 0.0, 0.0]]",  # across them
+    "line7": "[[-7.0, 0.0, 0.0], [0.0, 0.0, 0.0], [7.0, 0.0, 0.0]]",  # one UAV an aisle
+}
+
+
+def orchard_files(folder: Path, *, rows: int, per_row: int,
+                  tree_spacing_m: float = TREE_SPACING_M,
+                  canopy_radius_m: float = CANOPY_RADIUS_M, headland_m: float = HEADLAND_M,
+                  shape: str = "column", navigation: str = "rtk-fixed") -> Path:
+    """Write ``orchard.geojson`` and ``orchard.toml`` into ``folder``; the scenario's path.
+
+    ``rows`` north-south rows :data:`ROW_SPACING_M` apart of ``per_row`` trees
+    ``tree_spacing_m`` apart (canopy ``canopy_radius_m``), ``headland_m`` from the last
+    trees to the area's north and south edges; three UAVs 4 m apart in ``shape``
+    (:data:`SHAPES`: a north-south column or an east-west line), ``[navigation] class``
+    ``navigation``. Issue 51's orchard: ``rows=60, per_row=80, tree_spacing_m=4,
+    canopy_radius_m=1.2, headland_m=18`` (:func:`issue51_files`)."""
     width = (rows + 1) * ROW_SPACING_M
-    length = 2 * HEADLAND_M + (per_row - 1) * TREE_SPACING_M
+    length = 2 * headland_m + (per_row - 1) * tree_spacing_m
 
     frame = LocalFrame(LAT0, LON0)  # the scenario's own: its origin the south-west corner
 
@@ -70,19 +87,21 @@ def orchard_files(folder: Path, *, rows: int, per_row: int) -> Path:
         return float(lat), float(lon)
 
     e, n = np.meshgrid((np.arange(rows) + 1) * ROW_SPACING_M,
-                       HEADLAND_M + np.arange(per_row) * TREE_SPACING_M, indexing="ij")
+                       headland_m + np.arange(per_row) * tree_spacing_m, indexing="ij")
     lat, lon, _ = frame.to_lla(np.stack([e, n, np.zeros_like(e)], axis=-1))
     features = []
     for r in range(rows):
         for t in range(per_row):
             features.append(
                 f'{{"type": "Feature", "properties": {{"name": "row {r + 1} tree {t + 1}", '
-                f'"radius": {CANOPY_RADIUS_M}}}, "geometry": {{"type": "Point", '
+                f'"radius": {canopy_radius_m}}}, "geometry": {{"type": "Point", '
                 f'"coordinates": [{lon[r, t]:.8f}, {lat[r, t]:.8f}]}}}}')
     (folder / "orchard.geojson").write_text(
         '{"type": "FeatureCollection", "name": "orchard", "features": [\n'
         + ",\n".join(features) + "\n]}\n")
-    margin = ROW_SPACING_M / 2
+    offsets = np.array(json.loads(SHAPES[shape]))
+    # the outermost UAVs in the outer aisles: the lanes on the aisles' centre lines
+    margin = ROW_SPACING_M / 2 + float(np.abs(offsets[:, 0]).max())
     start, goal = ll(margin, 5.0), ll(width - margin, length - 5.0 if rows % 2 == 0 else 5.0)
     text = "\n".join([
         f'name = "Orchard of {rows * per_row} trees, {rows} rows"',
@@ -92,14 +111,25 @@ def orchard_files(folder: Path, *, rows: int, per_row: int) -> Path:
         "min_altitude = 2.0", "max_altitude = 7.0",
         "[start]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*start),
         "[goal]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*goal),
-        "[formation]", "offsets = [[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]",
-        "clearance = 1.0", "[navigation]", 'class = "rtk-fixed"',  # aisles need RTK
+        "[formation]", f"offsets = {SHAPES[shape]}",
+        "clearance = 1.0", "[navigation]", f'class = "{navigation}"',  # aisles need RTK
         "[survey]", f"spacing = {ROW_SPACING_M}", "heading = 0.0", f"margin = {margin}",
         "[planner]", 'waypoints = "auto"', "seed = 0",
         "[mission]", "speed = 3.0", 'end_action = "land"', ""])
     path = folder / "orchard.toml"
     path.write_text(text)
     return path
+
+
+ISSUE51 = {"rows": 60, "per_row": 80, "tree_spacing_m": 4.0, "canopy_radius_m": 1.2,
+           "headland_m": 18.0, "navigation": "rtk-fixed"}
+"""Issue 51's orchard: 4,800 trees, 60 rows of 80, 7 m x 4 m, canopy 1.2 m, 18 m headlands."""
+
+
+def issue51_files(folder: Path, *, shape: str = "column", headland_m: float = 18.0) -> Path:
+    """Issue 51's orchard (:data:`ISSUE51`) in ``folder``, flown by a column or a line,
+    with ``headland_m`` headlands (10: too narrow for the 8 m column to turn)."""
+    return orchard_files(folder, **{**ISSUE51, "headland_m": headland_m}, shape=shape)
 
 
 def _peak_rss_mib() -> float:

@@ -30,6 +30,7 @@ from .plans import Leg, Plan, combine
 from .problem import PlanningProblem, problem_from_scenario
 from .repair import Attempt, better, fly_as_arducopter, until_kept
 from .seeds import RouteChains, seed_waypoints
+from .turns import check_survey_turns
 from .window import WINDOW_FROM, leg_sizes, leg_window
 
 AUTO_TARGET = 0.0008
@@ -88,6 +89,7 @@ def plan(
     }
     settings = replace(settings, **{k: v for k, v in overrides.items() if v is not None})
     _check_settings(settings)
+    check_survey_turns(scenario)  # a lane the formation cannot reach: before any planning
     check_size(scenario, settings)
     base = problem_from_scenario(scenario, waypoints=_count(settings))
 
