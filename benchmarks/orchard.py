@@ -15,6 +15,12 @@ peak resident memory of the ``plan`` process, whether the plan is feasible and i
 predicted clearance, and the load average at the start (the machine is shared).
 
 The goals (issue 30): about 5,000 trees <= 30 s, 20,000 trees <= 120 s, memory < 2 GiB.
+
+Issue 51 (``--issue51``, :func:`issue51_rows`): its orchard (``issue51_files``: 60 rows of
+80 trees 7 m x 4 m apart, canopy 1.2 m, 18 m headlands, rtk-fixed) flown by a column
+and by a line (three UAVs 7 m apart, one an aisle) within 30 s, and refused within 5 s
+(exit code 2) with 10 m headlands (the 8 m column cannot turn) and for a line 4 m apart
+(8 m wide, it cannot be between rows 7 m apart).
 """
 
 from __future__ import annotations
@@ -137,6 +143,33 @@ def _peak_rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0
 
 
+def plan_process(scenario: Path, out: Path, *, timeout_s: float
+                 ) -> tuple[float, subprocess.CompletedProcess] | None:
+    """``python -m ftlbo_mav plan scenario -o out`` in a fresh process: wall seconds from
+    its start to its exit and the finished process (stderr ends with its own peak
+    resident memory, ``peak_rss_kib N``); ``None`` when killed after ``timeout_s``."""
+    t0 = time.perf_counter()
+    try:
+        # the peak memory of this child alone: a fresh interpreter that runs it and
+        # reports its own children's maximum
+        proc = subprocess.run(
+            [sys.executable, "-c",
+             "import resource, subprocess, sys; "
+             "p = subprocess.run(sys.argv[1:]); "
+             "print('peak_rss_kib', resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,"
+             " file=sys.stderr); sys.exit(p.returncode)",
+             sys.executable, "-m", "ftlbo_mav", "plan", str(scenario), "-o", str(out)],
+            capture_output=True, text=True, cwd=ROOT, timeout=timeout_s)
+    except subprocess.TimeoutExpired:
+        return None
+    return time.perf_counter() - t0, proc
+
+
+def _peak_mib(proc: subprocess.CompletedProcess) -> float | None:
+    peak = re.search(r"peak_rss_kib (\d+)", proc.stderr)
+    return round(int(peak.group(1)) / 1024.0, 1) if peak else None
+
+
 def run_orchard(trees: int, *, timeout_s: float = 600.0) -> dict:
     """Plan the orchard of about ``trees`` trees once, in a fresh process."""
     rows, per_row = layout(trees)
@@ -144,25 +177,12 @@ def run_orchard(trees: int, *, timeout_s: float = 600.0) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         scenario = orchard_files(folder, rows=rows, per_row=per_row)
-        t0 = time.perf_counter()
-        try:
-            # the peak memory of this child alone: a fresh interpreter that runs it and
-            # reports its own children's maximum
-            proc = subprocess.run(
-                [sys.executable, "-c",
-                 "import resource, subprocess, sys; "
-                 "p = subprocess.run(sys.argv[1:]); "
-                 "print('peak_rss_kib', resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,"
-                 " file=sys.stderr); sys.exit(p.returncode)",
-                 sys.executable, "-m", "ftlbo_mav", "plan", str(scenario), "-o",
-                 str(folder / "out")],
-                capture_output=True, text=True, cwd=ROOT, timeout=timeout_s)
-        except subprocess.TimeoutExpired:
+        done = plan_process(scenario, folder / "out", timeout_s=timeout_s)
+        if done is None:
             return {"what": f"orchard {trees} trees", "trees": rows * per_row,
                     "seconds": None, "timeout_s": timeout_s}
-        seconds = time.perf_counter() - t0
+        seconds, proc = done
         out = proc.stdout + proc.stderr
-        peak = re.search(r"peak_rss_kib (\d+)", proc.stderr)
         clearance = re.search(r"flown path \(predicted\): clearance ([\d.]+) m", out)
         legs = re.search(r"(\d+) legs?,", out)
         plan = folder / "out" / "plan.json"
@@ -171,10 +191,67 @@ def run_orchard(trees: int, *, timeout_s: float = 600.0) -> dict:
         return {"what": f"orchard {trees} trees", "trees": rows * per_row, "rows": rows,
                 "lanes": lanes, "legs": int(legs.group(1)) if legs else None,
                 "seconds": round(seconds, 2),
-                "peak_rss_mib": round(int(peak.group(1)) / 1024.0, 1) if peak else None,
+                "peak_rss_mib": _peak_mib(proc),
                 "exit": proc.returncode, "feasible": proc.returncode == 0 and "feasible;" in out,
                 "clearance_m": float(clearance.group(1)) if clearance else None,
                 "last": out.strip().splitlines()[-3:]}
+
+
+ISSUE51_GOALS = [  # (what, shape, headland m, limit s, refused)
+    ("issue 51 orchard, a column through the aisles", "column", 18.0, 30.0, False),
+    ("issue 51 orchard, a line across the aisles (7 m apart)", "line7", 18.0, 30.0, False),
+    ("issue 51 orchard, 10 m headlands: refused", "column", 10.0, 5.0, True),
+    ("issue 51 orchard, a line 4 m apart across 7 m aisles: refused", "line", 18.0, 5.0, True),
+]
+REFUSED_EXIT = 2
+"""The exit code of a refused scenario (``cli_errors.user_errors``: a ScenarioError)."""
+
+
+def issue51_rows(*, timeout_s: float = 120.0) -> list[dict]:
+    """Issue 51's goals measured now, as rows of ``benchmarks/goals.py`` (its ``row``):
+    the 4,800-tree orchard (:data:`ISSUE51`) planned by a whole ``ftlbo-mav plan``
+    process within 30 s flown by a column through the aisles and by a line across them
+    (three UAVs 7 m apart, one an aisle: a line 4 m apart cannot be between the rows),
+    each feasible; the same orchard with 10 m headlands, where the 8 m column cannot
+    turn, and the 4 m line refused within 5 s with exit code :data:`REFUSED_EXIT`; and
+    every process's peak resident memory under 2 GiB (a row of its own). Each process is
+    killed after ``timeout_s`` seconds. The load average is in each row's note."""
+    from goals import row  # the benchmarks' one row format (run as a script, beside it)
+
+    compile_package()
+    rows, peaks = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (what, shape, headland, limit, refused) in enumerate(ISSUE51_GOALS):
+            folder = Path(tmp) / str(k)
+            folder.mkdir()
+            scenario = issue51_files(folder, shape=shape, headland_m=headland)
+            load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+            done = plan_process(scenario, folder / "out", timeout_s=timeout_s)
+            if done is None:
+                rows.append(row(what, "issue 51", f"<= {limit:g} s", f"timeout > {timeout_s:g} s",
+                                False, value=None, limit_value=limit,
+                                note=f"load {load} at the start"))
+                continue
+            seconds, proc = done
+            peak = _peak_mib(proc)
+            peaks.append(peak or 0.0)
+            text = proc.stdout + proc.stderr
+            if refused:
+                ok = proc.returncode == REFUSED_EXIT and "cannot be flown" in text
+                said = f"{seconds:.2f} s, exit {proc.returncode}" + ("" if ok else ", not refused")
+            else:
+                ok = proc.returncode == 0 and "feasible;" in text
+                said = f"{seconds:.2f} s" + ("" if ok else f", exit {proc.returncode}, infeasible")
+            rows.append(row(what, "issue 51", f"<= {limit:g} s" + (", exit 2" if refused else ""),
+                            said, ok and seconds <= limit, value=round(seconds, 2),
+                            limit_value=limit, peak_rss_mib=peak,
+                            note=f"load {load} at the start; benchmarks/orchard.py issue51_rows"))
+    top = max(peaks) if peaks else None
+    rows.append(row("issue 51 orchard, peak memory of every plan process", "issue 51",
+                    f"< {MEMORY_GOAL_MIB:g} MiB", f"{top} MiB" if top else "not measured",
+                    top is not None and top < MEMORY_GOAL_MIB, value=top,
+                    limit_value=MEMORY_GOAL_MIB, peak_rss_mib=top))
+    return rows
 
 
 def main() -> None:
@@ -184,10 +261,19 @@ def main() -> None:
                         help="an orchard of about this many trees (repeatable)")
     parser.add_argument("--json", default="orchard-benchmark.json", help="output JSON path")
     parser.add_argument("--timeout", type=float, default=600.0, help="seconds per plan")
+    parser.add_argument("--issue51", action="store_true",
+                        help="issue 51's goals only (issue51_rows), as goals.py's rows")
     args = parser.parse_args()
     sizes = args.trees or [5_000, 20_000]
     load = os.getloadavg()
     print(f"load average at start: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", flush=True)
+    if args.issue51:
+        rows = issue51_rows(timeout_s=args.timeout)
+        print(table(["goal", "limit", "measured", "peak MiB", "status", "note"],
+                    [[r["goal"], r["limit"], r["measured"], r["peak_rss_mib"], r["status"],
+                      r["note"]] for r in rows]))
+        Path(args.json).write_text(json.dumps({"load": load, "rows": rows}, indent=1) + "\n")
+        return
     rows = []
     for trees in sizes:
         row = run_orchard(trees, timeout_s=args.timeout)
