@@ -8,6 +8,8 @@ sentences a person can act on; empty means feasible.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .cost import segment_axis_distances
@@ -26,10 +28,17 @@ def violations(problem: PlanningProblem, path: np.ndarray, *, limit: int = 20) -
     uavs = path[None, :, :] + problem.offsets[:, None, :]  # (N, P, 3)
 
     if len(problem.radii):
-        d = segment_axis_distances(problem, path[None])[0]  # (J, N, K)
-        for j, n, k in zip(*np.nonzero(d <= problem.radii)):
+        # only the cylinders within their radius of the box around every UAV's points can
+        # be entered (a leg among thousands of trees passes a few hundred)
+        lo, hi = uavs[:, :, :2].min(axis=(0, 1)), uavs[:, :, :2].max(axis=(0, 1))
+        gap = np.maximum(np.maximum(lo - problem.centres, problem.centres - hi), 0.0)
+        near = np.flatnonzero(np.hypot(gap[:, 0], gap[:, 1]) <= problem.radii * (1 + 1e-9))
+        sub = replace(problem, centres=problem.centres[near], radii=problem.radii[near])
+        d = segment_axis_distances(sub, path[None])[0]  # (J, N, K')
+        for j, n, i in zip(*np.nonzero(d <= sub.radii)):
+            k = near[i]
             messages.append(
-                f"UAV {n + 1} segment {j}-{j + 1} passes {d[j, n, k]:.2f} m from the axis of "
+                f"UAV {n + 1} segment {j}-{j + 1} passes {d[j, n, i]:.2f} m from the axis of "
                 f"obstacle {k + 1} (needs more than {problem.radii[k]:.2f} m: radius + clearance)"
             )
     h = uavs[:, 1:-1, 2]

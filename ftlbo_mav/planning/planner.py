@@ -25,11 +25,12 @@ from .cost import INFEASIBLE, CostTerms, cost_terms, search_cost
 from .feasibility import violations
 from .geometric import lower_bound, shortest_routes
 from .optimizers import OPTIMIZERS, Objective
-from .optimizers.base import Progress
+from .optimizers.base import OptimizerResult, Progress
 from .plans import Leg, Plan, combine
 from .problem import PlanningProblem, problem_from_scenario
 from .repair import Attempt, better, fly_as_arducopter, until_kept
 from .seeds import RouteChains, seed_waypoints
+from .turns import check_survey_turns
 from .window import WINDOW_FROM, leg_sizes, leg_window
 
 AUTO_TARGET = 0.0008
@@ -88,6 +89,7 @@ def plan(
     }
     settings = replace(settings, **{k: v for k, v in overrides.items() if v is not None})
     _check_settings(settings)
+    check_survey_turns(scenario)  # a lane the formation cannot reach: before any planning
     check_size(scenario, settings)
     base = problem_from_scenario(scenario, waypoints=_count(settings))
 
@@ -358,17 +360,21 @@ def _optimize(problem: PlanningProblem, settings: PlannerSettings, rng: np.rando
     optimizer = OPTIMIZERS[settings.algorithm]
     t0 = time.perf_counter()
     extra = {}
+    result = None
     if getattr(optimizer, "wants_seeds", False):  # timed: the seeds are part of this planner
         seeds = seed_waypoints(problem, routes=routes, chains=chains)
         extra["seeds"] = seeds.reshape(len(seeds), 3 * m)
-    result = optimizer(
-        objective,
-        students=settings.students,
-        iterations=settings.iterations,
-        rng=rng,
-        progress=progress,
-        **extra,
-    )
+        result = _seed_at_optimum(problem, objective, extra["seeds"][0], settings.iterations,
+                                  progress) if len(seeds) else None
+    if result is None:
+        result = optimizer(
+            objective,
+            students=settings.students,
+            iterations=settings.iterations,
+            rng=rng,
+            progress=progress,
+            **extra,
+        )
     seconds = time.perf_counter() - t0
     best = result.x.reshape(1, m, 3)
     terms = CostTerms(*(float(t[0]) for t in cost_terms(problem, best)))
@@ -386,3 +392,24 @@ def _optimize(problem: PlanningProblem, settings: PlannerSettings, rng: np.rando
         searched=searched,
     )
 
+
+def _seed_at_optimum(problem: PlanningProblem, objective: Objective, seed: np.ndarray,
+                     iterations: int, progress: Progress | None) -> OptimizerResult | None:
+    """The seed ``(3 m,)`` as the optimizer's result when no path can cost less, else
+    ``None``. Every path is at least as long as the straight line from start to goal, and
+    the safety and task terms are never negative: a seed with both terms 0 (no cylinder
+    in the leg's window, every UAV inside the altitude band) and the straight line's
+    length (to 1e-12, the rounding of its waypoints on the line) is the optimum, which
+    FTLBO would keep (it only takes a student that costs less) after its ``PATIENCE``
+    iterations of some 200 evaluations each. A survey's turns between aisles are such
+    legs: half the legs of issue 51's orchard."""
+    x = objective.clip(seed[None, :])
+    terms = cost_terms(problem, x.reshape(1, -1, 3))
+    straight = float(np.linalg.norm(problem.goal - problem.start))
+    if not (terms.safety[0] == 0.0 and terms.task[0] == 0.0
+            and terms.total[0] <= problem.weights[0] * straight * (1 + 1e-12)):
+        return None
+    cost = float(search_cost(problem, x.reshape(1, -1, 3))[0])
+    if progress is not None:
+        progress(iterations, iterations, cost)
+    return OptimizerResult(x[0].copy(), cost, np.full(iterations, cost), 1)
