@@ -14,8 +14,10 @@ from dataclasses import dataclass, field
 
 import pytest
 
+from ftlbo_mav.clock import VirtualClock
 from ftlbo_mav.sim.faults import Faults
 from ftlbo_mav.sim.homes import default_homes
+from ftlbo_mav.sim.inprocess import InProcessSimulator
 from ftlbo_mav.sim.radio import SharedRadio
 from ftlbo_mav.sim.router import RadioRouter
 from ftlbo_mav.sim.server import Simulator
@@ -68,10 +70,19 @@ def _behind(fleet: Fleet, radio, *, seed: int, speedup: float):
 
 
 @contextmanager
+def _in_process(**settings):
+    """An :class:`InProcessSimulator` and the virtual clock it runs on (the calling thread
+    with it until the block ends)."""
+    with VirtualClock(), InProcessSimulator(**settings) as sim:
+        yield sim
+
+
+@contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
              shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0,
              params: dict[str, float] | None = None, radio=None, router: bool = False,
-             copters: list[tuple[str, dict[str, float]]] | None = None):
+             copters: list[tuple[str, dict[str, float]]] | None = None,
+             virtual: bool = False):
     """``count`` vehicles, system ids 1..count, ready for uploads; ``homes`` (default a
     row at SITL's default location) and ``speedup`` (the emulator's time scale, SITL's
     --speedup) for flights; ``params``: parameters every vehicle boots with (SITL: a
@@ -80,7 +91,11 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
     or with ``router`` (always on SITL) a :class:`~ftlbo_mav.sim.router.RadioRouter`
     between the vehicles' TCP ports and the ground station. ``copters``: per vehicle its
     release (``"4.5.6"`` or ``"4.6.3"``) and the parameters it boots with (a fleet of
-    different copters; on SITL a 4.6 copter needs ARDUPILOT_SITL_4_6)."""
+    different copters; on SITL a 4.6 copter needs ARDUPILOT_SITL_4_6). ``virtual``: on the
+    emulator, the copters inside this process and the test with them on a virtual clock
+    (:mod:`ftlbo_mav.sim.inprocess`, ``emu:`` URLs; ``speedup`` unused): the flight costs
+    only its computation, for a test whose wall time is not what it tests; the test's
+    waits go through :mod:`ftlbo_mav.clock` (no sockets, threads or sleeps of its own)."""
     homes = default_homes(count) if homes is None else homes
     emulator_only = faults is not None or options is not None or signing_key or shared_link
     if BACKEND == "sitl":
@@ -116,6 +131,18 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
 
         base = options if options is not None else FAST
         options = [fleet_options(base, 1, firmware=[release])[0] for release, _p in copters]
+    if virtual:
+        if udp_out is not None or radio is not None:
+            raise ValueError("a virtual clock's copters have no shared link or radio")
+        with _in_process(homes=homes, faults=faults if faults is not None else Faults(),
+                         options=options if options is not None else FAST,
+                         signing_key=signing_key, seed=seed) as sim:
+            if params:
+                sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
+            for v, (_r, values) in zip(sim.vehicles if copters else (), copters or ()):
+                sim.call(lambda v=v, values=values: v.autopilot.params.update(values))
+            yield Fleet(urls=sim.urls, sim=sim, serial1_urls=sim.serial1_urls, kill=sim.kill)
+        return
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
