@@ -13,8 +13,10 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import pytest
+from pymavlink import mavutil
 
 from ftlbo_mav.clock import VirtualClock
+from ftlbo_mav.link.addresses import in_process
 from ftlbo_mav.sim.faults import Faults
 from ftlbo_mav.sim.homes import default_homes
 from ftlbo_mav.sim.inprocess import InProcessSimulator
@@ -35,7 +37,8 @@ class Fleet:
     """Running vehicles: ``urls[i]`` reaches system id i+1, ``serial1_urls[i]`` its
     second port (SITL's SERIAL1: another station, a pilot); ``kill(i)`` ends vehicle i
     as a crash does (its SITL process killed by pid, or the emulator's ``kill``);
-    ``sim`` is the emulator, if any."""
+    ``sim`` is the emulator, if any; ``time_scale``: the vehicles' seconds per second of
+    the test's clock (:mod:`ftlbo_mav.clock`: 1 on a virtual clock)."""
 
     urls: list[str]
     sim: Simulator | None = None
@@ -44,10 +47,22 @@ class Fleet:
     serial1_urls: list[str] = field(default_factory=list)
     kill: Callable[[int], None] | None = None
     radio: SharedRadio | None = None  # the shared link's radio, if any
+    time_scale: float = 1.0
 
     def missions(self) -> list[list]:
         """What each emulated vehicle stores (emulator only)."""
         return self.sim.call(lambda: [list(v.missions.items) for v in self.sim.vehicles])
+
+
+def connect(url: str, *, source_system: int):
+    """A pymavlink connection to ``url`` (a TCP port, or an in-process vehicle's ``emu:``
+    one) for a test's own station; read it with ``recv_match(blocking=False)`` and
+    ``select(timeout)``, which wait on the test's clock."""
+    opened = in_process(url)
+    if opened is not None:
+        return opened(url, source_system=source_system, source_component=0)
+    return mavutil.mavlink_connection(url, source_system=source_system,
+                                      dialect="ardupilotmega", retries=10)
 
 
 def free_udp_port() -> int:
@@ -93,9 +108,10 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
     release (``"4.5.6"`` or ``"4.6.3"``) and the parameters it boots with (a fleet of
     different copters; on SITL a 4.6 copter needs ARDUPILOT_SITL_4_6). ``virtual``: on the
     emulator, the copters inside this process and the test with them on a virtual clock
-    (:mod:`ftlbo_mav.sim.inprocess`, ``emu:`` URLs; ``speedup`` unused): the flight costs
-    only its computation, for a test whose wall time is not what it tests; the test's
-    waits go through :mod:`ftlbo_mav.clock` (no sockets, threads or sleeps of its own)."""
+    (:mod:`ftlbo_mav.sim.inprocess`, ``emu:`` URLs; ``speedup`` unused, ``time_scale``
+    1): the flight costs only its computation, for a test whose wall time is not what it
+    tests; the test's waits go through :mod:`ftlbo_mav.clock` (no sockets, threads or
+    sleeps of its own; :func:`connect` for a station of its own). SITL ignores it."""
     homes = default_homes(count) if homes is None else homes
     emulator_only = faults is not None or options is not None or signing_key or shared_link
     if BACKEND == "sitl":
@@ -118,7 +134,7 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
                            instance_params=own) as swarm:
                 serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
                 fleet = Fleet(urls=swarm.urls, serial1_urls=serial1,
-                              kill=lambda i: swarm.processes[i].kill())
+                              kill=lambda i: swarm.processes[i].kill(), time_scale=speedup)
                 with _behind(fleet, radio, seed=seed, speedup=speedup):
                     yield fleet
         finally:
@@ -153,6 +169,7 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
         for v, (_r, values) in zip(sim.vehicles if copters else (), copters or ()):
             sim.call(lambda v=v, values=values: v.autopilot.params.update(values))
         fleet = Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
-                      serial1_urls=sim.serial1_urls, kill=sim.kill, radio=sim.radio)
+                      serial1_urls=sim.serial1_urls, kill=sim.kill, radio=sim.radio,
+                      time_scale=speedup)
         with _behind(fleet, None if own_radio else radio, seed=seed, speedup=speedup):
             yield fleet
