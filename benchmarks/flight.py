@@ -36,7 +36,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from ftlbo_mav import clock
 from ftlbo_mav.ardupilot.copters import PROFILES
+from ftlbo_mav.clock import VirtualClock
 from ftlbo_mav.flight.fly import (
     Fleet,
     FlyOptions,
@@ -170,9 +172,9 @@ def fly_once(plan_dir: Path, urls, strategy: str, keep: Path | None = None, *,
                 v.arm(budget_s=60)
                 v.takeoff(takeoff_item(m)[1])
             naive_start(planned, fleet.vehicles)
-            deadline = time.monotonic() + 300
-            while not finished(planned, fleet.vehicles) and time.monotonic() < deadline:
-                time.sleep(0.1)
+            deadline = clock.monotonic() + 300
+            while not finished(planned, fleet.vehicles) and clock.monotonic() < deadline:
+                clock.sleep(0.1)
         else:
             options = FlyOptions(keeper=KeeperOptions(enabled=strategy == "fly"))
             keeper = make_keeper(planned, options.keeper)
@@ -224,7 +226,7 @@ class UploadFailed(Exception):
 def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None,
               speedup: float = 1.0, seed: int = 0, vary: bool = False,
               params=(), wind=None, keep: Path | None = None, radio=None,
-              profile: str | None = None) -> dict:
+              profile: str | None = None, virtual: bool = False) -> dict:
     """One flight of ``plan_dir`` on freshly started vehicles (SITL when ``binary``, else
     the emulator, ``vary`` and ``seed`` giving each copter its differences) flown the
     ``strategy`` way, in ``wind`` (SPD, DIR, TURB: SITL's SIM_WIND_* set on each instance,
@@ -234,7 +236,23 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
     (SITL: the router, sim/router.py; the emulator: its shared link), seeded by ``seed``.
     ``profile`` (a :data:`~ftlbo_mav.ardupilot.copters.PROFILES` name): every copter with
     that board's values (SITL: a defaults file after copter.parm; the emulator: each
-    vehicle booted with them)."""
+    vehicle booted with them). ``virtual``: the emulated copters in this process, flown
+    with the ground station on a virtual clock (:mod:`ftlbo_mav.sim.inprocess`; no radio,
+    ``speedup`` unused): the flight costs only its computation."""
+    if virtual:
+        if binary or radio is not None:
+            raise ValueError("a virtual clock flies the emulator's copters, no radio")
+        with VirtualClock():
+            return _fly_fresh(plan_dir, homes, strategy, binary=None, speedup=speedup,
+                              seed=seed, vary=vary, params=params, wind=wind, keep=keep,
+                              radio=None, profile=profile, virtual=True)
+    return _fly_fresh(plan_dir, homes, strategy, binary=binary, speedup=speedup, seed=seed,
+                      vary=vary, params=params, wind=wind, keep=keep, radio=radio,
+                      profile=profile, virtual=False)
+
+
+def _fly_fresh(plan_dir: Path, homes, strategy: str, *, binary, speedup, seed, vary, params,
+               wind, keep, radio, profile, virtual: bool) -> dict:
     planned = load_planned_flight(plan_dir)
     udp_out = ("127.0.0.1", free_udp_port()) if radio is not None else None
     n = len(homes)
@@ -245,14 +263,17 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
                           instance_params=[PROFILES[profile].params] * n if profile else None)
     else:
         from ftlbo_mav.sim.commands import fleet_options
+        from ftlbo_mav.sim.inprocess import InProcessSimulator
         from ftlbo_mav.sim.server import Simulator
         from ftlbo_mav.sim.vehicle import VehicleOptions
 
         options = (fleet_options(VehicleOptions(), n, profile=[profile]) if profile
                    else None)
-        swarm = Simulator(homes=homes, base_port=0, time_scale=speedup, seed=seed, vary=vary,
-                          udp_out=udp_out, radio=radio, options=options,
-                          **({"wind": wind} if wind else {}))
+        settings = {"homes": homes, "seed": seed, "vary": vary, "options": options,
+                    **({"wind": wind} if wind else {})}
+        swarm = (InProcessSimulator(**settings) if virtual else
+                 Simulator(base_port=0, time_scale=speedup, udp_out=udp_out, radio=radio,
+                           **settings))
     with swarm as started, contextlib.ExitStack() as stack:
         vehicles = _Urls(started.urls, None)
         if radio is not None and binary:
@@ -266,9 +287,9 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
         # as `ftlbo-mav upload` sends them: mission, the fence and rally points if any,
         # and the plan's [vehicle] parameters
         assignments = planned.assignments()
-        t0 = time.monotonic()
+        t0 = clock.monotonic()
         results = upload_swarm(assignments, vehicles.urls, timing=Timing())
-        upload_s = time.monotonic() - t0
+        upload_s = clock.monotonic() - t0
         failed = [r for r in results if not r.verified]
         if failed:
             raise UploadFailed("; ".join(f"upload failed: {r.name} -> sysid {r.sysid}: "

@@ -183,6 +183,12 @@ class InProcessSimulator:
             if conn.on_data is not None:
                 conn.on_data()
 
+    def call(self, fn: Callable[[], object]):
+        """``fn()`` with the vehicles still (between two steps) and its result: inspection,
+        as :meth:`Simulator.call <ftlbo_mav.sim.server.Simulator.call>`."""
+        with self.lock:
+            return fn()
+
     # -- the runners' loop (VehicleRunner: what a fault delays)
     def call_later(self, delay: float, fn: Callable, *args) -> None:
         heapq.heappush(self._later, (clock.monotonic() + delay, next(self._order), fn, args))

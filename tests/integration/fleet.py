@@ -13,9 +13,13 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import pytest
+from pymavlink import mavutil
 
+from ftlbo_mav.clock import VirtualClock
+from ftlbo_mav.link.addresses import in_process
 from ftlbo_mav.sim.faults import Faults
 from ftlbo_mav.sim.homes import default_homes
+from ftlbo_mav.sim.inprocess import InProcessSimulator
 from ftlbo_mav.sim.radio import SharedRadio
 from ftlbo_mav.sim.router import RadioRouter
 from ftlbo_mav.sim.server import Simulator
@@ -33,7 +37,8 @@ class Fleet:
     """Running vehicles: ``urls[i]`` reaches system id i+1, ``serial1_urls[i]`` its
     second port (SITL's SERIAL1: another station, a pilot); ``kill(i)`` ends vehicle i
     as a crash does (its SITL process killed by pid, or the emulator's ``kill``);
-    ``sim`` is the emulator, if any."""
+    ``sim`` is the emulator, if any; ``time_scale``: the vehicles' seconds per second of
+    the test's clock (:mod:`ftlbo_mav.clock`: 1 on a virtual clock)."""
 
     urls: list[str]
     sim: Simulator | None = None
@@ -42,10 +47,22 @@ class Fleet:
     serial1_urls: list[str] = field(default_factory=list)
     kill: Callable[[int], None] | None = None
     radio: SharedRadio | None = None  # the shared link's radio, if any
+    time_scale: float = 1.0
 
     def missions(self) -> list[list]:
         """What each emulated vehicle stores (emulator only)."""
         return self.sim.call(lambda: [list(v.missions.items) for v in self.sim.vehicles])
+
+
+def connect(url: str, *, source_system: int):
+    """A pymavlink connection to ``url`` (a TCP port, or an in-process vehicle's ``emu:``
+    one) for a test's own station; read it with ``recv_match(blocking=False)`` and
+    ``select(timeout)``, which wait on the test's clock."""
+    opened = in_process(url)
+    if opened is not None:
+        return opened(url, source_system=source_system, source_component=0)
+    return mavutil.mavlink_connection(url, source_system=source_system,
+                                      dialect="ardupilotmega", retries=10)
 
 
 def free_udp_port() -> int:
@@ -68,10 +85,19 @@ def _behind(fleet: Fleet, radio, *, seed: int, speedup: float):
 
 
 @contextmanager
+def _in_process(**settings):
+    """An :class:`InProcessSimulator` and the virtual clock it runs on (the calling thread
+    with it until the block ends)."""
+    with VirtualClock(), InProcessSimulator(**settings) as sim:
+        yield sim
+
+
+@contextmanager
 def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | None = None,
              shared_link: bool = False, seed: int = 0, homes=None, speedup: float = 1.0,
              params: dict[str, float] | None = None, radio=None, router: bool = False,
-             copters: list[tuple[str, dict[str, float]]] | None = None):
+             copters: list[tuple[str, dict[str, float]]] | None = None,
+             virtual: bool = False):
     """``count`` vehicles, system ids 1..count, ready for uploads; ``homes`` (default a
     row at SITL's default location) and ``speedup`` (the emulator's time scale, SITL's
     --speedup) for flights; ``params``: parameters every vehicle boots with (SITL: a
@@ -80,7 +106,12 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
     or with ``router`` (always on SITL) a :class:`~ftlbo_mav.sim.router.RadioRouter`
     between the vehicles' TCP ports and the ground station. ``copters``: per vehicle its
     release (``"4.5.6"`` or ``"4.6.3"``) and the parameters it boots with (a fleet of
-    different copters; on SITL a 4.6 copter needs ARDUPILOT_SITL_4_6)."""
+    different copters; on SITL a 4.6 copter needs ARDUPILOT_SITL_4_6). ``virtual``: on the
+    emulator, the copters inside this process and the test with them on a virtual clock
+    (:mod:`ftlbo_mav.sim.inprocess`, ``emu:`` URLs; ``speedup`` unused, ``time_scale``
+    1): the flight costs only its computation, for a test whose wall time is not what it
+    tests; the test's waits go through :mod:`ftlbo_mav.clock` (no sockets, threads or
+    sleeps of its own; :func:`connect` for a station of its own). SITL ignores it."""
     homes = default_homes(count) if homes is None else homes
     emulator_only = faults is not None or options is not None or signing_key or shared_link
     if BACKEND == "sitl":
@@ -103,7 +134,7 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
                            instance_params=own) as swarm:
                 serial1 = [f"tcp:127.0.0.1:{int(u.rsplit(':', 1)[1]) + 2}" for u in swarm.urls]
                 fleet = Fleet(urls=swarm.urls, serial1_urls=serial1,
-                              kill=lambda i: swarm.processes[i].kill())
+                              kill=lambda i: swarm.processes[i].kill(), time_scale=speedup)
                 with _behind(fleet, radio, seed=seed, speedup=speedup):
                     yield fleet
         finally:
@@ -116,6 +147,18 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
 
         base = options if options is not None else FAST
         options = [fleet_options(base, 1, firmware=[release])[0] for release, _p in copters]
+    if virtual:
+        if udp_out is not None or radio is not None:
+            raise ValueError("a virtual clock's copters have no shared link or radio")
+        with _in_process(homes=homes, faults=faults if faults is not None else Faults(),
+                         options=options if options is not None else FAST,
+                         signing_key=signing_key, seed=seed) as sim:
+            if params:
+                sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
+            for v, (_r, values) in zip(sim.vehicles if copters else (), copters or ()):
+                sim.call(lambda v=v, values=values: v.autopilot.params.update(values))
+            yield Fleet(urls=sim.urls, sim=sim, serial1_urls=sim.serial1_urls, kill=sim.kill)
+        return
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),
                    options=options if options is not None else FAST,
@@ -126,6 +169,7 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
         for v, (_r, values) in zip(sim.vehicles if copters else (), copters or ()):
             sim.call(lambda v=v, values=values: v.autopilot.params.update(values))
         fleet = Fleet(urls=sim.urls, sim=sim, udp_url=sim.udp_url,
-                      serial1_urls=sim.serial1_urls, kill=sim.kill, radio=sim.radio)
+                      serial1_urls=sim.serial1_urls, kill=sim.kill, radio=sim.radio,
+                      time_scale=speedup)
         with _behind(fleet, None if own_radio else radio, seed=seed, speedup=speedup):
             yield fleet

@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import json
 import re
-import time
 from pathlib import Path
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ftlbo_mav import clock
 from ftlbo_mav.mission.export import write_plan
 from ftlbo_mav.planning.planner import plan
 from ftlbo_mav.scenario import load_scenario
@@ -49,12 +49,12 @@ def _reset(port: SecondPort, percent: float) -> None:
 
 
 def test_a_copter_without_the_charge_for_its_mission_is_refused(battery_plan, tmp_path):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(battery_plan, fleet.urls)
         port = SecondPort(fleet.serial1_urls[1], 2)
         try:
             _reset(port, 8)  # 264 mAh: the mission needs ~230 and the reserve 825
-            result, _took = _fly_with(battery_plan, fleet.urls, time.monotonic)
+            result, _took = _fly_with(battery_plan, fleet.urls, clock.monotonic)
             assert not port.wait(lambda p: p.armed, 1.0)
         finally:
             port.close()
@@ -66,14 +66,14 @@ def test_a_copter_without_the_charge_for_its_mission_is_refused(battery_plan, tm
 
 
 def test_a_copter_running_short_mid_leg_is_a_departure_and_the_flight_ends(battery_plan):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(battery_plan, fleet.urls)
         port = SecondPort(fleet.serial1_urls[1], 2)
 
         def fault():
-            _in_auto_for(port, 3.0)
+            _in_auto_for(port, 3.0, fleet.time_scale)
             _reset(port, 12)  # 396 mAh: less than what is left and half the reserve
-            return time.monotonic()
+            return clock.monotonic()
 
         try:
             result, took = _fly_with(battery_plan, fleet.urls, fault)

@@ -13,14 +13,13 @@ import json
 import shutil
 import socket
 import threading
-import time
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ftlbo_mav import clock
 from ftlbo_mav.ardupilot.modes import CopterMode, mode_name
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, abort, start_together, take_off
@@ -30,7 +29,7 @@ from ftlbo_mav.sim.homes import scenario_homes
 from ftlbo_mav.sim.vehicle import VehicleOptions
 
 from ..conftest import EXAMPLE
-from .fleet import BACKEND, vehicles
+from .fleet import BACKEND, connect, vehicles
 
 pytestmark = pytest.mark.sitl
 
@@ -62,21 +61,24 @@ class SecondPort:
 
     def __init__(self, url: str, sysid: int) -> None:
         self.sysid = sysid
-        self.conn = mavutil.mavlink_connection(url, source_system=246,
-                                               dialect="ardupilotmega", retries=10)
+        self.conn = connect(url, source_system=246)
         self.mode, self.armed, self.texts = "?", False, []
-        self.seq, self._asked = -1, 0.0
+        self.seq, self._asked = -1, -1e9
 
     def wait(self, predicate, timeout_s: float) -> bool:
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
-            if self.seq < 0 and time.monotonic() - self._asked > 1.0:
-                self._asked = time.monotonic()  # MISSION_CURRENT at 5 Hz on this port
+        """Until ``predicate(self)`` holds (True) or ``timeout_s`` of the test's clock pass."""
+        deadline = clock.monotonic() + timeout_s
+        while clock.monotonic() < deadline:
+            if self.seq < 0 and clock.monotonic() - self._asked > 1.0:
+                self._asked = clock.monotonic()  # MISSION_CURRENT at 5 Hz on this port
                 self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_SET_MESSAGE_INTERVAL,
                                                 0, R.MAVLINK_MSG_ID_MISSION_CURRENT, 200_000,
                                                 0, 0, 0, 0, 0)
-            msg = self.conn.recv_match(blocking=True, timeout=0.1)
-            if msg is None or msg.get_srcSystem() != self.sysid:
+            msg = self.conn.recv_match(blocking=False)
+            if msg is None:
+                self.conn.select(min(0.1, max(0.0, deadline - clock.monotonic())))
+                continue
+            if msg.get_srcSystem() != self.sysid:
                 continue
             if msg.get_type() == "MISSION_CURRENT":
                 self.seq = msg.seq
@@ -122,9 +124,9 @@ def _fly_with(plan_dir: Path, urls, fault, *extra):
         holder["result"] = CliRunner().invoke(
             main, ["fly", str(plan_dir), "--sysid", "1..3", "--control-port", "0",
                    "--no-keeper", "--connect", " ".join(urls), *extra])
-        holder["end"] = time.monotonic()
+        holder["end"] = clock.monotonic()
 
-    thread = threading.Thread(target=run)
+    thread = clock.Thread(run, name="fly")
     thread.start()
     try:
         fault_t = fault()
@@ -140,10 +142,11 @@ def _fly_with(plan_dir: Path, urls, fault, *extra):
 START_GATE = 3  # the example's start gate: its legs begin after it (fly's timed start)
 
 
-def _in_auto_for(port: SecondPort, seconds: float) -> None:
-    """``seconds`` (the vehicles') into the legs."""
+def _in_auto_for(port: SecondPort, seconds: float, time_scale: float) -> None:
+    """``seconds`` (the vehicles') into the legs; ``time_scale``: the vehicles' seconds per
+    second of the test's clock (:attr:`Fleet.time_scale <.fleet.Fleet.time_scale>`)."""
     assert port.wait(lambda p: p.armed and p.mode == "AUTO" and p.seq > START_GATE, 120.0)
-    port.wait(lambda p: False, seconds / SPEEDUP)
+    port.wait(lambda p: False, seconds / time_scale)
 
 
 def _summary(plan_dir: Path) -> dict:
@@ -151,14 +154,14 @@ def _summary(plan_dir: Path) -> dict:
 
 
 def test_a_vehicle_lost_mid_leg_stops_the_others_and_the_flight_ends(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         watcher = SecondPort(fleet.serial1_urls[0], 1)
 
         def fault():
-            _in_auto_for(watcher, 4.0)
+            _in_auto_for(watcher, 4.0, fleet.time_scale)
             fleet.kill(1)  # uav2's autopilot dies (SITL: its process, by pid)
-            return time.monotonic()
+            return clock.monotonic()
 
         try:
             result, took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
@@ -185,15 +188,15 @@ def test_a_vehicle_lost_mid_leg_stops_the_others_and_the_flight_ends(plan_dir):
 
 
 def test_a_mode_taken_over_from_a_second_port_is_left_alone(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         pilot = SecondPort(fleet.serial1_urls[2], 3)
         times = {}
 
         def fault():
-            _in_auto_for(pilot, 4.0)
+            _in_auto_for(pilot, 4.0, fleet.time_scale)
             pilot.set_mode("BRAKE")  # uav3's pilot (or a failsafe) takes it over
-            times["sent"] = time.monotonic()
+            times["sent"] = clock.monotonic()
             return times["sent"]
 
         try:
@@ -218,14 +221,14 @@ def test_a_formation_that_falls_apart_is_a_departure_not_a_silent_exit_0(plan_di
     example) and, a second later, the flight counts it a departure and answers it."""
     bound = load_planned_flight(plan_dir).formation_bound_m
     assert 0.5 < bound < 1.0
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         other = SecondPort(fleet.serial1_urls[1], 2)
 
         def fault():
-            _in_auto_for(other, 6.0)
+            _in_auto_for(other, 6.0, fleet.time_scale)
             other.pause(True)
-            return time.monotonic()
+            return clock.monotonic()
 
         try:
             result, took = _fly_with(plan_dir, fleet.urls, fault)
@@ -245,14 +248,14 @@ def test_a_formation_that_falls_apart_is_a_departure_not_a_silent_exit_0(plan_di
 def test_a_fence_crossed_in_flight_is_seen_and_answered(plan_dir):
     """Another station lowers uav1's FENCE_ALT_MAX below the flight: ArduCopter says
     "Fence Breached" and takes FENCE_ACTION's mode (brake)."""
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         station = SecondPort(fleet.serial1_urls[0], 1)
 
         def fault():
-            _in_auto_for(station, 3.0)
+            _in_auto_for(station, 3.0, fleet.time_scale)
             station.set_param("FENCE_ALT_MAX", 5.0)
-            return time.monotonic()
+            return clock.monotonic()
 
         try:
             result, took = _fly_with(plan_dir, fleet.urls, fault)
@@ -338,10 +341,10 @@ def test_a_link_that_drops_and_returns_is_picked_up_again(plan_dir):
         urls = [fleet.urls[0], bridge.url, fleet.urls[2]]
 
         def fault():
-            _in_auto_for(watcher, 3.0)
+            _in_auto_for(watcher, 3.0, fleet.time_scale)
             bridge.drop()
-            t = time.monotonic()
-            time.sleep(3.0)  # the radio is out of range for 3 s (wall clock)
+            t = clock.monotonic()
+            clock.sleep(3.0)  # the radio is out of range for 3 s (wall clock)
             bridge.restore()
             return t
 
@@ -373,17 +376,17 @@ def test_abort_with_a_dead_link_answers_per_vehicle_within_two_seconds(plan_dir)
             start_together(planned, flying.vehicles)
             fleet.kill(2)
             assert flying.vehicles[2].wait_for(lambda s: False, 0.5) is False
-            t0 = time.monotonic()
+            t0 = clock.monotonic()
             late = abort(flying.vehicles, mode="LAND")
-            took = time.monotonic() - t0
+            took = clock.monotonic() - t0
         assert late == ["uav3"]
         assert took < 2.0
         # the command line, on links of its own: a line per vehicle, the dead one named
-        t0 = time.monotonic()
+        t0 = clock.monotonic()
         result = CliRunner().invoke(main, ["abort", "--sysid", "1..3", "--land",
                                            "--control-port", "0",
                                            "--connect", " ".join(fleet.urls)])
-        took = time.monotonic() - t0
+        took = clock.monotonic() - t0
     assert result.exit_code == 1, result.output
     assert "Traceback" not in result.output
     assert "sysid 1: LAND" in result.stdout and "sysid 2: LAND" in result.stdout
@@ -410,16 +413,16 @@ def test_departures_are_seen_within_their_deadlines(plan_dir):
                 fw.expect("AUTO")
 
                 def seen_after(kind: str, t0: float) -> float:
-                    while time.monotonic() - t0 < 10.0:
+                    while clock.monotonic() - t0 < 10.0:
                         if any(e.kind == kind for e in fw.poll()):
-                            return time.monotonic() - t0
-                        time.sleep(0.05)
+                            return clock.monotonic() - t0
+                        clock.sleep(0.05)
                     return float("inf")
 
-                t0 = time.monotonic()
+                t0 = clock.monotonic()
                 pilot.set_mode("LOITER")
                 mode_s = seen_after("mode", t0)
-                t0 = time.monotonic()
+                t0 = clock.monotonic()
                 fleet.kill(1)
                 lost_s = seen_after("link lost", t0)
                 abort([flying.vehicles[0]], mode="LAND")
@@ -435,19 +438,19 @@ def test_monitor_lists_a_vehicle_that_leaves_its_mission(plan_dir):
     """``monitor`` on the vehicles' SERIAL1 ports while they fly on SERIAL0: a switch to
     LOITER in the middle of the mission is listed, and monitor exits 1."""
     planned = load_planned_flight(plan_dir)
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         holder = {}
         with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
             take_off(planned, flying.vehicles, FlyOptions(), say=lambda _t: None)
-            thread = threading.Thread(target=lambda: holder.setdefault(
+            thread = clock.Thread(lambda: holder.setdefault(
                 "result", CliRunner().invoke(main, [
                     "monitor", str(plan_dir), "--sysid", "1..3", "--duration", "10",
                     "--log-dir", str(plan_dir / "watched"),
-                    "--connect", " ".join(fleet.serial1_urls)])))
+                    "--connect", " ".join(fleet.serial1_urls)])), name="monitor")
             thread.start()
             start_together(planned, flying.vehicles)
-            flying.vehicles[0].wait_for(lambda s: False, 2.0 / SPEEDUP + 1.0)
+            flying.vehicles[0].wait_for(lambda s: False, 2.0 / fleet.time_scale + 1.0)
             flying.vehicles[0].set_mode("LOITER")  # as a pilot would
             thread.join(timeout=60)
             abort(flying.vehicles, mode="LAND")

@@ -7,11 +7,11 @@ says what is not promised. The emulator only: SITL reports the version it was bu
 from __future__ import annotations
 
 import json
-import time
 from dataclasses import replace
 
 from click.testing import CliRunner
 
+from ftlbo_mav import clock
 from ftlbo_mav.ardupilot.firmware import Firmware
 from ftlbo_mav.cli import main
 from ftlbo_mav.sim.vehicle import VehicleOptions
@@ -32,10 +32,10 @@ def _upload_anyway(folder, urls) -> str:
 
 
 def test_fly_refuses_a_copter_on_another_firmware_before_arming(plan_dir):  # noqa: F811
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=FLEET) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, options=FLEET) as fleet:
         assert "uav2 (sysid 2): firmware: it runs 4.4.4 official" in _upload_anyway(
             plan_dir, fleet.urls)
-        result, _took = _fly_with(plan_dir, fleet.urls, time.monotonic)
+        result, _took = _fly_with(plan_dir, fleet.urls, clock.monotonic)
         armed = fleet.sim.call(lambda: [v.state.armed for v in fleet.sim.vehicles])
     out = result.output
     assert result.exit_code != 0, out
@@ -47,11 +47,11 @@ def test_fly_refuses_a_copter_on_another_firmware_before_arming(plan_dir):  # no
 
 
 def test_any_firmware_flies_and_says_what_is_not_promised(plan_dir):  # noqa: F811
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=FLEET) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, options=FLEET) as fleet:
         _upload_anyway(plan_dir, fleet.urls)
         # (a loose formation bound: at 12x without the keeper the ground's timing under a
         # busy machine is what a bound would judge; this test is about the firmware)
-        result, _took = _fly_with(plan_dir, fleet.urls, time.monotonic, "--any-firmware",
+        result, _took = _fly_with(plan_dir, fleet.urls, clock.monotonic, "--any-firmware",
                                   "--formation-bound", "5")
     out = result.output
     assert result.exit_code == 0, out

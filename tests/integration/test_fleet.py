@@ -52,7 +52,7 @@ def _fly(plan_dir, urls):
 
 
 def test_three_solos_are_uploaded_to_without_a_tuning_parameter_written(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP,
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True,
                   copters=[("4.5.6", SOLO)] * 3) as fleet:
         result = _upload(plan_dir, fleet.urls)
         after = {name: _read_param(fleet.urls[1], 2, name) for name in TUNING}
@@ -78,7 +78,8 @@ def _flown_as_promised(plan_dir, predicted_clearance: float, worst_m: float = 0.
 
 
 def test_three_solos_fly_the_plan_with_their_own_tuning(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=[("4.5.6", SOLO)] * 3) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True,
+                  copters=[("4.5.6", SOLO)] * 3) as fleet:
         uploaded = _upload(plan_dir, fleet.urls)
         result = _fly(plan_dir, fleet.urls)
         after = _read_param(fleet.urls[0], 1, "ATC_INPUT_TC")
@@ -93,7 +94,7 @@ def test_three_solos_fly_the_plan_with_their_own_tuning(plan_dir):
 def test_a_fleet_of_two_releases_flies_the_plan_as_predicted(plan_dir):
     """ArduCopter 4.5.6, 4.6.3 and 4.5.6, each with its defaults."""
     copters = [("4.5.6", {}), ("4.6.3", {}), ("4.5.6", {})]
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, copters=copters) as fleet:
         uploaded = _upload(plan_dir, fleet.urls)
         result = _fly(plan_dir, fleet.urls)
     # 4.6.3's own default PSC_VELXY_D (0.25) and its release
@@ -110,7 +111,7 @@ def test_a_solo_among_default_copters_is_uploaded_saying_how_far_it_lags(plan_di
     up; fly's formation keeper makes that up (ArduCopter 4.5.6 SITL: 0.30 m worst, the
     Solo 0.40 m behind at most), so upload says it and goes on."""
     copters = [("4.5.6", {}), ("4.5.6", {}), ("4.5.6", SOLO)]
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, copters=copters) as fleet:
         uploaded = _upload(plan_dir, fleet.urls)
     assert "uav3 (sysid 3): WPNAV_SPEED 300 (planned 1000)" in uploaded.stderr
     assert re.search(r"up to \d\.\d\d m from a slot before the formation keeper's waits: "
@@ -121,7 +122,7 @@ def test_a_copter_speaking_mavlink1_only_is_named_at_once(plan_dir):
     """A port set to MAVLink 1 (SERIAL0_PROTOCOL 1; a Solo on its original firmware): one
     line saying so and what to change, before anything is sent, not a time-out."""
     copters = [("4.5.6", {}), ("4.5.6", {"SERIAL0_PROTOCOL": 1}), ("4.5.6", {})]
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, copters=copters) as fleet:
         refused = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
                                             "--connect", " ".join(fleet.urls)])
         flown = _fly(plan_dir, fleet.urls)
@@ -136,7 +137,7 @@ def test_a_copter_speaking_mavlink1_only_is_named_at_once(plan_dir):
 def test_three_different_copters_fly_the_plan_within_its_bound(plan_dir):
     """ArduCopter 4.5.6 with its defaults, 4.6.3 with its defaults, a Solo on 4.5.6."""
     copters = [("4.5.6", {}), ("4.6.3", {}), ("4.5.6", SOLO)]
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, copters=copters) as fleet:
         uploaded = _upload(plan_dir, fleet.urls)
         result = _fly(plan_dir, fleet.urls)
     assert "uav2 (sysid 2): PSC_VELXY_D 0.25 (planned 0.5), ArduCopter 4.6" in uploaded.stderr
@@ -157,7 +158,7 @@ def test_a_value_the_plan_sets_that_a_copter_lacks_is_one_line_exit_2(plan_dir):
                           "params": dict(doc["vehicle"]) | {"WPNAV_ACCEL_C": 500.0},
                           "set": {"WPNAV_ACCEL_C": 500.0}}
     (plan_dir / "plan.json").write_text(json.dumps(doc))
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=FAST) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, options=FAST) as fleet:
         fleet.sim.call(lambda: fleet.sim.vehicles[1].autopilot.params.pop("WPNAV_ACCEL_C"))
         result = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
                                            "--timeout", "0.3", "--retries", "1",
@@ -176,7 +177,7 @@ def test_plan_fleet_plans_for_the_copters_as_they_are(tmp_path):
     nothing to say of them."""
     copters = [("4.5.6", {}), ("4.5.6", SOLO), ("4.5.6", {})]
     out = tmp_path / "out"
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=copters) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, copters=copters) as fleet:
         planned = CliRunner().invoke(main, ["plan", str(EXAMPLE), "-o", str(out), "-q",
                                             "--fleet", "1..3", "--connect", " ".join(fleet.urls)])
         assert planned.exit_code == 0, planned.output
@@ -193,7 +194,8 @@ def test_plan_fleet_plans_for_the_copters_as_they_are(tmp_path):
 def test_a_parameter_file_downloaded_from_a_copter_plans_for_it(tmp_path, small_text):
     """``download`` saves the copter's flight parameters in its .parm beside the fence's;
     a scenario's ``[vehicle.uavN] params_file`` reads it back."""
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, copters=[("4.5.6", SOLO)] * 3) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True,
+                  copters=[("4.5.6", SOLO)] * 3) as fleet:
         saved = CliRunner().invoke(main, ["download", "--sysid", "2", "--connect",
                                           fleet.urls[1], "-o", str(tmp_path / "uav2.waypoints")])
     assert saved.exit_code == 0, saved.output

@@ -85,7 +85,7 @@ def test_a_gps_glitch_mid_leg_is_a_departure_the_others_answer(plan_dir):
         station = SecondPort(fleet.serial1_urls[0], 1)
 
         def fault():
-            _in_auto_for(station, 3.0)
+            _in_auto_for(station, 3.0, fleet.time_scale)
             _glitch(station)
             return time.monotonic()
 

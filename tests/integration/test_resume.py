@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import json
 import shutil
-import time
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from ftlbo_mav import clock
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.progress import flown, progress_from_document
@@ -69,22 +69,23 @@ def test_a_survey_stopped_in_a_lane_resumes_and_every_photo_is_taken_once(tmp_pa
     folder = tmp_path / "survey"
     shutil.copytree(SURVEY, folder)
     homes = scenario_homes(load_scenario(SURVEY.with_suffix(".toml")))
-    with vehicles(3, homes=homes, speedup=SPEEDUP, params={"CAM1_TYPE": 1}, **OPTIONS) as fleet:
+    with vehicles(3, homes=homes, speedup=SPEEDUP, virtual=True, params={"CAM1_TYPE": 1},
+                  **OPTIONS) as fleet:
         _upload(folder, fleet.urls)
         pilot = SecondPort(fleet.serial1_urls[2], 3)
         try:
             def stop_in_a_lane() -> float:
                 assert pilot.wait(lambda p: p.armed and p.mode == "AUTO", 120.0)
-                pilot.wait(lambda p: False, STOP_AFTER_S / SPEEDUP)
+                pilot.wait(lambda p: False, STOP_AFTER_S / fleet.time_scale)
                 pilot.set_mode("BRAKE")
-                pilot.wait(lambda p: False, 3.0 / SPEEDUP)
+                pilot.wait(lambda p: False, 3.0 / fleet.time_scale)
                 pilot.set_mode("RTL")  # the pilot brings it home
-                return time.monotonic()
+                return clock.monotonic()
 
             first, _took = _fly_with(folder, fleet.urls, stop_in_a_lane, *LOOSE)
             assert first.exit_code == 1, first.output
             assert "--resume" in first.stdout  # the user is told how to carry on
-            assert pilot.wait(lambda p: not p.armed, 300.0 / SPEEDUP + 60.0)
+            assert pilot.wait(lambda p: not p.armed, 300.0 / fleet.time_scale + 60.0)
         finally:
             pilot.close()
         resumed = CliRunner().invoke(main, ["fly", str(folder), "--resume", *LOOSE,

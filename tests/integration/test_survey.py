@@ -38,7 +38,8 @@ def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
     planned = CliRunner().invoke(main, ["plan", str(SURVEY), "-o", str(out), "-q"])
     assert planned.exit_code == 0, planned.output
     options = {} if BACKEND == "sitl" else {"options": VehicleOptions(heartbeat_s=0.25)}
-    with vehicles(3, homes=scenario_homes(scenario), speedup=SPEEDUP, **options) as fleet:
+    with vehicles(3, homes=scenario_homes(scenario), speedup=SPEEDUP, virtual=True,
+                  **options) as fleet:
         urls = " ".join(fleet.urls)
         uploaded = CliRunner().invoke(main, ["upload", str(out), "--sysid", "1..3",
                                              "--connect", urls])
