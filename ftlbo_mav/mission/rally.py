@@ -248,7 +248,9 @@ def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.nda
     # the chosen UAVs' return lines so far: segment starts (S, 2), ends (S, 2), boxes
     line_a, line_b = np.zeros((0, 2)), np.zeros((0, 2))
     line_lo, line_hi = np.zeros((0, 2)), np.zeros((0, 2))
-    fans = Fans()  # which lines are whose, and the convex hull of each UAV's lines
+    # which lines are whose, the convex hull of each UAV's lines, which may reach a cell
+    fans = Fans(reach=sep + 1e-6, lo=np.asarray(area_min, float) - 1.0,
+                hi=np.asarray(area_max, float) + 1.0)
     for k in range(n):
         own = flat[k]
         own_home = _norm(own - homes[k])  # (P,)
@@ -358,12 +360,8 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
     if compiled or len(chunk) * int(hit.sum()) >= COMPILED_FROM:
         from ._rally_jit import first_clear
 
-        if fans is None:  # the lines as they come, each its own fan (no hull)
-            fans = Fans()
-            fans.start = list(range(len(line_a) + 1))
-            fans.edge_start = [0] * (len(line_a) + 1)
-            fans.rally = np.ascontiguousarray(line_b, float).reshape(-1, 2)
-            fans.angle = np.arctan2(line_a[:, 1] - line_b[:, 1], line_a[:, 0] - line_b[:, 0])
+        if fans is None:  # the lines as they come, each its own fan
+            fans = Fans.each_line(line_a, line_b)
         chunk = np.ascontiguousarray(chunk, float)
         # only the places within sep of the box of the path and the candidates can be
         # too near a return line (the compiled test looks at the box of each's lines)
@@ -372,7 +370,7 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
         box_lo = np.minimum(own_lo, chunk.min(axis=0)) - reach
         box_hi = np.maximum(own_hi, chunk.max(axis=0)) + reach
         first, done = first_clear(chunk, line_a, line_b, line_lo, line_hi, *fans.arrays(),
-                                  fans.near(chunk, sep), own, own_home,
+                                  own, own_home,
                                   places[_near_box(places, box_lo, box_hi)], float(sep),
                                   -1 if budget is None else max(int(budget), 1))
         found = None if first < 0 else int(first)
