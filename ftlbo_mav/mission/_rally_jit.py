@@ -186,7 +186,9 @@ def first_clear(chunk, line_a, line_b, line_lo, line_hi, fan_start, edge_start, 
                 m += 1
                 lo0, hi0 = min(lo0, own[p, 0]), max(hi0, own[p, 0])
                 lo1, hi1 = min(lo1, own[p, 1]), max(hi1, own[p, 1])
-        for j in range(places.shape[0] if m else 0):
+        first_place = max(last_place, 0)  # the last one too near first, then in order
+        for jj in range(places.shape[0] if m else 0):
+            j = (first_place + jj) % places.shape[0]
             qx, qy = places[j, 0], places[j, 1]
             if qx < lo0 - reach or qx > hi0 + reach or qy < lo1 - reach or qy > hi1 + reach:
                 continue
