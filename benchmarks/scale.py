@@ -13,6 +13,11 @@ feasible, and the load average at the start, since the machine is shared.
 
 The goals (issue 21): 10 UAVs <= 1.5 s, 50 UAVs <= 5 s, 200 UAVs <= 30 s on a 2-core
 machine.
+
+Issue 51 (``issue51_rows``, for ``benchmarks/goals.py``; ``--issue51`` prints them): the
+same whole process on a circle of 10 / 50 / 200 UAVs (radius 100 m) crossing a 1 km field
+(``circle_scenario_text``), every file written: <= 3 / 10 / 30 s, under 2 GiB. Before the
+rally search was bounded the 200-UAV circle spent over 300 s in it and wrote nothing.
 """
 
 from __future__ import annotations
@@ -205,6 +210,91 @@ def run_plan(text: str, repeats: int) -> dict:
             "feasible": bool(feasible), "files": files}
 
 
+ISSUE51 = {10: 3.0, 50: 10.0, 200: 30.0}
+"""Issue 51's limits, seconds of a whole ``plan`` process on its circle scenario
+(:func:`circle_scenario_text`): "every plan of up to 200 UAVs answers in seconds"."""
+ISSUE51_MEMORY_MIB = 2048.0
+
+
+def _goal_row(goal: str, limit: str, measured: str, met: bool | None, *, status=None,
+              value=None, limit_value=None, peak_rss_mib=None, note="") -> dict:
+    """A row as ``benchmarks/goals.py``'s ``row(...)`` makes it (the same keys), source
+    "issue 51" (goals.py imports this module, so not the other way round)."""
+    return {"goal": goal, "source": "issue 51", "limit": limit, "measured": measured,
+            "value": value, "limit_value": limit_value, "peak_rss_mib": peak_rss_mib,
+            "status": status or ("met" if met else "missed"), "note": note}
+
+
+def _written(out: Path, uavs: int) -> tuple[bool, int]:
+    """Whether ``out`` holds every file ``plan`` writes for ``uavs`` UAVs (plan.json,
+    fence.parm, a .waypoints and a .fence each), and how many UAVs its plan.json says
+    have no rally point because the rally search stopped at its bound."""
+    doc = out / "plan.json"
+    if not doc.is_file():
+        return False, 0
+    stopped = sum(any(n.startswith("no rally point, search stopped")
+                      for n in u.get("fence_notes", ()))
+                  for u in json.loads(doc.read_text())["uavs"])
+    ok = ((out / "fence.parm").is_file()
+          and len(list(out.glob("uav*.waypoints"))) == uavs
+          and len(list(out.glob("uav*.fence"))) == uavs)
+    return ok, stopped
+
+
+def issue51_rows(*, sizes: tuple[int, ...] = (10, 50, 200), timeout_s: float = 120.0,
+                 deadline: float | None = None) -> list[dict]:
+    """Issue 51's goals, one row per size (in ``benchmarks/goals.py``'s format): a fresh
+    ``python -m ftlbo_mav plan SCENARIO -o DIR -q`` (:func:`plan_process`) on the circle
+    scenario (:func:`circle_scenario_text`: the UAVs evenly on a circle of radius 100 m,
+    crossing a 1 km field among 5 trees, rtk-float), wall seconds from process start to
+    exit and its own peak RSS, against :data:`ISSUE51` and 2 GiB; met only when every
+    file was written (plan.json, fence.parm, each UAV's .waypoints and .fence). Each size
+    runs twice and the second is measured: the first compiles what numba's on-disk cache
+    does not hold yet (after an install or a change to a compiled loop; its time is in the
+    note); nothing else is cold or warm on purpose (the OS file cache is warm). The note
+    also says how many UAVs have no rally point because their rally search stopped at its
+    bound. A run is killed after ``timeout_s``, or at ``deadline`` (``time.monotonic()``),
+    after which no size starts."""
+    import time
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for uavs in sizes:
+            limit = ISSUE51[uavs]
+            goal = f"plan process: {uavs} UAVs on a 100 m circle, 1 km field, files written"
+            left = math.inf if deadline is None else deadline - time.monotonic()
+            if left < 2 * limit + 1.0:
+                rows.append(_goal_row(goal, f"<= {limit:g} s", "not run", None,
+                                      status="not measured", limit_value=limit,
+                                      note="time budget spent"))
+                continue
+            path = Path(tmp) / f"circle-{uavs}.toml"
+            path.write_text(circle_scenario_text(uavs=uavs))
+            first = plan_process(path, Path(tmp) / f"first-{uavs}",
+                                 timeout_s=min(timeout_s, left))
+            wait = min(timeout_s, math.inf if deadline is None else deadline - time.monotonic())
+            out = Path(tmp) / f"out-{uavs}"
+            run = plan_process(path, out, timeout_s=wait)
+            before = "timeout" if first["timed_out"] else f"{first['seconds']:.2f} s"
+            mib = run["peak_rss_mib"]
+            if run["timed_out"]:
+                rows.append(_goal_row(goal, f"<= {limit:g} s", f"timeout > {wait:.0f} s",
+                                      False, limit_value=limit, peak_rss_mib=mib,
+                                      note="killed; nothing written"))
+                continue
+            written, stopped = _written(out, uavs)
+            seconds = run["seconds"]
+            note = ("files written" if written else
+                    f"files missing (exit {run['returncode']}: {run['last_line'][:60]})")
+            note += (f"; {stopped} UAVs without rally point (search bound)" if stopped
+                     else "") + f"; second run (the first: {before})"
+            rows.append(_goal_row(goal, f"<= {limit:g} s, < 2 GiB", f"{seconds:.2f} s",
+                                  written and seconds <= limit and mib < ISSUE51_MEMORY_MIB,
+                                  value=seconds, limit_value=limit, peak_rss_mib=mib,
+                                  note=note))
+    return rows
+
+
 def growth(rows: list[dict], key: str) -> None:
     for before, row in zip(rows, rows[1:]):
         if before["seconds"] > 0 and before[key] > 0:
@@ -237,7 +327,15 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", default="scale-benchmark.json", help="output JSON path")
     parser.add_argument("--show", metavar="JSON", help="print the tables of a saved run")
+    parser.add_argument("--issue51", action="store_true",
+                        help="only issue 51's rows (the 10/50/200-UAV circle), as JSON")
     args = parser.parse_args()
+    if args.issue51:
+        load = "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
+        print(json.dumps({"load_start": load, "rows": issue51_rows(),
+                          "load_end": "{:.2f} {:.2f} {:.2f}".format(*os.getloadavg())},
+                         indent=1))
+        return
     if args.show:
         doc = json.loads(Path(args.show).read_text())
         print(f"load average {doc['load']}; median of {doc['repeats']} runs")

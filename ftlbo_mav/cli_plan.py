@@ -294,8 +294,9 @@ def _say_written(paths, *, listed: int = 24) -> None:
         kind = path.suffix if path.name.startswith("uav") else path.name
         kinds.setdefault(kind, []).append(path)
     folder = paths[0].parent
-    for kind, group in kinds.items():
-        what = (f"{len(group)} files uav1{kind} .. uav{len(group)}{kind}" if len(group) > 1
+    for group in kinds.values():
+        # the first and last names: not every UAV has every kind (a .rally)
+        what = (f"{len(group)} files {group[0].name} .. {group[-1].name}" if len(group) > 1
                 else group[0].name)
         click.echo(f"  wrote {what} in {folder}")
 

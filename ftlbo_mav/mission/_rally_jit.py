@@ -42,6 +42,10 @@ def clear_of_segments(q, a, b, sep):
     return ok
 
 
+NEIGHBOURS = 8
+"""Lines or path points either side of the last that ruled out a candidate, tried first."""
+
+
 @njit(cache=True)
 def _directions(dx, dy, reach, angle, ranges):
     """The index ranges (into ``ranges (2, 2)``, returned how many) of the sorted
@@ -74,8 +78,8 @@ def _directions(dx, dy, reach, angle, ranges):
 
 @njit(cache=True)
 def first_clear(chunk, line_a, line_b, line_lo, line_hi, fan_start, edge_start, edge_a,
-                edge_n, fan_rally, fan_angle, fans_near, own, own_home, places, sep,
-                budget):
+                edge_n, fan_rally, fan_angle, bucket_start, bucket_fans, origin, bucket_m,
+                nx, ny, own, own_home, places, sep, budget):
     """The index of the first of the candidates ``chunk (C, 2)`` at least ``sep`` from
     every segment ``line_a``-``line_b`` (each ``(S, 2)``) whose own return lines (from
     the points of ``own (P, 2)`` nearer to it than ``own_home (P,)``) keep ``sep`` from
@@ -84,17 +88,21 @@ def first_clear(chunk, line_a, line_b, line_lo, line_hi, fan_start, edge_start, 
     first line or place too near. Only the lines that can be too near are measured: the
     segments are in fans (``fan_start (F+1,)``), each in a convex hull of edges
     ``edge_a``/``edge_n`` (``edge_start (F+1,)``; :class:`.rally_fans.Fans`), and a fan whose
-    hull the candidate is farther than ``sep`` beyond is skipped (only the fans
-    ``fans_near`` (int64) are looked at: the others' hulls are beyond every candidate's
-    reach), as a segment whose box
+    hull the candidate is farther than ``sep`` beyond is skipped (only the fans listed in
+    the candidate's bucket are looked at, ``bucket_fans[bucket_start[b]:bucket_start[b +
+    1]]`` for the square of side ``bucket_m`` from ``origin (2,)`` that holds it, ``nx``
+    by ``ny`` of them: the others' hulls are beyond the whole bucket; every fan outside
+    them), as a segment whose box
     grown by ``sep`` (``line_lo``, ``line_hi``) does not hold it; of a fan's segments
     (all ending at its ``fan_rally (F, 2)``, sorted by their direction ``fan_angle (S,)``
     from it) only those whose direction is within ``asin(sep / d)`` (a hair more) of the
     candidate's, ``d`` from the rally point, are measured; of the places only
     those within ``sep`` (a hair more) of the box of its return lines are measured.
     The line, or the place and path point, that ruled out a candidate is tried first on
-    the next (neighbours are mostly ruled out by the same): a candidate too near it
-    fails at once, which the full tests would also find, so the choice is the same.
+    the next, with the :data:`NEIGHBOURS` lines or path points either side of it (the
+    next candidate, a neighbour, is mostly ruled out by the same or the next): a
+    candidate too near one fails at once, which the full tests would also find, so the
+    choice is the same.
     Returns the index and the work done: hull edges, segments and places measured, path
     points looked at (:data:`.rally.WORK_PER_UAV`); -1 as soon as the work passes
     ``budget`` (not when it is negative)."""
@@ -108,18 +116,36 @@ def first_clear(chunk, line_a, line_b, line_lo, line_hi, fan_start, edge_start, 
             return -1, work
         cx, cy = chunk[c, 0], chunk[c, 1]
         work += 1
-        if last_line >= 0 and _segment_distance(
-                cx, cy, line_a[last_line, 0], line_a[last_line, 1],
-                line_b[last_line, 0], line_b[last_line, 1]) < sep:
-            continue
-        if last_place >= 0:
-            dx, dy = own[last_point, 0] - cx, own[last_point, 1] - cy
-            if math.sqrt(dx * dx + dy * dy) < own_home[last_point] and _segment_distance(
-                    places[last_place, 0], places[last_place, 1], own[last_point, 0],
-                    own[last_point, 1], cx, cy) < sep:
-                continue
         ok = True
-        for f in fans_near:
+        if last_line >= 0:
+            for s in range(max(0, last_line - NEIGHBOURS),
+                           min(line_a.shape[0], last_line + NEIGHBOURS + 1)):
+                work += 1
+                if _segment_distance(cx, cy, line_a[s, 0], line_a[s, 1],
+                                     line_b[s, 0], line_b[s, 1]) < sep:
+                    ok = False
+                    break
+        if ok and last_place >= 0:
+            qx, qy = places[last_place, 0], places[last_place, 1]
+            for p in range(max(0, last_point - NEIGHBOURS),
+                           min(own.shape[0], last_point + NEIGHBOURS + 1)):
+                work += 1
+                dx, dy = own[p, 0] - cx, own[p, 1] - cy
+                if math.sqrt(dx * dx + dy * dy) < own_home[p] and _segment_distance(
+                        qx, qy, own[p, 0], own[p, 1], cx, cy) < sep:
+                    ok = False
+                    break
+        if not ok:
+            continue
+        bx = math.floor((cx - origin[0]) / bucket_m) if bucket_m < np.inf else 0
+        by = math.floor((cy - origin[1]) / bucket_m) if bucket_m < np.inf else 0
+        if 0 <= bx < nx and 0 <= by < ny:
+            b = by * nx + bx
+            listed = bucket_fans[bucket_start[b]:bucket_start[b + 1]]
+        else:
+            listed = np.arange(fan_start.shape[0] - 1)
+        for f in listed:
+            work += 1
             far = False
             for e in range(edge_start[f], edge_start[f + 1]):
                 work += 1
@@ -160,7 +186,9 @@ def first_clear(chunk, line_a, line_b, line_lo, line_hi, fan_start, edge_start, 
                 m += 1
                 lo0, hi0 = min(lo0, own[p, 0]), max(hi0, own[p, 0])
                 lo1, hi1 = min(lo1, own[p, 1]), max(hi1, own[p, 1])
-        for j in range(places.shape[0] if m else 0):
+        first_place = max(last_place, 0)  # the last one too near first, then in order
+        for jj in range(places.shape[0] if m else 0):
+            j = (first_place + jj) % places.shape[0]
             qx, qy = places[j, 0], places[j, 1]
             if qx < lo0 - reach or qx > hi0 + reach or qy < lo1 - reach or qy > hi1 + reach:
                 continue

@@ -1,5 +1,11 @@
 """The rally-point search: one rally point per UAV, where RTL goes when it is nearer
-than home (pure; the rules are in :mod:`.fence`'s notes and :func:`rally_points_enu`)."""
+than home (pure; the rules are in :mod:`.fence`'s notes and :func:`search_rally_points`).
+
+Bounded (issue 51): each UAV's search stops after :data:`WORK_PER_UAV` elementary tests;
+a UAV whose search stops there has no rally point (RTL goes home), which
+:attr:`RallySearch.stopped` says, :mod:`.fence` writes in its notes (plan.json) and
+``plan`` says on stderr. A search that ends within the bound chooses as the unbounded
+one (docs/outputs.md, "The search is bounded")."""
 
 from __future__ import annotations
 
@@ -160,19 +166,15 @@ class _RallyGrid:
             if len(ring):
                 ring = ring[np.argsort(d[ring], kind="stable")]
             yield np.column_stack([wx[ring], wy[ring]]), window.size
-            inner, outer = outer, 2.0 * outer
+            inner, outer = outer, 1.5 * outer  # a search stopped early sorts little
 
 
 WORK_PER_UAV = 20_000_000
-"""The rally search's bound, per UAV, in elementary tests: grid cells looked at in its
-rings, candidates measured against a blocked path point, and, for each batch of
-candidates tested exactly, candidates x (the others' return-line segments that can reach
-the batch + the UAV's own path points). A UAV whose search reaches it before a candidate
-passes gets no rally point (RTL goes home) and :attr:`RallySearch.stopped` says so; the
-search of every UAV is then bounded (about 0.1 s of tests, compiled; a 200-UAV circle
-1 km across in well under 30 s for all), while every search that finds its point within
-it chooses as the unbounded search would. Issue 51: a 200-UAV circle crossing a 1 km
-field searched for over 300 s without it."""
+"""The rally search's bound per UAV, in elementary tests: grid cells looked at in its
+rings, candidates measured against a blocked path point, and hull edges, line segments,
+path points and places the candidate tests measure. A UAV that reaches it without a
+point has none (:attr:`RallySearch.stopped`): 0.1-0.2 s of one core, so that a 200-UAV
+circle crossing a 1 km field (issue 51: over 300 s before) searches in about 10 s."""
 
 
 @dataclass(frozen=True)
@@ -248,7 +250,9 @@ def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.nda
     # the chosen UAVs' return lines so far: segment starts (S, 2), ends (S, 2), boxes
     line_a, line_b = np.zeros((0, 2)), np.zeros((0, 2))
     line_lo, line_hi = np.zeros((0, 2)), np.zeros((0, 2))
-    fans = Fans()  # which lines are whose, and the convex hull of each UAV's lines
+    # which lines are whose, the convex hull of each UAV's lines, which may reach a cell
+    fans = Fans(reach=sep + 1e-6, lo=np.asarray(area_min, float) - 1.0,
+                hi=np.asarray(area_max, float) + 1.0)
     for k in range(n):
         own = flat[k]
         own_home = _norm(own - homes[k])  # (P,)
@@ -263,14 +267,17 @@ def search_rally_points(*, paths: np.ndarray, centres: np.ndarray, radii: np.nda
         batch, work = 32, 0
         own_box = (own.min(axis=0), own.max(axis=0))
         for ring, looked in grid.nearest_first(paths[k, -1, :2], allowed):
-            work += looked + len(ring) * len(blocked)
-            if len(blocked):  # a return line that starts within sep of a place fails
-                ring = ring[_clear_of_blocked(ring, blocked, blocked_reach)]
+            work += looked
             i = 0
             while i < len(ring) and chosen[k] is None and work < work_per_uav:
                 chunk = ring[i:i + batch]
                 i += len(chunk)
                 batch = min(4 * batch, 4096 if compiled else 1024)
+                if len(blocked):  # a return line that starts within sep of a place fails
+                    work += len(chunk) * len(blocked)
+                    chunk = chunk[_clear_of_blocked(chunk, blocked, blocked_reach)]
+                    if not len(chunk):
+                        continue
                 hit = None if compiled else fans.reaching(chunk, line_lo, line_hi, sep)
                 first, done = _first_clear(chunk, own=own, own_home=own_home, places=places,
                                            line_a=line_a, line_b=line_b, line_lo=line_lo,
@@ -355,12 +362,8 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
     if compiled or len(chunk) * int(hit.sum()) >= COMPILED_FROM:
         from ._rally_jit import first_clear
 
-        if fans is None:  # the lines as they come, each its own fan (no hull)
-            fans = Fans()
-            fans.start = list(range(len(line_a) + 1))
-            fans.edge_start = [0] * (len(line_a) + 1)
-            fans.rally = np.ascontiguousarray(line_b, float).reshape(-1, 2)
-            fans.angle = np.arctan2(line_a[:, 1] - line_b[:, 1], line_a[:, 0] - line_b[:, 0])
+        if fans is None:  # the lines as they come, each its own fan
+            fans = Fans.each_line(line_a, line_b)
         chunk = np.ascontiguousarray(chunk, float)
         # only the places within sep of the box of the path and the candidates can be
         # too near a return line (the compiled test looks at the box of each's lines)
@@ -369,7 +372,7 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
         box_lo = np.minimum(own_lo, chunk.min(axis=0)) - reach
         box_hi = np.maximum(own_hi, chunk.max(axis=0)) + reach
         first, done = first_clear(chunk, line_a, line_b, line_lo, line_hi, *fans.arrays(),
-                                  fans.near(chunk, sep), own, own_home,
+                                  own, own_home,
                                   places[_near_box(places, box_lo, box_hi)], float(sep),
                                   -1 if budget is None else max(int(budget), 1))
         found = None if first < 0 else int(first)

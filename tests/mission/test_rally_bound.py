@@ -96,11 +96,14 @@ def test_plan_names_the_uavs_without_a_rally_point_on_stderr(monkeypatch, small_
 
 def test_the_fans_shortcuts_change_no_answer():
     """The compiled test with the lines kept as fans (hull, sorted directions, the fans
-    near the batch) answers as numpy measuring every line, the lines in every direction
-    from their rally points (the directions' wrap at pi included)."""
+    listed in the candidate's bucket) answers as numpy measuring every line, the lines in
+    every direction from their rally points (the directions' wrap at pi included)."""
     rng = np.random.default_rng(11)
     sep = 2.0
     fans, line_a, line_b, rallies = Fans(), [], [], []
+    # the same fans in buckets of 4 m over part of the field (candidates outside it too)
+    bucketed = Fans(reach=sep + 1e-6, lo=np.array([0.0, 0.0]), hi=np.array([60.0, 60.0]),
+                    bucket_m=4.0)
     for _ in range(6):
         r = rng.uniform(10.0, 50.0, 2)
         # none just above -pi: a candidate there is too near only the lines near +pi
@@ -108,7 +111,9 @@ def test_the_fans_shortcuts_change_no_answer():
         angle[:2] = [np.pi, np.pi - 1e-12]
         starts = r + rng.uniform(1.0, 25.0, (40, 1)) * np.column_stack([np.cos(angle),
                                                                          np.sin(angle)])
-        starts = starts[fans.add(starts, r)]
+        order = fans.add(starts, r)
+        np.testing.assert_array_equal(bucketed.add(starts, r), order)
+        starts = starts[order]
         rallies.append(r)
         line_a.append(starts)
         line_b.append(np.broadcast_to(r, starts.shape))
@@ -127,5 +132,6 @@ def test_the_fans_shortcuts_change_no_answer():
             rng.uniform(-5.0, 70.0, (int(rng.integers(1, 30)), 2)) for _ in range(150)]:
         numpy = rally._first_clear(chunk, **kw, hit=np.ones(len(line_a), bool))
         assert rally._first_clear(chunk, **kw, compiled=True, fans=fans) == numpy
+        assert rally._first_clear(chunk, **kw, compiled=True, fans=bucketed) == numpy
         answers.add(numpy if numpy is None else min(numpy, 1))
     assert answers == {None, 0, 1}
