@@ -204,7 +204,7 @@ def test_the_compiled_safety_term_is_the_same_on_one_thread_or_all(monkeypatch):
     problem = PlanningProblem(
         start=np.array([5.0, 5.0, 4.0]), goal=np.array([195.0, 195.0, 4.0]),
         offsets=np.array([[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]),
-        centres=rng.uniform(20, 180, (300, 2)), radii=rng.uniform(0.5, 1.5, 300), h_min=2.0,
+        centres=rng.uniform(20, 180, (150, 2)), radii=rng.uniform(0.1, 0.3, 150), h_min=2.0,
         h_max=7.0, area_lower=np.zeros(2), area_upper=np.full(2, 200.0), waypoints=2,
         weights=np.array([1.0, 1.0, 1.0]))
     waypoints = np.linspace(problem.start, problem.goal, 4)[1:-1][None] \
