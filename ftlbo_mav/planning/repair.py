@@ -41,6 +41,9 @@ def until_kept(scenario: Scenario, obstacles: int, attempt: Attempt, *,
                relay: bool = True) -> Plan:
     """Plan, predict, repair, until kept: the one loop every plan goes through.
 
+    0. a survey whose legs are all clear straight lines has its lanes laid further in by
+       the swing out of the area its straight route is predicted to make
+       (:func:`_straight_excursion`), as step 3 would after a first plan;
     1. ``attempt``: plan the route and predict its flown path (the corners the copters
        cut moved, or made stops, until the clearance is kept);
     2. keep the best plan so far (:func:`better`: feasible, fewer corner stops, shorter
