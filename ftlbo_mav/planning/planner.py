@@ -403,6 +403,8 @@ def _seed_at_optimum(problem: PlanningProblem, objective: Objective, seed: np.nd
     FTLBO would keep (it only takes a student that costs less) after its ``PATIENCE``
     iterations of some 200 evaluations each. A survey's turns between aisles are such
     legs: half the legs of issue 51's orchard."""
+    if len(problem.radii) and problem.weights[1] != 0:
+        return None  # every R/d is positive: the safety term is never 0
     x = objective.clip(seed[None, :])
     terms = cost_terms(problem, x.reshape(1, -1, 3))
     straight = float(np.linalg.norm(problem.goal - problem.start))

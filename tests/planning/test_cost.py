@@ -190,3 +190,29 @@ def test_a_segment_touching_a_cylinder_is_inside_compiled_or_not(monkeypatch, co
     assert np.isinf(cost_module.safety_cost(problem, problem.full_paths(touching))[0])
     assert cost_module.search_cost(problem, touching)[0] == cost_module.INFEASIBLE
     assert np.isfinite(cost_module.safety_cost(problem, problem.full_paths(apart))[0])
+
+
+def test_the_compiled_safety_term_is_the_same_on_one_thread_or_all(monkeypatch):
+    """Below PARALLEL_FROM distances a call runs on the calling thread alone (on a shared
+    machine a parallel call waits for its slowest thread): the same costs bit for bit,
+    and numba's thread count is given back after the call."""
+    import numba
+
+    from ftlbo_mav.planning import cost as cost_module
+
+    rng = np.random.default_rng(5)
+    problem = PlanningProblem(
+        start=np.array([5.0, 5.0, 4.0]), goal=np.array([195.0, 195.0, 4.0]),
+        offsets=np.array([[0.0, 4.0, 0.0], [0.0, 0.0, 0.0], [0.0, -4.0, 0.0]]),
+        centres=rng.uniform(20, 180, (150, 2)), radii=rng.uniform(0.1, 0.3, 150), h_min=2.0,
+        h_max=7.0, area_lower=np.zeros(2), area_upper=np.full(2, 200.0), waypoints=2,
+        weights=np.array([1.0, 1.0, 1.0]))
+    waypoints = np.linspace(problem.start, problem.goal, 4)[1:-1][None] \
+        + rng.normal(0, 20, (100, 2, 3)) * [1, 1, 0]
+    before = numba.get_num_threads()
+    monkeypatch.setattr(cost_module, "PARALLEL_FROM", 10**12)
+    alone = cost_module.cost_terms(problem, waypoints)
+    assert numba.get_num_threads() == before
+    monkeypatch.setattr(cost_module, "PARALLEL_FROM", 0)
+    every = cost_module.cost_terms(problem, waypoints)
+    assert np.array_equal(alone.safety, every.safety) and np.isfinite(alone.safety).any()

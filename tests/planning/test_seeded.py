@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -150,3 +152,29 @@ def test_random_orchards_default_plan_within_one_percent_or_no_route(trial):
     else:
         assert result.feasible, result.violations
         assert result.length_ratio < 1.01
+
+
+def test_a_leg_whose_seed_is_the_optimum_is_not_optimized():
+    """No cylinder near the leg, the seed on the straight line, every UAV inside the band:
+    no path costs less, so FTLBO is not run (1 evaluation) and the plan is that line; a
+    leg with a tree in its window is optimized as before."""
+    from ftlbo_mav.planning.planner import _seed_at_optimum
+    from ftlbo_mav.planning.problem import PlanningProblem
+
+    open_field = PlanningProblem(
+        start=np.array([0.0, 0.0, 4.0]), goal=np.array([30.0, 40.0, 6.0]),
+        offsets=np.zeros((1, 3)), centres=np.zeros((0, 2)), radii=np.zeros(0), h_min=2.0,
+        h_max=7.0, area_lower=np.full(2, -10.0), area_upper=np.full(2, 60.0), waypoints=1,
+        weights=np.ones(3))
+    objective = Objective(lambda x: x.sum(axis=1), *(b.ravel() for b in open_field.bounds()))
+    seed = (open_field.start + open_field.goal) / 2
+    result = _seed_at_optimum(open_field, objective, seed, 150, None)
+    assert result is not None and result.evaluations == 1
+    assert result.cost == pytest.approx(np.linalg.norm(open_field.goal - open_field.start))
+    # off the line: longer than the straight line, optimized
+    assert _seed_at_optimum(open_field, objective, seed + [5.0, 0, 0], 150, None) is None
+    treed = replace(open_field, centres=np.array([[40.0, 10.0]]), radii=np.array([1.0]))
+    assert _seed_at_optimum(treed, objective, seed, 150, None) is None
+    # a formation taller than the band: the task term is never 0
+    tall = replace(open_field, offsets=np.array([[0.0, 0.0, -3.0], [0.0, 0.0, 3.0]]))
+    assert _seed_at_optimum(tall, objective, seed, 150, None) is None
