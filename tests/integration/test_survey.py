@@ -1,10 +1,12 @@
-"""The shipped survey (missions/orchard-survey.toml), end to end: plan it, upload the
+"""The shipped survey (missions/orchard-survey.toml), end to end: its plan (the shipped
+folder, which tests/test_survey_scenario.py holds to what ``plan`` writes), upload the
 missions, fly them on the emulator (or ArduPilot SITL when ARDUPILOT_SITL is set) and
 check on what the vehicles reported that every UAV flew every lane and landed at the goal."""
 
 from __future__ import annotations
 
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -35,8 +37,8 @@ PASS_M = 3.0
 def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
     scenario = load_scenario(SURVEY)
     out = tmp_path / "survey"
-    planned = CliRunner().invoke(main, ["plan", str(SURVEY), "-o", str(out), "-q"])
-    assert planned.exit_code == 0, planned.output
+    # the shipped plan folder: tests/test_survey_scenario.py holds it to what `plan` writes
+    shutil.copytree(SURVEY.with_suffix(""), out)
     options = {} if BACKEND == "sitl" else {"options": VehicleOptions(heartbeat_s=0.25)}
     with vehicles(3, homes=scenario_homes(scenario), speedup=SPEEDUP, virtual=True,
                   **options) as fleet:
