@@ -29,7 +29,7 @@ from .fleet import BACKEND, vehicles
 
 pytestmark = pytest.mark.sitl
 
-SPEEDUP = 4.0
+SPEEDUP = 4.0  # SITL's; the emulator flies these on a virtual clock
 SCENARIO = load_scenario(EXAMPLE)
 HOMES = scenario_homes(SCENARIO)
 OPTIONS = {} if BACKEND == "sitl" else {"options": VehicleOptions(heartbeat_s=0.25)}

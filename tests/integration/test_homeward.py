@@ -35,7 +35,7 @@ from .test_departures import (
 
 pytestmark = pytest.mark.sitl
 
-SPEEDUP = 1.0 if BACKEND == "sitl" else 12.0  # the emulator: 40 s home in 4 s
+SPEEDUP = 1.0  # SITL in real time; the emulator on a virtual clock
 
 LANDED_WITHIN_M = 1.0  # issue 29: every remaining vehicle lands within 1 m of its home
 

@@ -24,7 +24,7 @@ from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE
 
 from ..conftest import EXAMPLE
-from .fleet import BACKEND, vehicles
+from .fleet import vehicles
 from .test_departures import (
     HOMES,
     OPTIONS,
@@ -52,7 +52,7 @@ def plan_dir(example, tmp_path) -> Path:
 pytestmark = pytest.mark.sitl
 
 GLITCH_M = 3.0
-SPEEDUP = 1.0 if BACKEND == "sitl" else 12.0  # the emulator: a flight in a few seconds
+SPEEDUP = 1.0  # SITL in real time; the emulator on a virtual clock
 
 
 def test_a_copter_whose_gps_is_worse_than_the_budget_is_refused_before_arming(plan_dir):

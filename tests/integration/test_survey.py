@@ -24,11 +24,7 @@ from .fleet import BACKEND, vehicles
 pytestmark = [pytest.mark.sitl, pytest.mark.slow]
 
 SURVEY = ROOT / "missions" / "orchard-survey.toml"
-SPEEDUP = 12.0
-# the emulator at 12x: the ground station's timing (its threads, the links) is 12 times
-# coarser in the copters' seconds, and a formation flown without the keeper drifts past
-# the plan's 0.77 m: this test is not about the formation (test_departures.py is)
-LOOSE = ["--formation-bound", "5"] if BACKEND == "emulator" else []
+SPEEDUP = 12.0  # SITL's; the emulator flies it on a virtual clock (fleet.vehicles)
 PASS_M = 3.0
 """How near each UAV must come to each of its lane ends: ArduCopter's waypoint radius
 (WPNAV_RADIUS, 2 m) plus a margin for corner cutting at the turns."""
@@ -46,11 +42,10 @@ def test_the_survey_plans_uploads_and_flies_every_lane(tmp_path):
         uploaded = CliRunner().invoke(main, ["upload", str(out), "--sysid", "1..3",
                                              "--connect", urls])
         assert uploaded.exit_code == 0, uploaded.output
-        # the emulator at 12x: the keeper's 20 Hz looks are 0.6 s of the copters' apart,
-        # too coarse to pace a U-turn (a copter 1 m off its slot, now a departure): off,
-        # as in the other fast flights
-        keeper = ["--no-keeper"] if BACKEND == "emulator" else []
-        flown = CliRunner().invoke(main, ["fly", str(out), "--sysid", "1..3", *keeper, *LOOSE,
+        # with the keeper and the plan's own formation bound: on the virtual clock the
+        # ground's timing is the copters' (at 12x on the wall clock it was 12 times coarser
+        # and both were off)
+        flown = CliRunner().invoke(main, ["fly", str(out), "--sysid", "1..3",
                                           "--control-port", "0", "--connect", urls])
         assert flown.exit_code == 0, flown.output
     assert "all vehicles finished their missions" in flown.stdout
