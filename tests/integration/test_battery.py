@@ -22,12 +22,12 @@ from ftlbo_mav.planning.planner import plan
 from ftlbo_mav.scenario import load_scenario
 
 from ..conftest import EXAMPLE
-from .fleet import BACKEND, vehicles
+from .fleet import vehicles
 from .test_departures import HOMES, OPTIONS, SecondPort, _fly_with, _in_auto_for, _upload
 
 pytestmark = pytest.mark.sitl
 
-SPEEDUP = 1.0 if BACKEND == "sitl" else 12.0  # the emulator: a flight in seconds
+SPEEDUP = 1.0  # SITL in real time; the emulator on a virtual clock
 SITL_QUAD = "\n[battery]\ncapacity = 3300\nhover_current = 28.12\nreserve = 25\n"
 
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import csv
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +14,7 @@ import pytest
 from click.testing import CliRunner
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ftlbo_mav import clock
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet
 from ftlbo_mav.link.codec import MISSION_TYPE_FENCE, MISSION_TYPE_RALLY, mission_differences
@@ -29,7 +29,7 @@ from .fleet import BACKEND, vehicles
 
 pytestmark = pytest.mark.sitl
 
-SPEEDUP = 4.0
+SPEEDUP = 4.0  # SITL's; the emulator flies these on a virtual clock
 SCENARIO = load_scenario(EXAMPLE)
 HOMES = scenario_homes(SCENARIO)
 OPTIONS = {} if BACKEND == "sitl" else {"options": VehicleOptions(heartbeat_s=0.25)}
@@ -59,7 +59,7 @@ def _upload(folder: Path, urls) -> str:
 
 
 def test_fence_rally_and_parameters_upload_and_verify(fenced, tmp_path):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         out = _upload(fenced, fleet.urls)
         # the scenario names no navigation value: no parameter but the fence's is set
         assert out.count("fence 11 items, 1 rally point(s), 5 fence parameters)") == 3, out
@@ -108,15 +108,16 @@ def _lla(east_north) -> tuple[float, float]:
     return float(lat[0]), float(lon[0])
 
 
-def _hold_for(v, seconds: float, texts: list[str]) -> float:
-    """How far the copter moves (m, 3D) in ``seconds`` of vehicle time."""
+def _hold_for(v, seconds: float, texts: list[str], time_scale: float) -> float:
+    """How far the copter moves (m, 3D) in ``seconds`` of vehicle time (``time_scale``:
+    the vehicles' seconds per second of the test's clock)."""
     start = _position(v)
-    deadline = time.monotonic() + seconds / SPEEDUP
+    deadline = clock.monotonic() + seconds / time_scale
     moved = 0.0
-    while time.monotonic() < deadline:
+    while clock.monotonic() < deadline:
         _collect(v, texts)
         moved = max(moved, float(np.linalg.norm(_position(v) - start)))
-        time.sleep(0.02)
+        clock.sleep(0.02)
     return moved
 
 
@@ -126,7 +127,7 @@ def test_guided_targets_outside_the_fence_are_refused(fenced):
     and the copter stays where it is (SITL: moved 0.01 m)."""
     tree = SCENARIO.obstacles[0]
     south = min(SCENARIO.corner_a.lat_deg, SCENARIO.corner_b.lat_deg)
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(fenced, fleet.urls)
         with Fleet(["uav1"], [1], fleet.urls[:1]) as flying:
             (uav1,) = flying.vehicles
@@ -137,7 +138,7 @@ def test_guided_targets_outside_the_fence_are_refused(fenced):
                                   (south - 30 / 111_000, here.lon_deg, 4.0),
                                   (here.lat_deg, here.lon_deg, 12.0)):
                 _go(uav1, lat, lon, alt)
-                assert _hold_for(uav1, 6.0, texts) < 0.5
+                assert _hold_for(uav1, 6.0, texts, fleet.time_scale) < 0.5
                 assert uav1.status.mode == "GUIDED"
             uav1.send_mode("LAND")
     assert not any("Fence" in t for t in texts), texts
@@ -151,7 +152,7 @@ def test_a_copter_sent_past_a_tree_is_braked_by_its_own_fence(fenced):
     tree = SCENARIO.obstacles[0]
     fence_radius = read_fence_set(fenced, "uav1").fence[4].param1
     centre = _en(tree.lat_deg, tree.lon_deg)
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(fenced, fleet.urls)
         with Fleet(["uav1"], [1], fleet.urls[:1]) as flying:
             (uav1,) = flying.vehicles
@@ -162,8 +163,8 @@ def test_a_copter_sent_past_a_tree_is_braked_by_its_own_fence(fenced):
             texts: list[str] = []
             braked = stop = None
             closest = math.inf
-            deadline = time.monotonic() + STOP_TIMEOUT_S
-            while time.monotonic() < deadline:
+            deadline = clock.monotonic() + STOP_TIMEOUT_S
+            while clock.monotonic() < deadline:
                 _collect(uav1, texts)
                 s, p = uav1.status, _position(uav1)[:2]
                 closest = min(closest, float(np.linalg.norm(p - centre)))
@@ -172,7 +173,7 @@ def test_a_copter_sent_past_a_tree_is_braked_by_its_own_fence(fenced):
                 if braked is not None and s.ground_speed_m_s < 0.05:
                     stop = p
                     break
-                time.sleep(0.02)
+                clock.sleep(0.02)
             uav1.send_mode("LAND")
     assert braked is not None and stop is not None, (uav1.status.mode, texts)
     assert any("Fence Breached" in t for t in texts), texts
@@ -204,14 +205,14 @@ def test_velocity_out_of_the_area_or_up_stops_at_the_fence_margin(fenced):
             texts: list[str] = []
             track = []
             for velocity in ((-3.0, 0.0, 0.0), (0.0, 0.0, -1.0)):  # north, east, down
-                deadline = time.monotonic() + 20.0
-                while time.monotonic() < deadline:
+                deadline = clock.monotonic() + 20.0
+                while clock.monotonic() < deadline:
                     uav2.send(R.MAVLink_set_position_target_local_ned_message(
                         0, 2, 1, R.MAV_FRAME_LOCAL_NED, 0b110111000111, 0, 0, 0,
                         *velocity, 0, 0, 0, 0, 0))
                     _collect(uav2, texts)
                     track.append(_position(uav2))
-                    time.sleep(0.1)
+                    clock.sleep(0.1)
             uav2.send_mode("LAND")
     track = np.array(track)
     print(f"\n[{BACKEND}] velocity south: stopped {track[:, 1].min() - edge:.2f} m inside "
@@ -223,7 +224,7 @@ def test_velocity_out_of_the_area_or_up_stops_at_the_fence_margin(fenced):
 
 
 def test_the_planned_flight_never_triggers_the_fence(fenced):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(fenced, fleet.urls)
         code, out = run("fly", fenced, "--sysid", "1..3", "--control-port", "0",
                         "--connect", " ".join(fleet.urls))
@@ -252,7 +253,7 @@ def test_the_planned_flight_never_triggers_the_fence(fenced):
 
 
 def test_fly_refuses_before_arming_a_vehicle_without_its_fence(fenced):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         code, out = run("upload", fenced, "--sysid", "1..3", "--no-fence",
                         "--connect", " ".join(fleet.urls))
         assert code == 0, out

@@ -27,7 +27,7 @@ from ..conftest import EXAMPLE
 from .fleet import FAST, vehicles
 from .test_fly import HOMES, _read_param
 
-SPEEDUP = 4.0  # as test_fly: a wall-clock flight at 8x on a loaded machine judged its timing
+SPEEDUP = 4.0  # SITL's; the emulator flies these on a virtual clock
 SOLO = dict(PROFILES["3dr-solo"].params)
 TUNING = ("ANGLE_MAX", "PSC_VELXY_P", "PSC_VELXY_I", "ATC_INPUT_TC")
 

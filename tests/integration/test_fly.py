@@ -135,7 +135,7 @@ def test_fly_refuses_before_arming_when_a_mission_differs(plan_dir, tmp_path):
     shutil.copytree(plan_dir, wrong)
     shutil.copy(plan_dir / "uav3.waypoints", wrong / "uav2.waypoints")
     (wrong / "plan.json").unlink()  # upload refuses a plan folder with another's file in it
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **_emulator_options()) as fleet:
         _upload(wrong, fleet.urls)  # vehicle 2 now holds uav3's mission
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
                                            "--control-port", "0",
@@ -180,7 +180,7 @@ def test_a_copter_with_its_own_tuning_is_flown_as_it_is_or_refused_never_retuned
     predicted with is predicted again with its own; where every promise holds the flight
     goes on saying so, where one is lost fly and upload refuse naming the copter, its
     values and the promise, and neither writes its tuning."""
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **_emulator_options()) as fleet:
         _upload(plan_dir, fleet.urls)
         _set_param(fleet.urls[1], 2, "WPNAV_ACCEL", 500.0)
         planned = load_planned_flight(plan_dir)
@@ -263,7 +263,7 @@ def test_takeoff_retries_arming_until_the_position_estimate_is_ready(plan_dir):
     Estimate"): the takeoff retries within its budget instead of failing."""
     planned = load_planned_flight(plan_dir)
     late = VehicleOptions(heartbeat_s=0.25, ready_after_s=0.0, position_after_s=10.0)
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, options=late) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, options=late) as fleet:
         with Fleet(planned.names, [1, 2, 3], fleet.urls) as flying:
             take_off(planned, flying.vehicles, FlyOptions(arm_budget_s=20.0),
                      say=lambda _t: None)
@@ -282,7 +282,7 @@ def test_a_mission_ending_in_loiter_finishes_when_every_vehicle_holds_there(tmp_
     plan_dir = tmp_path / "plan"
     assert CliRunner().invoke(main, ["plan", str(scenario), "-o", str(plan_dir), "-q"]
                               ).exit_code == 0
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **_emulator_options()) as fleet:
         _upload(plan_dir, fleet.urls)
         result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
                                            "--control-port", "0",
@@ -331,7 +331,7 @@ def test_abort_from_another_terminal_reaches_a_running_flight(plan_dir):
 
 
 def test_abort_with_no_flight_running_opens_the_links_itself(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **_emulator_options()) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **_emulator_options()) as fleet:
         result = CliRunner().invoke(main, ["abort", "--sysid", "1..3", "--land",
                                            "--control-port", str(free_tcp_port()),
                                            "--connect", " ".join(fleet.urls)])

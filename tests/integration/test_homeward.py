@@ -10,14 +10,13 @@ runs).
 
 from __future__ import annotations
 
-import threading
-import time
 from contextlib import contextmanager
 
 import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as R
 
+from ftlbo_mav import clock
 from ftlbo_mav.ardupilot.modes import mode_name
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.record import fitted_times
@@ -36,15 +35,16 @@ from .test_departures import (
 
 pytestmark = pytest.mark.sitl
 
-SPEEDUP = 1.0 if BACKEND == "sitl" else 12.0  # the emulator: 40 s home in 4 s
+SPEEDUP = 1.0  # SITL in real time; the emulator on a virtual clock
 
 LANDED_WITHIN_M = 1.0  # issue 29: every remaining vehicle lands within 1 m of its home
 
 
-def _in_auto_for(track, seconds: float) -> None:
-    """Until ``track``'s vehicle has flown ``seconds`` (its time) in AUTO."""
+def _in_auto_for(track, seconds: float, time_scale: float) -> None:
+    """Until ``track``'s vehicle has flown ``seconds`` (its time) in AUTO; ``time_scale``:
+    the vehicles' seconds per second of the test's clock."""
     assert track.wait(lambda p: p.armed and p.mode == "AUTO", 120.0)
-    time.sleep(seconds / SPEEDUP)
+    clock.sleep(seconds / time_scale)
 
 
 class Track(SecondPort):
@@ -57,24 +57,27 @@ class Track(SecondPort):
         super().__init__(url, sysid)
         self.rows: list[tuple[float, float, float, float, float]] = []  # t, boot, lat, lon, alt
         self.modes: list[tuple[float, str]] = []  # (t, mode) at every change
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.stop = clock.Event()
+        self.thread = clock.Thread(self._run, name=f"track uav{sysid}")
         self.thread.start()
 
     def _run(self) -> None:
         next_ask = 0.0
         while not self.stop.is_set():
-            now = time.monotonic()
+            now = clock.monotonic()
             if now >= next_ask:
                 self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_SET_MESSAGE_INTERVAL,
                                                 0, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 1e5,
                                                 0, 0, 0, 0, 0)
                 next_ask = now + 5.0
             try:
-                msg = self.conn.recv_match(blocking=True, timeout=0.05)
+                msg = self.conn.recv_match(blocking=False)
+                if msg is None:
+                    self.conn.select(0.05)
+                    continue
             except OSError:
                 return  # its vehicle is gone
-            if msg is None or msg.get_srcSystem() != self.sysid:
+            if msg.get_srcSystem() != self.sysid:
                 continue
             kind = msg.get_type()
             if kind == "GLOBAL_POSITION_INT":
@@ -89,11 +92,11 @@ class Track(SecondPort):
 
     def wait(self, predicate, timeout_s: float) -> bool:
         """As :meth:`SecondPort.wait`, on what the recording thread reads."""
-        deadline = time.monotonic() + timeout_s
-        while time.monotonic() < deadline:
+        deadline = clock.monotonic() + timeout_s
+        while clock.monotonic() < deadline:
             if predicate(self):
                 return True
-            time.sleep(0.02)
+            clock.sleep(0.02)
         return False
 
     def enu(self, frame, since: float = -np.inf) -> np.ndarray:
@@ -132,7 +135,7 @@ class Track(SecondPort):
 def _tracked(folder):
     """Three vehicles with the plan in ``folder`` uploaded and a :class:`Track` on each
     one's second link: ``(fleet, tracks)``; the tracks closed after."""
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(folder, fleet.urls)
         tracks = [Track(url, i + 1) for i, url in enumerate(fleet.serial1_urls)]
         try:
@@ -207,8 +210,8 @@ def test_a_vehicle_lost_mid_leg_the_others_fly_home_and_land_there(plan_dir):  #
     with _tracked(plan_dir) as (fleet, tracks):
 
         def fault():
-            _in_auto_for(tracks[0], 5.0)
-            times["fault"] = time.monotonic()
+            _in_auto_for(tracks[0], 5.0, fleet.time_scale)
+            times["fault"] = clock.monotonic()
             fleet.kill(1)  # uav2's autopilot dies (SITL: its process, by pid)
             tracks[1].stop.set()  # its second link is gone with it
             return times["fault"]
@@ -216,7 +219,7 @@ def test_a_vehicle_lost_mid_leg_the_others_fly_home_and_land_there(plan_dir):  #
         result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
         for j in (0, 2):
             assert tracks[j].wait(lambda p: not p.armed, 5.0)
-        time.sleep(0.5)
+        clock.sleep(0.5)
     gone = tracks[1].enu(planned.frame)[-1, 1:]
     judged = _judge_home(planned, tracks, (0, 2), gone, times["fault"])
     print(f"[{BACKEND}] lost mid-leg, the others home: {judged}")
@@ -229,8 +232,8 @@ def test_a_mode_taken_over_the_others_fly_home_around_it(plan_dir):  # noqa: F81
     with _tracked(plan_dir) as (fleet, tracks):
 
         def fault():
-            _in_auto_for(tracks[2], 5.0)
-            times["fault"] = time.monotonic()
+            _in_auto_for(tracks[2], 5.0, fleet.time_scale)
+            times["fault"] = clock.monotonic()
             tracks[2].set_mode("BRAKE")  # uav3's pilot takes it over and holds it there
             return times["fault"]
 
@@ -253,10 +256,10 @@ def test_a_vehicle_lost_in_the_take_off_the_others_come_down_at_home(plan_dir): 
 
         def fault():
             assert tracks[0].wait(lambda p: p.armed, 120.0)
-            time.sleep(1.0 / SPEEDUP)  # climbing
+            clock.sleep(1.0 / fleet.time_scale)  # climbing
             fleet.kill(1)
             tracks[1].stop.set()
-            return time.monotonic()
+            return clock.monotonic()
 
         result, _took = _fly_with(plan_dir, fleet.urls, fault, "--lost-wait", "3")
         for j in (0, 2):

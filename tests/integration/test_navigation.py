@@ -12,19 +12,19 @@ from __future__ import annotations
 import csv
 import math
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from ftlbo_mav import clock
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE
 
 from ..conftest import EXAMPLE
-from .fleet import BACKEND, vehicles
+from .fleet import vehicles
 from .test_departures import (
     HOMES,
     OPTIONS,
@@ -52,17 +52,17 @@ def plan_dir(example, tmp_path) -> Path:
 pytestmark = pytest.mark.sitl
 
 GLITCH_M = 3.0
-SPEEDUP = 1.0 if BACKEND == "sitl" else 12.0  # the emulator: a flight in a few seconds
+SPEEDUP = 1.0  # SITL in real time; the emulator on a virtual clock
 
 
 def test_a_copter_whose_gps_is_worse_than_the_budget_is_refused_before_arming(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         station = SecondPort(fleet.serial1_urls[1], 2)
         try:
             station.set_param("SIM_GPS_ACC", 1.5)
-            time.sleep(1.0 / SPEEDUP)
-            result, _took = _fly_with(plan_dir, fleet.urls, time.monotonic)
+            clock.sleep(1.0 / fleet.time_scale)
+            result, _took = _fly_with(plan_dir, fleet.urls, clock.monotonic)
             assert not station.armed
         finally:
             station.close()
@@ -80,14 +80,14 @@ def _glitch(station: SecondPort) -> None:
 
 
 def test_a_gps_glitch_mid_leg_is_a_departure_the_others_answer(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         station = SecondPort(fleet.serial1_urls[0], 1)
 
         def fault():
             _in_auto_for(station, 3.0, fleet.time_scale)
             _glitch(station)
-            return time.monotonic()
+            return clock.monotonic()
 
         try:
             result, took = _fly_with(plan_dir, fleet.urls, fault)
@@ -109,14 +109,14 @@ def test_a_gps_glitch_mid_leg_is_a_departure_the_others_answer(plan_dir):
 
 
 def test_a_gps_glitch_during_take_off_is_a_departure(plan_dir):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         station = SecondPort(fleet.serial1_urls[2], 3)
 
         def fault():
             assert station.wait(lambda p: p.armed, 120.0)
             _glitch(station)
-            return time.monotonic()
+            return clock.monotonic()
 
         try:
             result, _took = _fly_with(plan_dir, fleet.urls, fault)
@@ -138,13 +138,13 @@ def test_a_copter_whose_gps_puts_it_ahead_of_its_start_moves_there_before_the_le
     passes the plan's bound), which the plan's 0.77 m bound would call a departure; the
     emulator does not show that gain (docs/flight.md, "When a vehicle leaves the plan")."""
     ahead_m = 1.2
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, **OPTIONS) as fleet:
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         station = SecondPort(fleet.serial1_urls[1], 2)
         try:
             station.set_param("SIM_GPS_GLITCH_Y", ahead_m / (
                 METRES_PER_DEGREE * math.cos(math.radians(HOMES[1][0]))))
-            time.sleep(10.0 / SPEEDUP)  # EKF3 takes a GPS step up over about 5 s
+            clock.sleep(10.0 / fleet.time_scale)  # EKF3 takes a GPS step up over about 5 s
             result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
                                                "--control-port", "0", "--no-keeper",
                                                "--formation-bound", "5",
