@@ -40,6 +40,7 @@ SECONDS: dict[str, float] = {
     "ftlbo_mav.planning._cost_jit.safety": 3.0,  # 3.6 s at load 5
     "ftlbo_mav.planning._proximity_jit._nearest": 1.5,  # 1.9 s at load 5
     "ftlbo_mav.mission._rally_jit.clear_of_segments": 1.0,  # 1.3 s at load 5
+    "ftlbo_mav.mission._rally_jit.first_clear": 2.5,  # 2.8 s at load 2
 }
 """About how many seconds a loop (``module.function``) takes to compile on 2 quiet cores,
 its callees with it (``python benchmarks/cold.py``, ``FTLBO_MAV_COMPILE_LOG``; the
