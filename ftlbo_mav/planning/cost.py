@@ -21,6 +21,8 @@ by minus the UAV's offset, so the distances are computed once for N*K shifted ax
 
 from __future__ import annotations
 
+import os
+import time
 from contextlib import contextmanager
 from typing import NamedTuple
 
@@ -121,19 +123,38 @@ def _compiled(problem: PlanningProblem) -> bool:
 
 PARALLEL_FROM = 2_000_000
 """UAV-segment-axis distances in one call of the compiled safety term from which it runs
-on every core; below, on the calling thread alone. A parallel call waits for its
-slowest thread: on a shared machine (two cores, other processes busy) one of them may
-wait a time slice of several milliseconds, where the call's work is a fraction of one.
-The orchard survey of issue 51 evaluates 100 students x 2 segments x 960 axes (0.2 ms of
-work) some 23,000 times: 20 s of its plan with two threads at load 3, 5 s with one.
-Bit for bit the same: each student's sums run in the same order either way."""
+on every core even on a busy machine; below, on the calling thread alone when the
+machine is busy (:func:`_busy`). A parallel call waits for its slowest thread: where
+other processes keep the cores busy, one of them may wait a time slice of several
+milliseconds, where the call's work is a fraction of one. The orchard survey of issue 51
+evaluates 100 students x 2 segments x 960 axes (0.2 ms of work) some 23,000 times: 20 s
+of its plan with two threads at load 3, 5 s with one; on a quiet machine two threads
+are faster (the whole plan 7.7 s against 9.1 s with one, the dense 100-tree field's
+plan() 0.53 s against 0.68 s; 2026-12-07, ``python benchmarks/goals.py``). Bit for bit
+the same: each student's sums run in the same order either way."""
+
+_LOAD_SEEN: list[float] = [-1.0, 0.0]  # when (time.monotonic) and the answer, 1 s old at most
+
+
+def _busy() -> bool:
+    """Whether the machine's other processes keep its cores busy: the 1-minute load
+    average (this process counts one) at least the cores less a half, read at most once
+    a second."""
+    now = time.monotonic()
+    if now - _LOAD_SEEN[0] > 1.0:
+        try:
+            load = os.getloadavg()[0]
+        except OSError:  # not every system has one
+            load = 0.0
+        _LOAD_SEEN[:] = [now, float(load >= (os.cpu_count() or 1) - 0.5)]
+    return bool(_LOAD_SEEN[1])
 
 
 @contextmanager
 def _threads_for(distances: int):
     """numba's threads for the calls inside: all of them from :data:`PARALLEL_FROM`
-    distances, else one (the calling thread)."""
-    if distances >= PARALLEL_FROM:
+    distances or on a machine not :func:`_busy`, else one (the calling thread)."""
+    if distances >= PARALLEL_FROM or not _busy():
         yield
         return
     import numba

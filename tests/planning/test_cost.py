@@ -193,8 +193,8 @@ def test_a_segment_touching_a_cylinder_is_inside_compiled_or_not(monkeypatch, co
 
 
 def test_the_compiled_safety_term_is_the_same_on_one_thread_or_all(monkeypatch):
-    """Below PARALLEL_FROM distances a call runs on the calling thread alone (on a shared
-    machine a parallel call waits for its slowest thread): the same costs bit for bit,
+    """Below PARALLEL_FROM distances a call on a busy machine runs on the calling thread
+    alone (a parallel call waits for its slowest thread): the same costs bit for bit,
     and numba's thread count is given back after the call."""
     import numba
 
@@ -210,9 +210,27 @@ def test_the_compiled_safety_term_is_the_same_on_one_thread_or_all(monkeypatch):
     waypoints = np.linspace(problem.start, problem.goal, 4)[1:-1][None] \
         + rng.normal(0, 20, (100, 2, 3)) * [1, 1, 0]
     before = numba.get_num_threads()
+    monkeypatch.setattr(cost_module, "_busy", lambda: True)
     monkeypatch.setattr(cost_module, "PARALLEL_FROM", 10**12)
     alone = cost_module.cost_terms(problem, waypoints)
     assert numba.get_num_threads() == before
     monkeypatch.setattr(cost_module, "PARALLEL_FROM", 0)
     every = cost_module.cost_terms(problem, waypoints)
     assert np.array_equal(alone.safety, every.safety) and np.isfinite(alone.safety).any()
+
+
+def test_the_machine_is_busy_when_its_load_fills_its_cores_but_one_half(monkeypatch):
+    """_busy: the 1-minute load average against the cores, read at most once a second."""
+    from ftlbo_mav.planning import cost as cost_module
+
+    load = [1.2]
+    monkeypatch.setattr(cost_module.os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(cost_module.os, "getloadavg", lambda: (load[0], 0.0, 0.0))
+    monkeypatch.setattr(cost_module, "_LOAD_SEEN", [-1.0, 0.0])
+    clock = [100.0]
+    monkeypatch.setattr(cost_module.time, "monotonic", lambda: clock[0])
+    assert not cost_module._busy()  # this plan alone: 1.2 < 1.5
+    load[0] = 3.0
+    assert not cost_module._busy()  # read less than a second ago
+    clock[0] += 1.5
+    assert cost_module._busy()
