@@ -58,7 +58,6 @@ def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) ->
     diagonally among ``obstacles`` trees (seeded)."""
     offsets = grid_offsets(uavs)
     half = np.abs(offsets[:, :2]).max(axis=0) + 6.0  # the formation's half size, spare
-    m_lon = M_PER_DEG_LAT * np.cos(np.radians(LAT0))
     start = half
     goal = np.array([side_m, side_m]) - half
     rng = np.random.default_rng(seed)
@@ -70,10 +69,23 @@ def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) ->
                ((start, half), (goal, half))):
             trees.append((centre, radius))
 
+    # a swarm 3 m apart among trees needs RTK (docs/planning.md)
+    return _field_text(f"{uavs} UAVs, {obstacles} trees, {side_m:g} m field", side_m=side_m,
+                       offsets=offsets, start=start, goal=goal, trees=trees,
+                       navigation="rtk-fixed")
+
+
+def _field_text(name: str, *, side_m: float, offsets: np.ndarray, start: np.ndarray,
+                goal: np.ndarray, trees: list, navigation: str) -> str:
+    """A scenario TOML on a ``side_m`` square field at the example's corner: the formation
+    ``offsets`` (N, 3) from ``start`` to ``goal`` (ENU metres) among ``trees`` ((centre,
+    radius) pairs), ``[navigation] class = navigation``."""
+    m_lon = M_PER_DEG_LAT * np.cos(np.radians(LAT0))
+
     def ll(e: float, n: float) -> tuple[float, float]:
         return LAT0 + n / M_PER_DEG_LAT, LON0 + e / m_lon
 
-    lines = [f'name = "{uavs} UAVs, {obstacles} trees, {side_m:g} m field"',
+    lines = [f'name = "{name}"',
              "[area]", f"corner_a = [{LAT0}, {LON0}]",
              "corner_b = [{:.7f}, {:.7f}]".format(*ll(side_m, side_m)),
              "min_altitude = 2.0", "max_altitude = 7.0",
@@ -82,8 +94,7 @@ def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) ->
              "[formation]",
              "offsets = [" + ", ".join(f"[{e:.2f}, {n:.2f}, 0.0]" for e, n, _ in offsets) + "]",
              "clearance = 1.0",
-             # a swarm 3 m apart among trees needs RTK (docs/planning.md)
-             "[navigation]", 'class = "rtk-fixed"']
+             "[navigation]", f'class = "{navigation}"']
     for centre, radius in trees:
         lines += ["[[obstacles]]", "lat = {:.7f}\nlon = {:.7f}".format(*ll(*centre)),
                   f"radius = {radius:.2f}"]
@@ -105,7 +116,6 @@ def circle_scenario_text(*, uavs: int, radius_m: float = 100.0, side_m: float = 
     the goal's formation), ``[navigation] class = "rtk-float"``."""
     offsets = circle_offsets(uavs, radius_m)
     half = radius_m + 10.0
-    m_lon = M_PER_DEG_LAT * np.cos(np.radians(LAT0))
     start = np.array([half, half])
     goal = np.array([side_m, side_m]) - half
     rng = np.random.default_rng(seed)
@@ -116,23 +126,9 @@ def circle_scenario_text(*, uavs: int, radius_m: float = 100.0, side_m: float = 
         if all(np.hypot(*(centre - p)) > half + radius + 2.0 for p in (start, goal)):
             trees.append((centre, radius))
 
-    def ll(e: float, n: float) -> tuple[float, float]:
-        return LAT0 + n / M_PER_DEG_LAT, LON0 + e / m_lon
-
-    lines = [f'name = "{uavs} UAVs on a {radius_m:g} m circle, {side_m:g} m field"',
-             "[area]", f"corner_a = [{LAT0}, {LON0}]",
-             "corner_b = [{:.7f}, {:.7f}]".format(*ll(side_m, side_m)),
-             "min_altitude = 2.0", "max_altitude = 7.0",
-             "[start]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*ll(*start)),
-             "[goal]", "lat = {:.7f}\nlon = {:.7f}\nalt = 4.0".format(*ll(*goal)),
-             "[formation]",
-             "offsets = [" + ", ".join(f"[{e:.2f}, {n:.2f}, 0.0]" for e, n, _ in offsets) + "]",
-             "clearance = 1.0",
-             "[navigation]", 'class = "rtk-float"']
-    for centre, radius in trees:
-        lines += ["[[obstacles]]", "lat = {:.7f}\nlon = {:.7f}".format(*ll(*centre)),
-                  f"radius = {radius:.2f}"]
-    return "\n".join(lines) + "\n"
+    return _field_text(f"{uavs} UAVs on a {radius_m:g} m circle, {side_m:g} m field",
+                       side_m=side_m, offsets=offsets, start=start, goal=goal, trees=trees,
+                       navigation="rtk-float")
 
 
 def compile_package() -> None:
