@@ -60,19 +60,26 @@ def scenario_text(*, uavs: int, obstacles: int, side_m: float, seed: int = 0) ->
     half = np.abs(offsets[:, :2]).max(axis=0) + 6.0  # the formation's half size, spare
     start = half
     goal = np.array([side_m, side_m]) - half
-    rng = np.random.default_rng(seed)
-    trees = []
-    while len(trees) < obstacles:
-        centre = rng.uniform(0.0, side_m, 2)
-        radius = float(rng.uniform(2.0, 4.0))
-        if all(np.all(np.abs(centre - p) > h + radius + 2.0) for p, h in
-               ((start, half), (goal, half))):
-            trees.append((centre, radius))
+    trees = _scattered_trees(obstacles, side_m, seed, lambda centre, radius: all(
+        np.all(np.abs(centre - p) > half + radius + 2.0) for p in (start, goal)))
 
     # a swarm 3 m apart among trees needs RTK (docs/planning.md)
     return _field_text(f"{uavs} UAVs, {obstacles} trees, {side_m:g} m field", side_m=side_m,
                        offsets=offsets, start=start, goal=goal, trees=trees,
                        navigation="rtk-fixed")
+
+
+def _scattered_trees(count: int, side_m: float, seed: int, clear) -> list:
+    """``count`` trees of 2-4 m radius, (centre, radius) pairs, uniform over the ``side_m``
+    square field (seeded), each one for which ``clear(centre, radius)`` holds."""
+    rng = np.random.default_rng(seed)
+    trees = []
+    while len(trees) < count:
+        centre = rng.uniform(0.0, side_m, 2)
+        radius = float(rng.uniform(2.0, 4.0))
+        if clear(centre, radius):
+            trees.append((centre, radius))
+    return trees
 
 
 def _field_text(name: str, *, side_m: float, offsets: np.ndarray, start: np.ndarray,
@@ -118,13 +125,8 @@ def circle_scenario_text(*, uavs: int, radius_m: float = 100.0, side_m: float = 
     half = radius_m + 10.0
     start = np.array([half, half])
     goal = np.array([side_m, side_m]) - half
-    rng = np.random.default_rng(seed)
-    trees = []
-    while len(trees) < obstacles:
-        centre = rng.uniform(0.0, side_m, 2)
-        radius = float(rng.uniform(2.0, 4.0))
-        if all(np.hypot(*(centre - p)) > half + radius + 2.0 for p in (start, goal)):
-            trees.append((centre, radius))
+    trees = _scattered_trees(obstacles, side_m, seed, lambda centre, radius: all(
+        np.hypot(*(centre - p)) > half + radius + 2.0 for p in (start, goal)))
 
     return _field_text(f"{uavs} UAVs on a {radius_m:g} m circle, {side_m:g} m field",
                        side_m=side_m, offsets=offsets, start=start, goal=goal, trees=trees,
