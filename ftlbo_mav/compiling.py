@@ -34,6 +34,13 @@ WHAT: dict[str, str] = {
 }
 """Per module of compiled loops: what it is, in the user's words."""
 
+LATER: dict[str, str] = {
+    "ftlbo_mav.planning._geometric_jit": "ftlbo_mav.planning.warm:compile_loops",
+    "ftlbo_mav.planning._proximity_jit": "ftlbo_mav.planning.warm:compile_loops",
+}
+"""Per module whose loops :func:`cheap` runs only once cached: the function
+(``"package.module:function"``) that compiles them in the background."""
+
 SECONDS: dict[str, float] = {
     "ftlbo_mav.ardupilot.compiled.fly": 12.0,  # 11-12 s quiet, 20-26 s at load 5-7
     "ftlbo_mav.ardupilot.compiled._follow": 4.0,  # 4.1 and 6.0 s at load 6
@@ -88,11 +95,20 @@ def cheap(get: Callable[[], object]) -> bool:
     """Whether running compiled loops now costs next to nothing: numba is loaded in this
     process and the loop (or tuple of loops) ``get()`` returns is :func:`ready`. ``get``
     imports the loops' module, called only when numba is loaded (an import that would
-    otherwise load it)."""
+    otherwise load it). When they are not ready and :data:`LATER` names how their module
+    is compiled, that starts in the background (:func:`compile_later`): a run that would
+    have used them finds them cached next time, instead of only after some plan large
+    enough to compile them in the foreground."""
     if not loaded():
         return False
     loops = get()
-    return ready(*loops) if isinstance(loops, tuple) else ready(loops)
+    loops = loops if isinstance(loops, tuple) else (loops,)
+    if ready(*loops):
+        return True
+    module = getattr(loops[0], "py_func", loops[0]).__module__
+    if module in LATER:
+        compile_later(module, LATER[module])
+    return False
 
 
 def compile_later(module: str, how: str) -> bool:
