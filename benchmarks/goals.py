@@ -1,7 +1,7 @@
 """Every speed goal beside the figure measured now, met or missed, in one table.
 
-Plain ``python benchmarks/goals.py`` (at most about 7 minutes on a 2-core machine). It runs
-the quick form of each benchmark, once each unless a row says otherwise, and prints one
+Plain ``python benchmarks/goals.py`` (about 4 minutes on a 2-core machine, at most 7). It
+runs the quick form of each benchmark, once each unless a row says otherwise, and prints one
 table: each goal with where it was set (an issue or a benchmark's docstring), its limit,
 the figure measured in this run, the peak memory of the process measured where there is
 one, and met or missed; and the load average at the start and at the end, since the
