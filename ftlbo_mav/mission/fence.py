@@ -29,7 +29,7 @@ navigation error (:func:`~ftlbo_mav.gnss.pair_error_m`) from the other UAVs' hom
 rally points and from their return lines to their rally points (the straight lines RTL
 flies from each point of their paths that is nearer their rally point than their home),
 while its own such lines keep that distance from the other UAVs' homes and rally points
-(:func:`~.rally.rally_points_enu`). Its altitude is the goal's, in whole metres
+(:func:`~.rally.search_rally_points`). Its altitude is the goal's, in whole metres
 (AP_Rally keeps an int16 of metres).
 """
 
@@ -201,9 +201,8 @@ def plan_fences(plan: Plan, *, settings: FenceSettings = FenceSettings()) -> lis
                              "the other UAVs' homes, rally points and return lines; RTL "
                              "goes home")
         elif point is None:
-            sep = rally_settings.rally_separation_m
             own_notes.append(f"no rally point: no place in the area is clear of the "
-                             f"obstacles and {sep:.2f} m from the other UAVs' return "
+                             f"obstacles and {sep_m:.2f} m from the other UAVs' return "
                              "lines; RTL goes home")
         else:
             lat, lon, _ = plan.lla(np.array([[point[0], point[1], 0.0]]))[0]

@@ -15,7 +15,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .rally_fans import Fans
+from .rally_fans import Fans, outward_edges
 from .rally_fans import convex_hull as _hull
 
 
@@ -78,10 +78,7 @@ def _near_hull(queries: np.ndarray, points: np.ndarray, reach: float) -> np.ndar
     hull = _hull(points)
     if len(hull) < 3 or not near.any():
         return near
-    a, b = hull, np.roll(hull, -1, axis=0)
-    edge = b - a
-    normal = np.column_stack([edge[:, 1], -edge[:, 0]])  # outward for a ccw hull
-    normal /= np.maximum(_norm(normal), 1e-300)[:, None]
+    a, normal = outward_edges(hull)
     q = queries[near]
     beyond = ((q[:, None, :] - a[None]) * normal[None]).sum(-1) > reach + 1e-6
     near[np.flatnonzero(near)[beyond.any(axis=1)]] = False
@@ -340,7 +337,7 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
                  line_lo: np.ndarray, line_hi: np.ndarray, sep: float,
                  compiled: bool = False, hit: np.ndarray | None = None,
                  fans: Fans | None = None, own_box: tuple | None = None,
-                 budget: int | None = None):
+                 budget: int | None = None) -> tuple[int | None, int]:
     """The index of the first of the candidates ``chunk`` (C, 2) that keeps ``sep``
     between itself and the others' return lines ``line_a``-``line_b`` (S, 2) (their boxes
     grown by ``sep``: ``line_lo``, ``line_hi``) and between the others' places ``places``
@@ -352,10 +349,10 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
     the candidates x lines that can reach them (``hit`` (S,), else found here from the
     boxes) are :data:`COMPILED_FROM` or more. ``fans`` (:class:`.rally_fans.Fans`) says whose the
     lines are, for the compiled test to skip a fan's lines at once; ``own_box`` the box
-    (lo, hi) of ``own``. With a ``budget`` of work (:data:`WORK_PER_UAV`), returns the
-    index and the work done: compiled, what it measured, given up (None) once the budget
-    is spent; in numpy, at most candidates x (lines reaching them + path points +
-    places), the batch tested whole."""
+    (lo, hi) of ``own``. Returns the index and the work done: compiled, what it measured,
+    given up (None) once a ``budget`` of work (:data:`WORK_PER_UAV`; None: no budget) is
+    spent; in numpy, at most candidates x (lines reaching them + path points + places),
+    the batch tested whole."""
     if hit is None and not compiled:
         lo, hi = chunk.min(axis=0), chunk.max(axis=0)
         hit = np.all((line_lo <= hi) & (line_hi >= lo), axis=1)
@@ -375,12 +372,10 @@ def _first_clear(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,
                                   own, own_home,
                                   places[_near_box(places, box_lo, box_hi)], float(sep),
                                   -1 if budget is None else max(int(budget), 1))
-        found = None if first < 0 else int(first)
-        return (found, int(done)) if budget is not None else found
+        return (None if first < 0 else int(first)), int(done)
     found = _first_clear_numpy(chunk, own=own, own_home=own_home, places=places,
                                line_a=line_a[hit], line_b=line_b[hit], sep=sep)
-    done = len(chunk) * (int(hit.sum()) + len(own) + len(places))
-    return (found, done) if budget is not None else found
+    return found, len(chunk) * (int(hit.sum()) + len(own) + len(places))
 
 
 def _first_clear_numpy(chunk: np.ndarray, *, own: np.ndarray, own_home: np.ndarray,

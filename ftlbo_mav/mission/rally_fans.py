@@ -28,6 +28,16 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
     return np.array(lower[:-1] + upper[:-1])
 
 
+def outward_edges(hull: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of a counter-clockwise ``hull`` (h, 2) of three corners or more (as
+    :func:`convex_hull` gives it): their starts (h, 2) and outward unit normals (h, 2).
+    A point ``q`` is ``(q - start) . normal`` beyond an edge's line."""
+    edge = np.roll(hull, -1, axis=0) - hull
+    normal = np.column_stack([edge[:, 1], -edge[:, 0]])  # outward for a ccw hull
+    normal /= np.maximum(np.hypot(normal[:, 0], normal[:, 1]), 1e-300)[:, None]
+    return hull, normal
+
+
 class Fans:
     """The chosen UAVs' return lines as fans: each UAV's lines (contiguous in the line
     arrays, ``start`` (F+1,) their bounds) run from path points to its rally point
@@ -73,12 +83,7 @@ class Fans:
         """The fan of the lines from ``starts`` (m, 2) to ``rally`` (2,). Returns the
         order (m,) in which its lines must be appended to the line arrays."""
         hull = convex_hull(np.concatenate([starts, rally[None]]))
-        a, n = np.zeros((0, 2)), np.zeros((0, 2))
-        if len(hull) >= 3:
-            a = hull
-            edge = np.roll(hull, -1, axis=0) - hull
-            n = np.column_stack([edge[:, 1], -edge[:, 0]])  # outward for a ccw hull
-            n /= np.maximum(np.hypot(n[:, 0], n[:, 1]), 1e-300)[:, None]
+        a, n = outward_edges(hull) if len(hull) >= 3 else (np.zeros((0, 2)), np.zeros((0, 2)))
         self.edge_a = np.concatenate([self.edge_a, a])
         self.edge_n = np.concatenate([self.edge_n, n])
         angle = np.arctan2(starts[:, 1] - rally[1], starts[:, 0] - rally[0])

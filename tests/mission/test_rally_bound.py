@@ -130,8 +130,8 @@ def test_the_fans_shortcuts_change_no_answer():
     answers = set()
     for chunk in [w[None] for w in west] + [
             rng.uniform(-5.0, 70.0, (int(rng.integers(1, 30)), 2)) for _ in range(150)]:
-        numpy = rally._first_clear(chunk, **kw, hit=np.ones(len(line_a), bool))
-        assert rally._first_clear(chunk, **kw, compiled=True, fans=fans) == numpy
-        assert rally._first_clear(chunk, **kw, compiled=True, fans=bucketed) == numpy
+        numpy = rally._first_clear(chunk, **kw, hit=np.ones(len(line_a), bool))[0]
+        assert rally._first_clear(chunk, **kw, compiled=True, fans=fans)[0] == numpy
+        assert rally._first_clear(chunk, **kw, compiled=True, fans=bucketed)[0] == numpy
         answers.add(numpy if numpy is None else min(numpy, 1))
     assert answers == {None, 0, 1}
