@@ -72,8 +72,7 @@ def _until_kept(scenario: Scenario, obstacles: int, attempt: Attempt, *, relay: 
     if relay and current.survey is not None and current.survey.lanes:
         probe = _straight_excursion(scenario)
         if probe is not None and (probe[0].max() > 0 or probe[1].max() > 0):
-            inset_lo = np.where(probe[0] > 0, probe[0] + SURVEY_RELAY_MARGIN_M, 0.0)
-            inset_hi = np.where(probe[1] > 0, probe[1] + SURVEY_RELAY_MARGIN_M, 0.0)
+            inset_lo, inset_hi = _further_in(probe[0]), _further_in(probe[1])
             try:
                 current = relay_lanes(scenario, inset_lower_m=inset_lo, inset_upper_m=inset_hi)
             except ScenarioError:  # no room for it: planned as laid, and judged
@@ -100,13 +99,19 @@ def _until_kept(scenario: Scenario, obstacles: int, attempt: Attempt, *, relay: 
         out_lo, out_hi = _area_excursion(result)
         if (relay and relays < SURVEY_RELAYS and current.survey is not None
                 and current.survey.lanes and (out_lo.max() > 0 or out_hi.max() > 0)):
-            inset_lo = inset_lo + np.where(out_lo > 0, out_lo + SURVEY_RELAY_MARGIN_M, 0.0)
-            inset_hi = inset_hi + np.where(out_hi > 0, out_hi + SURVEY_RELAY_MARGIN_M, 0.0)
+            inset_lo, inset_hi = inset_lo + _further_in(out_lo), inset_hi + _further_in(out_hi)
             current = relay_lanes(scenario, inset_lower_m=inset_lo, inset_upper_m=inset_hi)
             relays, relaid = relays + 1, True
             continue
         break
     return replace(best, seconds=seconds, replans=max(best.replans, replans))
+
+
+def _further_in(out: np.ndarray) -> np.ndarray:
+    """How much further in the lanes are laid for a swing ``out`` (2,) metres past the
+    area's sides (<= 0: none): that and :data:`SURVEY_RELAY_MARGIN_M`, on the sides it
+    crosses."""
+    return np.where(out > 0, out + SURVEY_RELAY_MARGIN_M, 0.0)
 
 
 def _straight_excursion(scenario: Scenario) -> tuple[np.ndarray, np.ndarray] | None:
