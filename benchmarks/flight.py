@@ -239,16 +239,12 @@ def fly_fresh(plan_dir: Path, homes, strategy: str, *, binary: str | None = None
     vehicle booted with them). ``virtual``: the emulated copters in this process, flown
     with the ground station on a virtual clock (:mod:`ftlbo_mav.sim.inprocess`; no radio,
     ``speedup`` unused): the flight costs only its computation."""
-    if virtual:
-        if binary or radio is not None:
-            raise ValueError("a virtual clock flies the emulator's copters, no radio")
-        with VirtualClock():
-            return _fly_fresh(plan_dir, homes, strategy, binary=None, speedup=speedup,
-                              seed=seed, vary=vary, params=params, wind=wind, keep=keep,
-                              radio=None, profile=profile, virtual=True)
-    return _fly_fresh(plan_dir, homes, strategy, binary=binary, speedup=speedup, seed=seed,
-                      vary=vary, params=params, wind=wind, keep=keep, radio=radio,
-                      profile=profile, virtual=False)
+    if virtual and (binary or radio is not None):
+        raise ValueError("a virtual clock flies the emulator's copters, no radio")
+    with VirtualClock() if virtual else contextlib.nullcontext():
+        return _fly_fresh(plan_dir, homes, strategy, binary=binary, speedup=speedup,
+                          seed=seed, vary=vary, params=params, wind=wind, keep=keep,
+                          radio=radio, profile=profile, virtual=virtual)
 
 
 def _fly_fresh(plan_dir: Path, homes, strategy: str, *, binary, speedup, seed, vary, params,
