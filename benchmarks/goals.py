@@ -427,7 +427,7 @@ def main() -> int:
     print(f"load average at start: {' '.join(map(str, doc['load_start']))}", flush=True)
     rows = []
     print("the first plan after an install, empty numba cache ...", flush=True)
-    rows += first_run_rows(row)
+    rows += first_run_rows()
     # The rows below measure what a user has once the first run's background compile is
     # done (the rows above measured the empty cache): the flown-path model compiled first.
     print("the flown-path model compiled into the cache ...", flush=True)

@@ -214,15 +214,6 @@ ISSUE51 = {10: 3.0, 50: 10.0, 200: 30.0}
 ISSUE51_MEMORY_MIB = 2048.0
 
 
-def _goal_row(goal: str, limit: str, measured: str, met: bool | None, *, status=None,
-              value=None, limit_value=None, peak_rss_mib=None, note="") -> dict:
-    """A row as ``benchmarks/goals.py``'s ``row(...)`` makes it (the same keys), source
-    "issue 51" (goals.py imports this module, so not the other way round)."""
-    return {"goal": goal, "source": "issue 51", "limit": limit, "measured": measured,
-            "value": value, "limit_value": limit_value, "peak_rss_mib": peak_rss_mib,
-            "status": status or ("met" if met else "missed"), "note": note}
-
-
 def _written(out: Path, uavs: int) -> tuple[bool, int]:
     """Whether ``out`` holds every file ``plan`` writes for ``uavs`` UAVs (plan.json,
     fence.parm, a .waypoints and a .fence each), and how many UAVs its plan.json says
@@ -255,6 +246,8 @@ def issue51_rows(*, sizes: tuple[int, ...] = (10, 50, 200), timeout_s: float = 1
     after which no size starts."""
     import time
 
+    from goals import row  # the benchmarks' one row format (run as a script, beside it)
+
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for uavs in sizes:
@@ -262,9 +255,9 @@ def issue51_rows(*, sizes: tuple[int, ...] = (10, 50, 200), timeout_s: float = 1
             goal = f"plan process: {uavs} UAVs on a 100 m circle, 1 km field, files written"
             left = math.inf if deadline is None else deadline - time.monotonic()
             if left < 2 * limit + 1.0:
-                rows.append(_goal_row(goal, f"<= {limit:g} s", "not run", None,
-                                      status="not measured", limit_value=limit,
-                                      note="time budget spent"))
+                rows.append(row(goal, "issue 51", f"<= {limit:g} s", "not run", None,
+                                status="not measured", limit_value=limit,
+                                note="time budget spent"))
                 continue
             path = Path(tmp) / f"circle-{uavs}.toml"
             path.write_text(circle_scenario_text(uavs=uavs))
@@ -276,9 +269,9 @@ def issue51_rows(*, sizes: tuple[int, ...] = (10, 50, 200), timeout_s: float = 1
             before = "timeout" if first["timed_out"] else f"{first['seconds']:.2f} s"
             mib = run["peak_rss_mib"]
             if run["timed_out"]:
-                rows.append(_goal_row(goal, f"<= {limit:g} s", f"timeout > {wait:.0f} s",
-                                      False, limit_value=limit, peak_rss_mib=mib,
-                                      note="killed; nothing written"))
+                rows.append(row(goal, "issue 51", f"<= {limit:g} s",
+                                f"timeout > {wait:.0f} s", False, limit_value=limit,
+                                peak_rss_mib=mib, note="killed; nothing written"))
                 continue
             written, stopped = _written(out, uavs)
             seconds = run["seconds"]
@@ -286,10 +279,9 @@ def issue51_rows(*, sizes: tuple[int, ...] = (10, 50, 200), timeout_s: float = 1
                     f"files missing (exit {run['returncode']}: {run['last_line'][:60]})")
             note += (f"; {stopped} UAVs without rally point (search bound)" if stopped
                      else "") + f"; second run (the first: {before})"
-            rows.append(_goal_row(goal, f"<= {limit:g} s, < 2 GiB", f"{seconds:.2f} s",
-                                  written and seconds <= limit and mib < ISSUE51_MEMORY_MIB,
-                                  value=seconds, limit_value=limit, peak_rss_mib=mib,
-                                  note=note))
+            rows.append(row(goal, "issue 51", f"<= {limit:g} s, < 2 GiB", f"{seconds:.2f} s",
+                            written and seconds <= limit and mib < ISSUE51_MEMORY_MIB,
+                            value=seconds, limit_value=limit, peak_rss_mib=mib, note=note))
     return rows
 
 
