@@ -107,7 +107,7 @@ def tuning(urls) -> list[dict]:
     return out
 
 
-def one(scenario: Path, name: str, speedup: float) -> dict:
+def one(scenario: Path, name: str, speedup: float, keep: Path | None = None) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="ftlbo-fleet-")) / "plan"
     shutil.copytree(scenario.with_suffix(""), folder)
     homes = scenario_homes(load_scenario(scenario))
@@ -131,6 +131,8 @@ def one(scenario: Path, name: str, speedup: float) -> dict:
                  float(load_planned_flight(folder).predicted_clearance.min()))
     summary_path = folder / "flight" / "summary.json"
     s = json.loads(summary_path.read_text()) if summary_path.exists() else {}
+    if keep is not None:  # the flight's own records, to look at where an error came from
+        shutil.copytree(folder, keep / f"{scenario.stem}-{name}", dirs_exist_ok=True)
     shutil.rmtree(folder.parent, ignore_errors=True)
     return {"scenario": scenario.stem, "fleet": name, "backend": backend, "plan": plan_for,
             "upload_exit": up.exit_code, "fly_exit": flown.exit_code,
@@ -148,6 +150,8 @@ def main() -> int:
     ap.add_argument("--scenario", action="append", type=Path, default=[])
     ap.add_argument("--speedup", type=float, default=4.0)
     ap.add_argument("--out", type=Path, default=None, help="also write the rows as JSON")
+    ap.add_argument("--keep", type=Path, default=None,
+                    help="copy each flight's plan folder (records included) under this folder")
     args = ap.parse_args()
     rows = []
     print("| scenario | fleet | back end | plan made for | upload / fly exit | tuning written "
@@ -155,7 +159,7 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|---|---|")
     for scenario in args.scenario or SCENARIOS:
         for name in args.fleet or list(FLEETS):
-            r = one(scenario, name, args.speedup)
+            r = one(scenario, name, args.speedup, args.keep)
             rows.append(r)
 
             def f(x):
