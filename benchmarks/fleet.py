@@ -107,7 +107,8 @@ def tuning(urls) -> list[dict]:
     return out
 
 
-def one(scenario: Path, name: str, speedup: float, keep: Path | None = None) -> dict:
+def one(scenario: Path, name: str, speedup: float, keep: Path | None = None,
+        fly_args: tuple[str, ...] = ()) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="ftlbo-fleet-")) / "plan"
     shutil.copytree(scenario.with_suffix(""), folder)
     homes = scenario_homes(load_scenario(scenario))
@@ -123,7 +124,8 @@ def one(scenario: Path, name: str, speedup: float, keep: Path | None = None) -> 
             plan_for = "the fleet (plan --fleet)" if again.exit_code == 0 else (
                 f"plan --fleet exit {again.exit_code}")
             up = CliRunner().invoke(cli, ["upload", str(folder), *args])
-        flown = CliRunner().invoke(cli, ["fly", str(folder), *args, "--control-port", "0"])
+        flown = CliRunner().invoke(cli, ["fly", str(folder), *args, "--control-port", "0",
+                                         *fly_args])
         after = tuning(urls)
     changed = sum(b[k] != a[k] for b, a in zip(before, after) for k in TUNING)
     kept = re.search(r"own values: clearance (\d+\.\d+) m", up.stderr)
@@ -150,6 +152,9 @@ def main() -> int:
     ap.add_argument("--scenario", action="append", type=Path, default=[])
     ap.add_argument("--speedup", type=float, default=4.0)
     ap.add_argument("--out", type=Path, default=None, help="also write the rows as JSON")
+    ap.add_argument("--no-keeper", action="store_true",
+                    help="fly without the formation keeper (fly --no-keeper): how the "
+                    "copters drift apart on their own")
     ap.add_argument("--keep", type=Path, default=None,
                     help="copy each flight's plan folder (records included) under this folder")
     args = ap.parse_args()
@@ -159,7 +164,8 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|---|---|")
     for scenario in args.scenario or SCENARIOS:
         for name in args.fleet or list(FLEETS):
-            r = one(scenario, name, args.speedup, args.keep)
+            r = one(scenario, name, args.speedup, args.keep,
+                    ("--no-keeper",) if args.no_keeper else ())
             rows.append(r)
 
             def f(x):
