@@ -35,7 +35,7 @@ def _settle(*climbs, **options) -> tuple[float, list[str]]:
     said: list[str] = []
     with VirtualClock(start_s=0.0):
         vehicles = [Climbing(f"uav{i + 1}", c, 0.0) for i, c in enumerate(climbs)]
-        settle(vehicles, FlyOptions(**options), said.append)
+        settle(vehicles, FlyOptions(**{"settle_budget_s": 4.0, **options}), said.append)
         return clock.monotonic(), said
 
 
@@ -53,6 +53,7 @@ def test_the_wait_is_bounded_and_says_who_was_still_moving():
     assert len(said) == 1 and "uav2 climbing +0.20 m/s" in said[0]
 
 
-def test_no_budget_no_wait():
+def test_no_budget_no_wait_which_is_the_default():
+    assert FlyOptions().settle_budget_s == 0.0
     waited, said = _settle(lambda t: 0.3, settle_budget_s=0.0)
     assert waited == 0.0 and said == []
