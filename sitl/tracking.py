@@ -10,6 +10,12 @@ controller ran with (PARM) and the drag coefficients SITL's frame printed at sta
 (``sitl.log``: "Suggested EK3_DRAG_BCOEF_* = ..., EK3_DRAG_MCOEF = ...").
 ``tests/conformance/test_tracking.py`` holds :mod:`ftlbo_mav.ardupilot.poscontrol` to it:
 the recorded targets in, the recorded positions out.
+
+``--climb``: the vertical instead (PSCD: target altitude TPU, desired climb DVU and
+vertical acceleration DAU, the copter's altitude PU, climb VU and acceleration AU, up
+from the EKF origin), from the takeoff's liftoff to ``--after`` seconds into AUTO, times
+from AUTO's start (``tests/conformance/test_climb.py``: the vertical follower and the
+stopping point AUTO starts from).
 """
 
 from __future__ import annotations
@@ -61,6 +67,45 @@ def read_log(path: Path) -> dict:
     return {"version": version, "params": params, "rows": rows}
 
 
+CLIMB_PARAMS = ("PSC_POSZ_P", "PSC_VELZ_P", "PSC_VELZ_I", "PSC_VELZ_FLTE", "PSC_ACCZ_P",
+                "PSC_ACCZ_I", "PSC_ACCZ_IMAX", "PSC_ACCZ_FLTE", "WPNAV_ACCEL_Z", "PSC_JERK_Z",
+                "MOT_THST_HOVER", "MOT_THST_EXPO")
+CLIMB_FIELDS = ("t", "TPU", "DVU", "DAU", "PU", "VU", "AU")
+LIFTOFF_M = 0.05  # above where it stood: the takeoff has left the ground
+
+
+def read_climb(path: Path, after_s: float) -> dict:
+    """One copter's PSCD rows from its liftoff to ``after_s`` into AUTO (times from
+    AUTO's start, metres up), its PARMs (the last value logged) and version."""
+    log = DFReader.DFReader_binary(str(path), zero_time_base=True)
+    params, version, rows, auto_at, ground = {}, None, [], None, None
+    while True:
+        m = log.recv_match(type=["PARM", "MODE", "PSCD", "MSG"])
+        if m is None:
+            break
+        kind = m.get_type()
+        if kind == "PARM" and m.Name in CLIMB_PARAMS:
+            params[m.Name] = float(m.Value)
+        elif kind == "MSG" and version is None and m.Message.startswith("ArduCopter V"):
+            version = m.Message
+        elif kind == "MODE" and m.ModeNum == AUTO and auto_at is None:
+            auto_at = m.TimeUS / 1e6
+        elif kind == "PSCD":
+            t = m.TimeUS / 1e6
+            if ground is None:
+                ground = -float(m.PD)
+            if auto_at is not None and t > auto_at + after_s:
+                break
+            if rows or -float(m.PD) > ground + LIFTOFF_M:
+                rows.append([t, *(round(-float(getattr(m, f)), 4)
+                                  for f in ("TPD", "DVD", "DAD", "PD", "VD", "AD"))])
+    if auto_at is None:
+        raise SystemExit(f"{path}: never in AUTO")
+    for r in rows:
+        r[0] = round(r[0] - auto_at, 4)
+    return {"version": version, "params": params, "rows": rows}
+
+
 def drag_coefficients(sitl_log: Path) -> dict:
     """The drag SITL's frame printed at start."""
     text = sitl_log.read_text(errors="replace")
@@ -76,7 +121,13 @@ def main(argv=None) -> int:
                         help="flight folders kept by benchmarks/flight.py --keep")
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--note", default="", help="how the flights were flown")
+    parser.add_argument("--climb", action="store_true",
+                        help="the vertical from the takeoff into AUTO (PSCD) instead")
+    parser.add_argument("--after", type=float, default=3.0,
+                        help="--climb: seconds of AUTO kept")
     args = parser.parse_args(argv)
+    if args.climb:
+        return _climb(args)
     flights = []
     for folder in args.flights:
         copters = []
@@ -95,6 +146,30 @@ def main(argv=None) -> int:
     doc = {"about": f"{version} SITL (copter.parm), the position controller's own log "
                     f"(PSCN/PSCE at 10 Hz) in AUTO; `python -m sitl.tracking`. {args.note}",
            "fields": list(FIELDS), "flights": flights}
+    args.out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+def _climb(args) -> int:
+    flights = []
+    for folder in args.flights:
+        copters = []
+        for instance in sorted(folder.glob("instance*")):
+            logs = sorted((instance / "logs").glob("*.BIN"))
+            if not logs:
+                raise SystemExit(f"{instance}: no DataFlash log")
+            copter = read_climb(logs[-1], args.after)
+            copter["instance"] = instance.name
+            copters.append(copter)
+            print(f"{folder.name}/{instance.name}: {len(copter['rows'])} rows", file=sys.stderr)
+        flights.append({"flight": folder.name, "copters": copters})
+    version = next((c["version"] for f in flights for c in f["copters"] if c["version"]), "?")
+    doc = {"about": f"{version} SITL (copter.parm), the vertical position controller's own "
+                    f"log (PSCD at 10 Hz, metres up) from the takeoff's liftoff to "
+                    f"{args.after:g} s into AUTO, t from AUTO's start; `python -m sitl.tracking "
+                    f"--climb`. {args.note}",
+           "fields": list(CLIMB_FIELDS), "flights": flights}
     args.out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
     print(f"wrote {args.out}", file=sys.stderr)
     return 0

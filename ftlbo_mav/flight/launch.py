@@ -4,7 +4,8 @@ GUIDED, arm (retried while the autopilot still waits for its position estimate),
 off to the mission's takeoff altitude, all vehicles at once; wait until every vehicle is
 within a tolerance of its altitude *and* has stopped climbing (a naive start, switching
 to AUTO as soon as all are near altitude, lets one copter still climbing start late and
-fly the legs behind the others); then each moves to its start point where its own
+fly the legs behind the others), and its climb has settled (:func:`settle`, bounded);
+then each moves to its start point where its own
 estimate puts it off (:func:`align_at_start`). The start itself is :mod:`.start`.
 """
 
@@ -75,6 +76,7 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
             raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
         pending = [v for v, alt in zip(vehicles, targets) if not hovering(alt)(v.status)]
         if not pending:
+            settle(vehicles, options, say, poll)
             return
         if clock.monotonic() >= deadline:
             abort(vehicles, mode="LAND")
@@ -83,6 +85,41 @@ def take_off(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], options,
                               f" s (at {pending[0].status.alt_m:.1f} m); all vehicles landing")
         poll()
         pending[0].wait_for(hovering(targets[vehicles.index(pending[0])]), 0.1)
+
+
+def settle(vehicles: Sequence[FlightVehicle], options, say: Callable[[str], None],
+           poll: Callable[[], None] = lambda: None) -> None:
+    """Hovering, wait until every vehicle's climb rate has stayed within
+    ``options.settle_climb_m_s`` for ``options.settle_hold_s``, at most
+    ``options.settle_budget_s`` (then start anyway, said).
+
+    A copter that has just reached its takeoff altitude is not still: it overshoots it
+    and comes back over seconds (ArduCopter 4.5.6 SITL, 6 m: 6.05 m, then 5.97 m, still
+    moving 0.04-0.08 m/s three seconds after its target stopped). AUTO starts its first leg
+    from the stopping point (AC_WPNav::wp_and_spline_init, AC_PosControl::
+    get_stopping_point_z_cm: the altitude plus the climb rate over PSC_POSZ_P, 1/s), so a
+    copter still climbing 0.1 m/s flies its first leg 0.1 m above the plan and the others.
+    The wait costs its seconds in the air (the flight's time and battery)."""
+    budget, hold, limit = options.settle_budget_s, options.settle_hold_s, options.settle_climb_m_s
+    if budget <= 0:
+        return
+    start = clock.monotonic()
+    quiet_since: list[float | None] = [None] * len(vehicles)
+
+    def pending() -> list[int]:
+        now = clock.monotonic()
+        for i, v in enumerate(vehicles):
+            if abs(v.status.climb_m_s) > limit:
+                quiet_since[i] = None
+            elif quiet_since[i] is None:
+                quiet_since[i] = now
+        return [i for i, since in enumerate(quiet_since) if since is None or now - since < hold]
+
+    late = wait_while(vehicles, pending, start + budget, poll, step_s=0.1)
+    if late:
+        say("still settling after {:g} s, starting anyway: {}".format(budget, ", ".join(
+            f"{vehicles[i].name} climbing {vehicles[i].status.climb_m_s:+.2f} m/s"
+            for i in late)))
 
 
 def camera_off(v: FlightVehicle, say: Callable[[str], None]) -> None:

@@ -27,11 +27,13 @@ SIMULATOR_NOTE = (
     "emulator run on one simulated clock (unless --time-scale): the ground computes in "
     "no time, and a seed always flies the same flight. Against ArduCopter 4.5.6 SITL on ten seeded "
     "conditions of the example (docs/risk.md): clearance agrees within the spread; the "
-    "formation error's worst is about three fifths of SITL's (0.119 against 0.203 m "
-    "median; five SITL flights of ten passed the emulator's largest, 0.192 m), so this "
-    "report still understates it (the copters' vertical state where AUTO starts is not "
-    "modelled); the smallest separation is about 0.1 m smaller than SITL's (2.87 against "
-    "2.99 m median).")
+    "formation error's worst is about seven tenths of SITL's (0.125 against 0.174 m "
+    "median; four SITL flights of ten passed the emulator's largest, 0.193 m), so this "
+    "report still understates it (the copters' vertical approach to their takeoff "
+    "altitude and the stopping point AUTO starts from are modelled; how SITL's copters "
+    "fall behind their targets along the track while accelerating in wind is not); the "
+    "smallest separation is about 0.1 m smaller than SITL's (2.86 against 2.98 m "
+    "median).")
 
 
 def _where(records, key):

@@ -65,7 +65,7 @@ from ..ardupilot.navigation import (
     REAL32,
     param_value,
 )
-from ..ardupilot.poscontrol import PositionFollower
+from ..ardupilot.poscontrol import PositionFollower, VerticalFollower, stopping_point_z
 from ..mission.items import (
     MissionItem,
 )
@@ -170,6 +170,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self.gusts: Gusts | None = None  # wind (:mod:`.wind`): the copter is off its target
         self._follower: PositionFollower | None = None  # AC_PosControl, while AC_WPNav flies
         self._followed_until: float | None = None
+        self._climber: VerticalFollower | None = None  # AC_PosControl's vertical loops
+        self._climbed_until: float | None = None
         self._land_target = np.zeros(3)  # where a landing's descent holds the copter
         self._descend_from = 0.0  # when it starts down (Navigation.land_descent_delay_s)
         self._nav_since = 0.0  # when AC_WPNav was started from a hover
@@ -425,8 +427,15 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
 
     # -- mission execution
     def _start_nav(self, stopping_point: np.ndarray | None = None) -> None:
-        """AC_WPNav::wp_and_spline_init at the copter's (stopped) position."""
-        point = self.position.copy() if stopping_point is None else stopping_point
+        """AC_WPNav::wp_and_spline_init from the copter's stopping point: horizontally where
+        it is (stopped), vertically AC_PosControl::get_stopping_point_z_cm (a copter still
+        climbing after its takeoff starts its first leg above itself)."""
+        if stopping_point is None:
+            point = self.position.copy()
+            point[2] = stopping_point_z(float(self.position[2]), float(self.velocity[2]),
+                                        self.nav_params())
+        else:
+            point = stopping_point
         self.nav = WaypointNav(self.nav_params(), point, self.speed_m_s)
         self._nav_since = self.time  # the hover it starts from (FlightLimits: its settling)
 
@@ -554,7 +563,9 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
                 self.disarm()
             return
         if self._enter is not None:
-            if not self.landed and self._brake(dt):
+            # ModeAuto::init does not stop the copter: AC_WPNav starts from its stopping
+            # point (vertically too, _start_nav); other modes' entries brake first here
+            if not self.landed and self._brake(dt, vertical=self._enter != self._auto_enter):
                 return
             enter, self._enter = self._enter, None
             enter()
@@ -581,11 +592,13 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         if not self.landed:
             self._armed_on_ground_since = None
 
-    def _follow(self, dt: float, target, target_vel, target_accel) -> None:
+    def _follow(self, dt: float, target, target_vel, target_accel, *,
+                vertical: bool = True) -> None:
         """AC_PosControl's horizontal loops for ``dt``: the copter follows ``target``
         (ENU) with the airframe's drag, from where it was (a follower is started anew,
         AC_PosControl::init_xy_controller, when the last step did not follow one or
-        the parameters changed); vertically it is on the target."""
+        the parameters changed); vertically too (:meth:`_climb`), unless ``vertical`` is
+        False: then it is on its vertical target."""
         nav = self.nav_params()
         wind = (0.0, 0.0, 0.0) if self.gusts is None else self.gusts.wind.velocity_xyz
         follower = self._follower
@@ -600,8 +613,31 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
                 airframe=self.options.limits.airframe, wind=wind[:2])
         follower.step(dt, target, target_vel, target_accel)
         self._followed_until = self.time
-        self.position = np.array([follower.px, follower.py, target[2]])
-        self.velocity = np.array([follower.vx, follower.vy, target_vel[2]])
+        z, vz = (self._climb(dt, target[2], target_vel[2], target_accel[2]) if vertical
+                 else (target[2], target_vel[2]))
+        self.position = np.array([follower.px, follower.py, z])
+        self.velocity = np.array([follower.vx, follower.vy, vz])
+
+    def _climb(self, dt: float, target: float, target_vel: float, target_accel: float
+               ) -> tuple[float, float]:
+        """AC_PosControl's vertical loops for ``dt``
+        (:class:`~ftlbo_mav.ardupilot.poscontrol.VerticalFollower`): the copter's altitude
+        and climb rate following ``target`` (m, up), from where it was (started anew,
+        AC_PosControl::init_z_controller, when the last step did not follow one)."""
+        climber = self._climber
+        if (climber is None or self._climbed_until is None
+                or abs(self._climbed_until - (self.time - dt)) > 1e-9):
+            climber = self._climber = VerticalFollower(
+                float(self.position[2]), float(self.velocity[2]), nav=self.nav_params(),
+                airframe=self.options.limits.airframe)
+        self._climbed_until = self.time
+        if target_vel == 0.0 and target_accel == 0.0 and climber.at_rest_on(target):
+            return climber.z, climber.v  # hovering on its target: nothing moves
+        climber.nav = self.nav_params()
+        climber.step(dt, target, target_vel, target_accel)
+        if climber.z < 0.0:  # the ground holds it
+            climber.z, climber.v = 0.0, max(climber.v, 0.0)
+        return climber.z, climber.v
 
     def _nav_step(self, dt: float, out: list) -> None:
         """AC_WPNav moves the target and the copter follows it (AC_PosControl and the

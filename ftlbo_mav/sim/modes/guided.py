@@ -60,8 +60,10 @@ class ModeGuided:
         nav = self.nav_params()
         self.z.to_altitude(self._takeoff_alt, dt, up=nav.wp_speed_up, down=nav.wp_speed_dn,
                            accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
-        self.position[2] = max(self.z.pos, 0.0)
-        self.velocity[:] = (0.0, 0.0, self.z.vel)
+        # the copter follows its target (AC_PosControl::update_z_controller), not on it
+        self.position[2], vz = self._climb(dt, self.z.pos, self.z.vel, self.z.accel)
+        self.velocity[:] = (0.0, 0.0, vz)
+        # complete by its target, not by where the copter is (_AutoTakeoff::run)
         slow = 0.1 * nav.wp_speed_up
         if (self.z.pos >= self._takeoff_alt - 0.5 * slow * slow / nav.wp_accel_z
                 and self.z.vel < slow):
@@ -75,10 +77,11 @@ class ModeGuided:
 
     def _hover_step(self, dt: float) -> None:
         """Hovering after a GUIDED takeoff: the altitude target settles on the takeoff
-        altitude, the copter ``hover_error_m`` below it (FlightLimits)."""
+        altitude (ModeGuided::takeoff_run goes on running _AutoTakeoff::run); the copter
+        follows it, overshooting and coming back over seconds
+        (:class:`~ftlbo_mav.ardupilot.poscontrol.VerticalFollower`)."""
         nav = self.nav_params()
         self.z.to_altitude(self._takeoff_alt, dt, up=nav.wp_speed_up, down=nav.wp_speed_dn,
                            accel_max=nav.wp_accel_z, jerk=nav.psc_jerk_z)
-        settled = min(1.0, (self.time - self._takeoff_done_at) / 1.0)
-        self.position[2] = self.z.pos - self.options.limits.hover_error_m * settled
-        self.velocity[:] = (0.0, 0.0, self.z.vel)
+        self.position[2], vz = self._climb(dt, self.z.pos, self.z.vel, self.z.accel)
+        self.velocity[:] = (0.0, 0.0, vz)
