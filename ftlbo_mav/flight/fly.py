@@ -20,12 +20,10 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from ..ardupilot.copters import Copter
 from ..link.transfer import Timing
 from .departures import WatchOptions
-from .fit import predict_fleet
 from .fleet import Fleet, concurrently
-from .keeper import ExpectedLeads, FormationKeeper, KeeperOptions, planned_speed
+from .keeper import FormationKeeper, KeeperOptions, planned_speed
 from .launch import align_at_start, take_off, takeoff_item
 from .outcome import FlightLeftPlan, abort, aborted
 from .planned import PlannedFlight
@@ -75,23 +73,9 @@ class FlyOptions:
     any_params: bool = False  # fly copters whose own values lose a promise (flight/fit.py)
 
 
-def make_keeper(planned: PlannedFlight, options: KeeperOptions,
-                copters: Sequence[Copter] | None = None) -> FormationKeeper:
-    """A keeper for this plan; its cruise speed is learnt at pre-flight (cruise_speed).
-    ``copters``: each UAV's copter as it is (default: as the plan says); where they fly
-    differently, the keeper knows how they are predicted to drift apart."""
-    return FormationKeeper(planned.paths, planned_speed(planned.missions), options,
-                           expected=expected_leads(planned, copters or planned.fleet()))
-
-
-def expected_leads(planned: PlannedFlight, copters: Sequence[Copter]) -> ExpectedLeads | None:
-    """How ``copters`` flying ``planned`` drift apart on their own (None: they do not, or
-    the plan holds no prediction)."""
-    if len({c.nav for c in copters}) < 2:
-        return None
-    pred = predict_fleet(planned, copters)
-    return None if pred is None else ExpectedLeads.of(planned.paths, pred.times,
-                                                      pred.positions, pred.reached)
+def make_keeper(planned: PlannedFlight, options: KeeperOptions) -> FormationKeeper:
+    """A keeper for this plan; its cruise speed is learnt at pre-flight (cruise_speed)."""
+    return FormationKeeper(planned.paths, planned_speed(planned.missions), options)
 
 
 def cruise_speed(planned: PlannedFlight, vehicles: Sequence[FlightVehicle]) -> float | None:
@@ -123,14 +107,10 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     is sent to ``options.abort_mode`` before the interrupt propagates.
     """
     say("pre-flight: firmware, missions, GPS, pre-arm checks")
-    copters = preflight(planned, vehicles, timing=timing,
-                        ready_timeout_s=options.ready_timeout_s,
-                        any_firmware=options.any_firmware, any_params=options.any_params,
-                        say=say)
+    preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s,
+              any_firmware=options.any_firmware, any_params=options.any_params, say=say)
     if keeper is None and options.keeper.enabled:
-        keeper = make_keeper(planned, options.keeper, copters)
-    elif keeper is not None and keeper.options.enabled and keeper.expected is None:
-        keeper.expected = expected_leads(planned, copters)
+        keeper = make_keeper(planned, options.keeper)
     if keeper is not None and keeper.options.enabled and keeper.cruise_speed_m_s is None:
         keeper.cruise_speed_m_s = cruise_speed(planned, vehicles)
         if keeper.cruise_speed_m_s is None:

@@ -88,14 +88,6 @@ class KeeperOptions:
     keeper paused uav2 just before an outage and it fell 2.1 m behind, a departure;
     without the keeper that flight's formation stayed within 0.27 m).
 
-    A fleet of copters that fly differently (a Solo among default copters, 4.6 among
-    4.5) drifts apart on its own, as the plan's prediction with each copter's values says
-    (:class:`ExpectedLeads`): where the prediction says a copter will gain on the group's
-    last within the next ``anticipate_s``, that gain counts as a lead already (about the
-    time a pause takes to take half of what it costs: 0.5-1.1 s for pauses of 0.1-0.5 s
-    at 5 m/s, :meth:`~ftlbo_mav.ardupilot.navigation.Navigation.pause_loss`), so the
-    leaders wait as the lag opens, not after it has.
-
     The numbers are measured, not a taste: docs/flight.md."""
 
     enabled: bool = True
@@ -112,13 +104,12 @@ class KeeperOptions:
     max_jitter_s: float = 0.14
     max_gap_s: float = 0.6
     gap_memory_s: float = 20.0
-    anticipate_s: float = 1.0
     navigation: Navigation = Navigation()  # ArduCopter's defaults (copter.parm keeps them)
 
     def __post_init__(self) -> None:
         for name in ("engage_m", "engage_s", "floor_m", "max_pause_s", "rest_s",
                      "min_speed_m_s", "period_s", "late_s", "stale_s", "max_gap_s",
-                     "gap_memory_s", "anticipate_s"):
+                     "gap_memory_s"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0:
                 raise ValueError(f"keeper {name} must be a finite number >= 0, got {value!r}")
@@ -208,100 +199,6 @@ def progress_along(path: np.ndarray, point: np.ndarray, *, start_segment: int = 
     return float(along[k]), lo + k
 
 
-def progress_of(path: np.ndarray, points: np.ndarray, segment: np.ndarray) -> np.ndarray:
-    """``(T,)`` metres along ``path`` ``(P, 3)`` of each of ``points`` ``(T, 3)``, each
-    nearest to the segment ``segment`` ``(T,)`` says it is on or to one either side (a
-    corner is cut from the segment before it into the one after)."""
-    a, b, cum = _segments(path)
-    near = np.clip(np.asarray(segment)[:, None] + np.arange(-1, 2), 0, len(a) - 1)  # (T, 3)
-    d = b[near] - a[near]
-    dd = np.einsum("tkj,tkj->tk", d, d)
-    t = np.clip(np.einsum("tkj,tkj->tk", points[:, None] - a[near], d)
-                / np.where(dd > 0, dd, 1.0), 0, 1)
-    dist = np.linalg.norm(a[near] + t[..., None] * d - points[:, None], axis=-1)
-    k = np.argmin(dist, axis=1)[:, None]
-    return np.take_along_axis(cum[near] + t * np.sqrt(dd), k, axis=1)[:, 0]
-
-
-SLOWEST_M_S = 0.3  # the last's predicted speed below which a lead in time is held
-ALIGN_M = 0.05
-"""Where the group's last is matched to the prediction, it is taken this much short of
-where it is measured: at a corner the prediction's last creeps on by millimetres for
-seconds, and a copter hovering there by centimetres would be matched to any of them."""
-
-
-@dataclass(frozen=True)
-class ExpectedLeads:
-    """How far each UAV is predicted to run ahead of the group's last on its own: a fleet
-    of copters that fly differently, predicted with each copter's release and values
-    without the keeper (:func:`~ftlbo_mav.flight.fit.predict_fleet`). ``times`` ``(T,)``
-    seconds into the legs, ``last`` ``(T,)`` the progress of the group's last then
-    (never decreasing), ``leads`` ``(N, T)`` seconds each UAV is ahead of it: how much
-    earlier it reached where the last is then.
-
-    A lead in time, not in metres: a copter with slower S-curves or a later hand-over
-    runs its track's clock behind the others', and a pause takes seconds off a track's
-    clock whatever the speed (out of a corner, where a lead grows while the copters are
-    slow, a lead in metres is sized as if at cruise and the leaders wait too little:
-    the emulator's orchard survey, a Solo 0.9 m behind within 2 s of a lane's start)."""
-
-    times: np.ndarray
-    last: np.ndarray
-    leads: np.ndarray
-
-    @classmethod
-    def of(cls, paths: np.ndarray, times: np.ndarray, positions: np.ndarray,
-           reached: np.ndarray) -> ExpectedLeads | None:
-        """From a prediction along ``paths`` ``(N, P, 3)``: ``positions`` ``(N, T, 3)`` at
-        ``times`` ``(T,)``, ``reached`` ``(N, P)`` when each UAV reached each point; None
-        where no UAV is predicted to gain on another (a fleet of alike copters)."""
-        times = np.asarray(times, float)
-        progress = np.maximum.accumulate(np.array([
-            progress_of(np.asarray(path), np.asarray(track), np.clip(
-                np.searchsorted(when, times, side="right") - 1, 0, len(path) - 2))
-            for path, track, when in zip(paths, positions, reached)]), axis=1)
-        last = progress.min(axis=0)
-        arrived = _first_reached(times, last, last)  # the last got there (waits, not)
-        leads = np.array([arrived - _first_reached(times, own, last) for own in progress])
-        # where the last hardly moves (the start, a corner, the goal) a lead in time is not
-        # known: a copter creeping by millimetres reaches them seconds apart; the lead is
-        # held from where the last last moved
-        moving = np.gradient(last, times) >= SLOWEST_M_S
-        held = np.maximum.accumulate(np.where(moving, np.arange(len(times)), -1))
-        leads = np.where(held >= 0, leads[:, np.maximum(held, 0)], 0.0)
-        if leads.max(initial=0.0) < 1e-6:
-            return None
-        return cls(times, last, leads)
-
-    def when(self, last_m: float) -> float:
-        """Seconds into the legs at which the group's last is predicted to reach
-        ``last_m``: the first moment it does (where the copters wait at a corner, the
-        prediction's last stays there for seconds; a later moment would count the
-        leaders' gain out of the corner before the last has arrived)."""
-        return float(_first_reached(self.times, self.last, np.array([last_m]))[0])
-
-    def gain(self, last_m: float, within_s: float) -> np.ndarray:
-        """``(N,)`` seconds each UAV is predicted to gain on the group's last within the
-        next ``within_s`` seconds, from where the last is ``last_m`` along its path
-        (negative where it is predicted to lose)."""
-        now = self.when(last_m - ALIGN_M)
-        later = now + within_s
-        return np.array([np.interp(later, self.times, lead) - np.interp(now, self.times, lead)
-                         for lead in self.leads])
-
-
-def _first_reached(times: np.ndarray, progress: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """The first moment ``progress`` ``(T,)`` (never decreasing, at ``times``) reaches each
-    of ``at``, interpolated (``times[0]`` before its start, ``times[-1]`` past its end)."""
-    k = np.searchsorted(progress, at, side="left")
-    inside = (k > 0) & (k < len(progress))
-    kk = np.clip(k, 1, len(progress) - 1)
-    lo, hi = progress[kk - 1], progress[kk]
-    f = np.where(hi > lo, (at - lo) / np.where(hi > lo, hi - lo, 1.0), 1.0)
-    mid = times[kk - 1] + np.clip(f, 0.0, 1.0) * (times[kk] - times[kk - 1])
-    return np.where(inside, mid, np.where(k == 0, times[0], times[-1]))
-
-
 MAX_AHEAD_M = 3.0  # a progress measured further on than the last one by more is doubted
 MAX_BACK_M = 1.0  # ... or further back (a copter overshooting a stop comes back)
 
@@ -311,14 +208,12 @@ class FormationKeeper:
     """``paths``: ``(N, P, 3)`` metres ENU, each UAV's planned points from its start to its
     goal; ``cruise_speed_m_s``: the speed their waypoint navigation is set to (the
     missions' DO_CHANGE_SPEED, else WPNAV_SPEED; None until known, and the keeper stays
-    silent): a pause slows the track's clock from it; ``expected``: how the copters are
-    predicted to drift apart on their own (None: alike copters, that do not)."""
+    silent): a pause slows the track's clock from it."""
 
     paths: np.ndarray
     cruise_speed_m_s: float | None = None
     options: KeeperOptions = KeeperOptions()
     off_reason: str | None = None  # why this flight flies without it, if it does
-    expected: ExpectedLeads | None = None  # a fleet that flies apart on its own, predicted
     _segment: list[int] = field(default_factory=list)
     _paused_at: list[float | None] = field(default_factory=list)
     _resume_at: list[float] = field(default_factory=list)
@@ -413,7 +308,6 @@ class FormationKeeper:
         if gap_s is not None:
             log.worst_gap_s = max(log.worst_gap_s, gap_s)
         s = self.progress(positions)
-        last = float(s.min())  # where the group's last truly is
         lead = s - s.mean()  # what the formation error sees (logged)
         group_speed = float(np.mean(speeds_m_s))
         # what the pauses under way have still to take, taken
@@ -424,8 +318,6 @@ class FormationKeeper:
         # one loses its whole lead over the last (against the mean a laggard's two
         # leaders would each lose only a third of the gap a round, and the formation stay
         # out for rounds: SITL in 5 m/s wind, a copter 0.5 m behind for 8 s)
-        if self.expected is not None:  # where each is about to be, against the others
-            s = s + self.cruise_speed_m_s * self.expected.gain(last, o.anticipate_s)
         ahead = s - s.min()
         if self.trace is not None:
             self.trace.append((now, s.tolist(), lead.tolist()))

@@ -100,11 +100,10 @@ def firmware_problems(vehicles: Sequence[FlightVehicle], *, timeout_s: float
 def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
               timing: Timing, ready_timeout_s: float, any_firmware: bool = False,
               any_params: bool = False,
-              say: Callable[[str], None] = lambda _t: None) -> list[Copter]:
+              say: Callable[[str], None] = lambda _t: None) -> None:
     """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission.
     A vehicle whose firmware is not ArduCopter 4.5.x or 4.6.x is one that is not, unless
-    ``any_firmware``: then ``say`` hears what is no longer promised for it. Returns each
-    UAV's copter as it is (its release and values as read; the plan's where unread)."""
+    ``any_firmware``: then ``say`` hears what is no longer promised for it."""
     fleet = planned.fleet()
     firmware = firmware_problems(vehicles, timeout_s=timing.timeout_s)
     for v, problem in zip(vehicles, firmware):
@@ -140,7 +139,6 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     fences = planned.fences or (None,) * len(planned.missions)
     onboard = concurrently(onboard_problems, list(zip(vehicles, planned.missions, fences,
                                                       fleet)))
-    actual = list(fleet)
     if len(values) == len(vehicles):
         actual = copters_as_they_are(planned, vehicles, [values[v.sysid] for v in vehicles],
                                      [v.status.firmware_version for v in vehicles])
@@ -187,4 +185,3 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
             problems.append(f"{v.name} (sysid {v.sysid}): " + "; ".join(why))
     if problems:
         raise PreflightError(problems)
-    return actual

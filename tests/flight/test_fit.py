@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numpy as np
 import pytest
 
 from ftlbo_mav.ardupilot.copters import resolve_copter
@@ -67,22 +66,3 @@ def test_a_promise_lost_names_at_most_four_values(planned):
     fit = fit_fleet(planned, [default, bad, default])
     assert fit.broken and all(" more: " in b for b in fit.broken)
     assert "ATC_INPUT_TC" in fit.changed[0]  # the note before names every one
-
-
-def test_a_solo_among_default_copters_is_predicted_to_fall_behind_from_the_start(planned):
-    """What fly's keeper is told (fly.expected_leads): the two default copters gain on
-    the Solo as the first leg speeds up (on ArduCopter 4.5.6 SITL the Solo among two
-    default copters kept to this prediction's progress within 0.06 m over the first 4 s
-    of its legs: benchmarks/fleet.py --keep, 2026-12-07)."""
-    from ftlbo_mav.flight.fly import expected_leads
-
-    default, solo = planned.fleet()[0], resolve_copter(profile="3dr-solo")
-    assert expected_leads(planned, [default] * 3) is None
-    expected = expected_leads(planned, [default, default, solo])
-    assert expected.leads[2].max() < 0.01  # the Solo is the last throughout
-    # seconds ahead of it: 0.24 s 3 s into the legs (0.7 m at the speed then), 0.6 s
-    # once cruising
-    at_3_s = expected.leads[:2, int(np.searchsorted(expected.times, 3.0))]
-    assert 0.15 < at_3_s.min() and at_3_s.max() < 0.35
-    assert 0.5 < expected.leads.max() < 0.8
-    assert (expected.gain(2.0, 1.0)[:2] > 0.03).all()

@@ -8,12 +8,10 @@ import numpy as np
 import pytest
 
 from ftlbo_mav.flight.keeper import (
-    ExpectedLeads,
     FormationKeeper,
     KeeperOptions,
     planned_speed,
     progress_along,
-    progress_of,
     still_to_lose_s,
 )
 from ftlbo_mav.mission.items import MissionItem
@@ -262,61 +260,3 @@ def test_no_pause_while_the_link_has_lately_gone_silent():
     assert keeper.log.rough_s == pytest.approx(1.0) and keeper.log.worst_gap_s == 1.0
     # short silences only (a frame or two lost): the lead is answered
     assert keeper.update(positions_at([6.1, 5.5, 5.5]), speeds, 1.1, gap_s=0.3) == {0: True}
-
-
-# -- a fleet that flies apart on its own: the prediction's leads, anticipated ------------
-
-def _expected(speeds=(5.0, 5.0, 4.8), seconds=8.0):
-    """Each UAV flying its path at its own steady speed, as a fleet's prediction says."""
-    times = np.arange(0.0, seconds, 0.1)
-    along = np.minimum(np.outer(speeds, times), 20.0)  # (N, T) metres, at most the path's
-    positions = np.array([[positions_at([s] * 3)[n] for s in row]
-                          for n, row in enumerate(along)])
-    reached = np.array([[0.0, 10.0 / v, 20.0 / v] for v in speeds])
-    return ExpectedLeads.of(PATHS, times, positions, reached)
-
-
-def test_progress_of_a_predicted_track_is_found_from_when_it_reached_each_point():
-    track = positions_at([3.0, 3.0, 3.0])[0] + np.array([[0, 0, 0], [4, 0.2, 0], [7, 5, 0]])
-    s = progress_of(PATHS[0], track, np.array([0, 0, 1]))
-    assert s == pytest.approx([3.0, 7.0, 15.0])
-
-
-def test_alike_copters_are_predicted_to_keep_together_and_change_nothing():
-    assert _expected(speeds=(5.0, 5.0, 5.0)) is None
-
-
-def test_the_leaders_predicted_gain_on_the_last_is_known_ahead():
-    expected = _expected()
-    gain = expected.gain(5.0, 1.0)
-    # 0.2 m/s faster for 1 s: 0.2 m more, which the last flies in 0.2 / 4.8 s
-    assert gain[:2] == pytest.approx([0.2 / 4.8, 0.2 / 4.8], abs=0.002)
-    assert gain[2] == pytest.approx(0.0, abs=1e-9)
-
-
-def test_a_leader_waits_as_the_prediction_says_the_lag_opens_not_after():
-    speeds = np.full(3, 5.0)
-    level = positions_at([5.0, 5.0, 5.0])
-    # all level now: nothing to answer, unless the lag about to open is known
-    assert FormationKeeper(PATHS, CRUISE, options=ON).update(level, speeds, 0.0) == {}
-    keeper = FormationKeeper(PATHS, CRUISE, options=ON, expected=_expected())
-    assert keeper.update(level, speeds, 0.0) == {0: True, 1: True}
-
-
-def test_who_waits_is_judged_on_where_each_will_be_against_the_others():
-    keeper = FormationKeeper(PATHS, CRUISE, options=ON, expected=_expected())
-    # uav1 already 0.3 m behind: it gains 0.2 m on the slow uav3 within the next second
-    # and is still 0.1 m behind it then, so it flies on, and uav3 waits for it; uav2,
-    # level with uav3 now, will be 0.3 m ahead of uav1: it waits
-    out = keeper.update(positions_at([4.75, 5.05, 5.05]), np.full(3, 5.0), 0.0)
-    assert out == {1: True, 2: True}
-
-
-def test_where_the_last_waits_at_a_corner_its_arrival_is_the_moment_that_counts():
-    times = np.arange(0.0, 10.0, 0.5)
-    last = np.array([0, 1, 2, 3, 3, 3, 3, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15.0])
-    expected = ExpectedLeads(times, last, np.zeros((2, len(times))))
-    assert expected.when(3.0) == pytest.approx(1.5)  # arrived, not about to leave
-    assert expected.when(2.5) == pytest.approx(1.25)
-    assert expected.when(3.5) == pytest.approx(3.75)
-    assert expected.when(-1.0) == 0.0 and expected.when(99.0) == pytest.approx(9.5)
