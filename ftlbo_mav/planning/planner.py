@@ -26,7 +26,7 @@ from .feasibility import violations
 from .geometric import lower_bound, shortest_routes
 from .optimizers import OPTIMIZERS, Objective
 from .optimizers.base import OptimizerResult, Progress
-from .plans import Leg, Plan, combine
+from .plans import Leg, Plan, combine, spread_repeats
 from .problem import PlanningProblem, problem_from_scenario
 from .repair import Attempt, better, fly_as_arducopter, until_kept
 from .seeds import RouteChains, seed_waypoints
@@ -376,7 +376,7 @@ def _optimize(problem: PlanningProblem, settings: PlannerSettings, rng: np.rando
             **extra,
         )
     seconds = time.perf_counter() - t0
-    best = _spread_repeats(problem, result.x.reshape(1, m, 3))
+    best = spread_repeats(problem, result.x.reshape(1, m, 3))
     terms = CostTerms(*(float(t[0]) for t in cost_terms(problem, best)))
     centroid = problem.full_paths(best)[0]
     return Leg(
@@ -391,48 +391,6 @@ def _optimize(problem: PlanningProblem, settings: PlannerSettings, rng: np.rando
         seconds=seconds,
         searched=searched,
     )
-
-
-REPEAT_M = 0.1  # waypoints closer than this are one point (ArduCopter: a leg of its own)
-
-
-def _spread_repeats(problem: PlanningProblem, best: np.ndarray) -> np.ndarray:
-    """``best`` ``(1, m, 3)`` with waypoints that repeat a point (within :data:`REPEAT_M`:
-    a straight leg's waypoint the optimizer left on or by its start or goal) spread
-    evenly along the straight line to the next point (to the goal's from the one before):
-    the same path within that, without legs of next to no length. ArduCopter flies a
-    zero-length leg as an S-curve of its own whose end differs from copter to copter with
-    their residual errors: on 4.6.3 SITL three Solos surveying the orchard at 3 m/s, one
-    began the next leg 0.3 s after the others at a lane end of two such legs, 0.7 m from
-    its slot, in two flights of two; planned without them, 0.06 m worst (2026-12-07,
-    ``benchmarks/fleet.py --fleet solo-4.6.3 --scenario missions/orchard-survey.toml``)."""
-    path = problem.full_paths(best)[0]
-    n = len(path)
-    same = np.linalg.norm(np.diff(path, axis=0), axis=1) <= REPEAT_M
-    if not same.any():
-        return best
-    path = path.copy()
-    i = 0
-    while i < n - 1:
-        if not same[i]:
-            i += 1
-            continue
-        j = i
-        while j < n - 1 and same[j]:
-            j += 1
-        # path[i..j] are one point
-        if j < n - 1:  # spread path[i+1..j] towards path[j+1]
-            a, b, moved = path[i], path[j + 1], range(i + 1, j + 1)
-            steps = j - i + 1
-            for k, idx in enumerate(moved, 1):
-                path[idx] = a + (b - a) * (k / steps)
-        elif i > 0:  # the goal's repeats: spread path[i..j-1] from path[i-1]
-            a, b, moved = path[i - 1], path[j], range(i, j)
-            steps = j - i + 1
-            for k, idx in enumerate(moved, 1):
-                path[idx] = a + (b - a) * (k / steps)
-        i = j + 1
-    return path[1:-1][None]
 
 
 def _seed_at_optimum(problem: PlanningProblem, objective: Objective, seed: np.ndarray,

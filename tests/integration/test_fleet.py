@@ -158,7 +158,7 @@ def test_three_different_copters_survey_the_orchard_within_the_goal(tmp_path):
     Solo. What made this fleet a formation departure on ArduCopter SITL was the plan's
     zero-length legs at the lane ends (two in a row, flown as S-curves of their own that
     end apart from copter to copter), now spread along the lines
-    (planner._spread_repeats); SITL (benchmarks/fleet.py, 2026-12-07): 0.06/0.19 m
+    (plans.spread_repeats); SITL (benchmarks/fleet.py, 2026-12-07): 0.06/0.19 m
     RMS/worst. The emulator flies it 0.07/0.37 m (the Solo 0.48 m behind as the first
     lane speeds up, SITL's 0.19 m): held to the plan's bound here, not to the 0.3 m goal."""
     survey = ROOT / "missions" / "orchard-survey.toml"

@@ -277,7 +277,7 @@ def test_a_width_a_hair_over_whole_spacings_gets_no_lane_more():
 
 def test_no_leg_of_the_shipped_survey_has_zero_length():
     """A straight leg's waypoint the optimizer leaves on the leg's start or end is spread
-    along the line (planner._spread_repeats): the same path, without the zero-length legs
+    along the line (plans.spread_repeats): the same path, without the zero-length legs
     ArduCopter flies as S-curves of their own, ended apart from copter to copter."""
     from ftlbo_mav.mission.plan_reader import read_plan
 
@@ -287,16 +287,16 @@ def test_no_leg_of_the_shipped_survey_has_zero_length():
 
 
 def test_repeated_waypoints_are_spread_along_the_line_they_sit_on():
-    from ftlbo_mav.planning.planner import _spread_repeats
+    from ftlbo_mav.planning.plans import spread_repeats
 
     class Line:  # start (0,0,4), goal (10,0,4)
         @staticmethod
         def full_paths(w):
             return np.concatenate([[[[0.0, 0, 4]]], w, [[[10.0, 0, 4]]]], axis=1)
 
-    on_start = _spread_repeats(Line, np.array([[[0.0, 0, 4], [0.0, 0, 4]]]))
+    on_start = spread_repeats(Line, np.array([[[0.0, 0, 4], [0.0, 0, 4]]]))
     assert on_start[0, :, 0] == pytest.approx([10 / 3, 20 / 3])
-    on_goal = _spread_repeats(Line, np.array([[[5.0, 0, 4], [10.0, 0, 4]]]))
+    on_goal = spread_repeats(Line, np.array([[[5.0, 0, 4], [10.0, 0, 4]]]))
     assert on_goal[0, :, 0] == pytest.approx([5.0, 7.5])
     apart = np.array([[[2.0, 0, 4], [6.0, 1, 4]]])
-    assert _spread_repeats(Line, apart) is apart
+    assert spread_repeats(Line, apart) is apart
