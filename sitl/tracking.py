@@ -35,6 +35,16 @@ FIELDS = ("t", "TPN", "TPE", "DVN", "DVE", "DAN", "DAE", "PN", "PE", "VN", "VE")
 AUTO = 3  # ArduCopter's mode number
 
 
+def _header(m, names, params: dict, version: str | None) -> str | None:
+    """A log's PARM (of ``names``, into ``params``) or MSG; returns the firmware version
+    (the first "ArduCopter V..." message, else ``version``)."""
+    if m.get_type() == "PARM" and m.Name in names:
+        params[m.Name] = float(m.Value)
+    elif m.get_type() == "MSG" and version is None and m.Message.startswith("ArduCopter V"):
+        return m.Message
+    return version
+
+
 def read_log(path: Path) -> dict:
     """One copter's PSCN / PSCE rows in AUTO (times from AUTO's start), its PARMs and
     version."""
@@ -46,10 +56,8 @@ def read_log(path: Path) -> dict:
         if m is None:
             break
         kind = m.get_type()
-        if kind == "PARM" and m.Name in PARAMS:
-            params[m.Name] = float(m.Value)
-        elif kind == "MSG" and version is None and m.Message.startswith("ArduCopter V"):
-            version = m.Message
+        if kind in ("PARM", "MSG"):
+            version = _header(m, PARAMS, params, version)
         elif kind == "MODE":
             auto_since = m.TimeUS if m.ModeNum == AUTO else None
         elif auto_since is not None and kind == "PSCN":
@@ -84,10 +92,8 @@ def read_climb(path: Path, after_s: float) -> dict:
         if m is None:
             break
         kind = m.get_type()
-        if kind == "PARM" and m.Name in CLIMB_PARAMS:
-            params[m.Name] = float(m.Value)
-        elif kind == "MSG" and version is None and m.Message.startswith("ArduCopter V"):
-            version = m.Message
+        if kind in ("PARM", "MSG"):
+            version = _header(m, CLIMB_PARAMS, params, version)
         elif kind == "MODE" and m.ModeNum == AUTO and auto_at is None:
             auto_at = m.TimeUS / 1e6
         elif kind == "PSCD":
@@ -127,52 +133,40 @@ def main(argv=None) -> int:
                         help="--climb: seconds of AUTO kept")
     args = parser.parse_args(argv)
     if args.climb:
-        return _climb(args)
+        flights = _flights(args.flights, lambda instance, log: read_climb(log, args.after))
+        about = (f"the vertical position controller's own log (PSCD at 10 Hz, metres up) "
+                 f"from the takeoff's liftoff to {args.after:g} s into AUTO, t from AUTO's "
+                 f"start; `python -m sitl.tracking --climb`")
+        fields = CLIMB_FIELDS
+    else:
+        flights = _flights(args.flights, lambda instance, log: read_log(log) | {
+            "drag": drag_coefficients(instance / "sitl.log")})
+        about = ("the position controller's own log (PSCN/PSCE at 10 Hz) in AUTO; "
+                 "`python -m sitl.tracking`")
+        fields = FIELDS
+    version = next((c["version"] for f in flights for c in f["copters"] if c["version"]), "?")
+    doc = {"about": f"{version} SITL (copter.parm), {about}. {args.note}",
+           "fields": list(fields), "flights": flights}
+    args.out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+def _flights(folders, read) -> list[dict]:
+    """Each kept flight's copters, ``read(instance folder, its last DataFlash log)``."""
     flights = []
-    for folder in args.flights:
+    for folder in folders:
         copters = []
         for instance in sorted(folder.glob("instance*")):
             logs = sorted((instance / "logs").glob("*.BIN"))
             if not logs:
                 raise SystemExit(f"{instance}: no DataFlash log")
-            copter = read_log(logs[-1])
-            copter["drag"] = drag_coefficients(instance / "sitl.log")
-            copter["instance"] = instance.name
+            copter = read(instance, logs[-1]) | {"instance": instance.name}
             copters.append(copter)
-            print(f"{folder.name}/{instance.name}: {len(copter['rows'])} rows in AUTO",
+            print(f"{folder.name}/{instance.name}: {len(copter['rows'])} rows",
                   file=sys.stderr)
         flights.append({"flight": folder.name, "copters": copters})
-    version = next((c["version"] for f in flights for c in f["copters"] if c["version"]), "?")
-    doc = {"about": f"{version} SITL (copter.parm), the position controller's own log "
-                    f"(PSCN/PSCE at 10 Hz) in AUTO; `python -m sitl.tracking`. {args.note}",
-           "fields": list(FIELDS), "flights": flights}
-    args.out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
-    print(f"wrote {args.out}", file=sys.stderr)
-    return 0
-
-
-def _climb(args) -> int:
-    flights = []
-    for folder in args.flights:
-        copters = []
-        for instance in sorted(folder.glob("instance*")):
-            logs = sorted((instance / "logs").glob("*.BIN"))
-            if not logs:
-                raise SystemExit(f"{instance}: no DataFlash log")
-            copter = read_climb(logs[-1], args.after)
-            copter["instance"] = instance.name
-            copters.append(copter)
-            print(f"{folder.name}/{instance.name}: {len(copter['rows'])} rows", file=sys.stderr)
-        flights.append({"flight": folder.name, "copters": copters})
-    version = next((c["version"] for f in flights for c in f["copters"] if c["version"]), "?")
-    doc = {"about": f"{version} SITL (copter.parm), the vertical position controller's own "
-                    f"log (PSCD at 10 Hz, metres up) from the takeoff's liftoff to "
-                    f"{args.after:g} s into AUTO, t from AUTO's start; `python -m sitl.tracking "
-                    f"--climb`. {args.note}",
-           "fields": list(CLIMB_FIELDS), "flights": flights}
-    args.out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
-    print(f"wrote {args.out}", file=sys.stderr)
-    return 0
+    return flights
 
 
 if __name__ == "__main__":
