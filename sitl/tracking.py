@@ -16,6 +16,11 @@ vertical acceleration DAU, the copter's altitude PU, climb VU and acceleration A
 from the EKF origin), from the takeoff's liftoff to ``--after`` seconds into AUTO, times
 from AUTO's start (``tests/conformance/test_climb.py``: the vertical follower and the
 stopping point AUTO starts from).
+
+``--takeoff``: the horizontal (PSCN / PSCE, the fields above) from the takeoff's liftoff
+to ``--after`` seconds into AUTO, times from AUTO's start, with the wind SITL blew
+(SIM_WIND_*): how a copter lifting off in wind is blown off its target and comes back,
+and the state it starts its first leg in (``tests/conformance/test_takeoff_wind.py``).
 """
 
 from __future__ import annotations
@@ -106,6 +111,48 @@ def read_climb(path: Path, after_s: float) -> dict:
     return {"version": version, "params": params, "rows": rows}
 
 
+TAKEOFF_PARAMS = PARAMS + ("SIM_WIND_SPD", "SIM_WIND_DIR", "SIM_WIND_TURB", "SIM_WIND_T")
+
+
+def read_takeoff(path: Path, after_s: float) -> dict:
+    """One copter's PSCN / PSCE rows from its liftoff (PSCD: LIFTOFF_M above where it
+    stood) to ``after_s`` into AUTO (times from AUTO's start), its PARMs and version."""
+    log = DFReader.DFReader_binary(str(path), zero_time_base=True)
+    params, version, rows, auto_at, ground, lifted, north = {}, None, [], None, None, None, None
+    while True:
+        m = log.recv_match(type=["PARM", "MODE", "PSCN", "PSCE", "PSCD", "MSG"])
+        if m is None:
+            break
+        kind = m.get_type()
+        if kind == "PARM" and m.Name in TAKEOFF_PARAMS:
+            params[m.Name] = float(m.Value)
+        elif kind == "MSG" and version is None and m.Message.startswith("ArduCopter V"):
+            version = m.Message
+        elif kind == "MODE" and m.ModeNum == AUTO and auto_at is None:
+            auto_at = m.TimeUS / 1e6
+        elif kind == "PSCD":
+            if ground is None:
+                ground = -float(m.PD)
+            if lifted is None and -float(m.PD) > ground + LIFTOFF_M:
+                lifted = m.TimeUS / 1e6
+        elif kind == "PSCN":
+            north = m
+        elif kind == "PSCE" and north is not None and north.TimeUS == m.TimeUS:
+            t = m.TimeUS / 1e6
+            if auto_at is not None and t > auto_at + after_s:
+                break
+            if lifted is not None:
+                rows.append([t, *(round(float(getattr(north if f.endswith("N") else m, f)), 4)
+                                  for f in FIELDS[1:])])
+            north = None
+    if auto_at is None or lifted is None:
+        raise SystemExit(f"{path}: no liftoff or never in AUTO")
+    for r in rows:
+        r[0] = round(r[0] - auto_at, 4)
+    return {"version": version, "params": params, "liftoff_s": round(lifted - auto_at, 4),
+            "rows": rows}
+
+
 def drag_coefficients(sitl_log: Path) -> dict:
     """The drag SITL's frame printed at start."""
     text = sitl_log.read_text(errors="replace")
@@ -125,8 +172,10 @@ def main(argv=None) -> int:
                         help="the vertical from the takeoff into AUTO (PSCD) instead")
     parser.add_argument("--after", type=float, default=3.0,
                         help="--climb: seconds of AUTO kept")
+    parser.add_argument("--takeoff", action="store_true",
+                        help="the horizontal from the takeoff into AUTO (PSCN/PSCE) instead")
     args = parser.parse_args(argv)
-    if args.climb:
+    if args.climb or args.takeoff:
         return _climb(args)
     flights = []
     for folder in args.flights:
@@ -159,17 +208,24 @@ def _climb(args) -> int:
             logs = sorted((instance / "logs").glob("*.BIN"))
             if not logs:
                 raise SystemExit(f"{instance}: no DataFlash log")
-            copter = read_climb(logs[-1], args.after)
+            copter = (read_takeoff if args.takeoff else read_climb)(logs[-1], args.after)
             copter["instance"] = instance.name
             copters.append(copter)
             print(f"{folder.name}/{instance.name}: {len(copter['rows'])} rows", file=sys.stderr)
         flights.append({"flight": folder.name, "copters": copters})
     version = next((c["version"] for f in flights for c in f["copters"] if c["version"]), "?")
-    doc = {"about": f"{version} SITL (copter.parm), the vertical position controller's own "
-                    f"log (PSCD at 10 Hz, metres up) from the takeoff's liftoff to "
-                    f"{args.after:g} s into AUTO, t from AUTO's start; `python -m sitl.tracking "
-                    f"--climb`. {args.note}",
-           "fields": list(CLIMB_FIELDS), "flights": flights}
+    if args.takeoff:
+        about = (f"{version} SITL (copter.parm), the horizontal position controller's own "
+                 f"log (PSCN/PSCE at 10 Hz, metres from the EKF origin) from the takeoff's "
+                 f"liftoff to {args.after:g} s into AUTO, t from AUTO's start; `python -m "
+                 f"sitl.tracking --takeoff`. {args.note}")
+    else:
+        about = (f"{version} SITL (copter.parm), the vertical position controller's own "
+                 f"log (PSCD at 10 Hz, metres up) from the takeoff's liftoff to "
+                 f"{args.after:g} s into AUTO, t from AUTO's start; `python -m sitl.tracking "
+                 f"--climb`. {args.note}")
+    doc = {"about": about, "fields": list(FIELDS if args.takeoff else CLIMB_FIELDS),
+           "flights": flights}
     args.out.write_text(json.dumps(doc, separators=(",", ":")) + "\n")
     print(f"wrote {args.out}", file=sys.stderr)
     return 0
