@@ -16,6 +16,11 @@ vertical acceleration DAU, the copter's altitude PU, climb VU and acceleration A
 from the EKF origin), from the takeoff's liftoff to ``--after`` seconds into AUTO, times
 from AUTO's start (``tests/conformance/test_climb.py``: the vertical follower and the
 stopping point AUTO starts from).
+
+``--takeoff``: the horizontal (PSCN / PSCE, the fields above) from the takeoff's liftoff
+to ``--after`` seconds into AUTO, times from AUTO's start, with the wind SITL blew
+(SIM_WIND_*): how a copter lifting off in wind is blown off its target and comes back,
+and the state it starts its first leg in (``tests/conformance/test_takeoff_wind.py``).
 """
 
 from __future__ import annotations
@@ -112,6 +117,46 @@ def read_climb(path: Path, after_s: float) -> dict:
     return {"version": version, "params": params, "rows": rows}
 
 
+TAKEOFF_PARAMS = PARAMS + ("SIM_WIND_SPD", "SIM_WIND_DIR", "SIM_WIND_TURB", "SIM_WIND_T")
+
+
+def read_takeoff(path: Path, after_s: float) -> dict:
+    """One copter's PSCN / PSCE rows from its liftoff (PSCD: LIFTOFF_M above where it
+    stood) to ``after_s`` into AUTO (times from AUTO's start), its PARMs and version."""
+    log = DFReader.DFReader_binary(str(path), zero_time_base=True)
+    params, version, rows, auto_at, ground, lifted, north = {}, None, [], None, None, None, None
+    while True:
+        m = log.recv_match(type=["PARM", "MODE", "PSCN", "PSCE", "PSCD", "MSG"])
+        if m is None:
+            break
+        kind = m.get_type()
+        if kind in ("PARM", "MSG"):
+            version = _header(m, TAKEOFF_PARAMS, params, version)
+        elif kind == "MODE" and m.ModeNum == AUTO and auto_at is None:
+            auto_at = m.TimeUS / 1e6
+        elif kind == "PSCD":
+            if ground is None:
+                ground = -float(m.PD)
+            if lifted is None and -float(m.PD) > ground + LIFTOFF_M:
+                lifted = m.TimeUS / 1e6
+        elif kind == "PSCN":
+            north = m
+        elif kind == "PSCE" and north is not None and north.TimeUS == m.TimeUS:
+            t = m.TimeUS / 1e6
+            if auto_at is not None and t > auto_at + after_s:
+                break
+            if lifted is not None:
+                rows.append([t, *(round(float(getattr(north if f.endswith("N") else m, f)), 4)
+                                  for f in FIELDS[1:])])
+            north = None
+    if auto_at is None or lifted is None:
+        raise SystemExit(f"{path}: no liftoff or never in AUTO")
+    for r in rows:
+        r[0] = round(r[0] - auto_at, 4)
+    return {"version": version, "params": params, "liftoff_s": round(lifted - auto_at, 4),
+            "rows": rows}
+
+
 def drag_coefficients(sitl_log: Path) -> dict:
     """The drag SITL's frame printed at start."""
     text = sitl_log.read_text(errors="replace")
@@ -131,8 +176,16 @@ def main(argv=None) -> int:
                         help="the vertical from the takeoff into AUTO (PSCD) instead")
     parser.add_argument("--after", type=float, default=3.0,
                         help="--climb: seconds of AUTO kept")
+    parser.add_argument("--takeoff", action="store_true",
+                        help="the horizontal from the takeoff into AUTO (PSCN/PSCE) instead")
     args = parser.parse_args(argv)
-    if args.climb:
+    if args.takeoff:
+        flights = _flights(args.flights, lambda instance, log: read_takeoff(log, args.after))
+        about = (f"the horizontal position controller's own log (PSCN/PSCE at 10 Hz, metres "
+                 f"from the EKF origin) from the takeoff's liftoff to {args.after:g} s into "
+                 f"AUTO, t from AUTO's start; `python -m sitl.tracking --takeoff`")
+        fields = FIELDS
+    elif args.climb:
         flights = _flights(args.flights, lambda instance, log: read_climb(log, args.after))
         about = (f"the vertical position controller's own log (PSCD at 10 Hz, metres up) "
                  f"from the takeoff's liftoff to {args.after:g} s into AUTO, t from AUTO's "

@@ -125,16 +125,22 @@ class PositionFollower:
     """The copter's horizontal position and velocity as AC_PosControl makes it follow its
     target (see the module's docstring). Starts at ``position`` (ENU metres) with
     ``velocity``, its velocity integrator holding what that velocity's drag needs (a
-    copter cruising, or hovering in ``wind``). ``step`` takes the target AC_WPNav set
+    copter cruising, or hovering in ``wind``; nothing for one leaving the ground,
+    ``airborne`` False). ``step`` takes the target AC_WPNav set
     (position, velocity, acceleration, ENU) and returns the copter's new position."""
 
     def __init__(self, position, velocity=(0.0, 0.0), *, nav: Navigation = DEFAULT_NAV,
-                 airframe: Airframe = DEFAULT_AIRFRAME, wind=(0.0, 0.0)) -> None:
+                 airframe: Airframe = DEFAULT_AIRFRAME, wind=(0.0, 0.0),
+                 airborne: bool = True) -> None:
         self.nav, self.airframe = nav, airframe
         self.px, self.py = float(position[0]), float(position[1])
         self.vx, self.vy = float(velocity[0]), float(velocity[1])
         self.wind = (float(wind[0]), float(wind[1]))
-        ax, ay = self._drag()
+        # leaving the ground (``airborne`` False): while landed, _AutoTakeoff::run
+        # (ArduCopter/takeoff.cpp) runs AC_PosControl::relax_velocity_controller_xy, which
+        # decays the acceleration target to zero and init_xy_controller sets the I term
+        # from it: the copter lifts off level, with nothing against the wind
+        ax, ay = self._drag() if airborne else (0.0, 0.0)
         self._ix, self._iy = ax, ay  # the integrator holds the drag
         self._lx, self._ly = ax, ay  # the lean's acceleration, settled
         self._ex = self._ey = 0.0  # the filtered velocity error
@@ -245,6 +251,24 @@ VELZ_FLTE_HZ = 5.0
 ACCZ_P, ACCZ_I, ACCZ_IMAX, ACCZ_FLTE_HZ = 0.5, 1.0, 800.0, 20.0
 THROTTLE_CUTOFF_HZ = 2.0
 STOPPING_DIST_UP_MAX_M, STOPPING_DIST_DOWN_MAX_M = 3.0, 2.0  # AC_PosControl.h
+
+
+def stopping_point_xy(position, velocity, nav: Navigation = DEFAULT_NAV) -> np.ndarray:
+    """AC_PosControl::get_stopping_point_xy_cm: where a copter at ``position`` moving at
+    ``velocity`` (ENU m, m/s; the first two used) stops: ``stopping_distance``
+    (AP_Math/control.cpp) with PSC_POSXY_P and WPNAV_ACCEL along its velocity, the speed at
+    most WPNAV_SPEED. AC_WPNav::wp_and_spline_init starts there
+    (init_xy_controller_stopping_point)."""
+    x, y = float(position[0]), float(position[1])
+    vx, vy = float(velocity[0]), float(velocity[1])
+    speed = math.hypot(vx, vy)
+    p, accel = nav.psc_posxy_p, nav.wp_accel
+    if speed <= 0 or p <= 0 or accel <= 0:
+        return np.array([x, y])
+    v = min(speed, nav.wp_speed)
+    linear = accel / p
+    dist = v / p if v < linear else linear / (2 * p) + v * v / (2 * accel)
+    return np.array([x + vx * dist / speed, y + vy * dist / speed])
 
 
 def stopping_point_z(position_z: float, velocity_z: float, nav: Navigation = DEFAULT_NAV

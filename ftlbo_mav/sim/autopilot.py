@@ -65,7 +65,12 @@ from ..ardupilot.navigation import (
     REAL32,
     param_value,
 )
-from ..ardupilot.poscontrol import PositionFollower, VerticalFollower, stopping_point_z
+from ..ardupilot.poscontrol import (
+    PositionFollower,
+    VerticalFollower,
+    stopping_point_xy,
+    stopping_point_z,
+)
 from ..mission.items import (
     MissionItem,
 )
@@ -151,6 +156,8 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         self.home_alt_m = 0.0  # home above mean sea level (CAMERA_FEEDBACK's alt_msl)
         self._takeoff_at: float | None = None  # spool-up: the climb starts then
         self._takeoff_alt = 0.0
+        self._takeoff_from_ground = False  # it lifts off level (ModeGuided._takeoff_step)
+        self._takeoff_xy = np.zeros(2)  # the horizontal target a takeoff holds
         self._takeoff_done_at: float | None = None
         self._touchdown_at: float | None = None
         self._wait_until: float | None = None  # a hold time, RTL's loiter, a start latency
@@ -428,10 +435,13 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
     # -- mission execution
     def _start_nav(self, stopping_point: np.ndarray | None = None) -> None:
         """AC_WPNav::wp_and_spline_init from the copter's stopping point: horizontally where
-        it is (stopped), vertically AC_PosControl::get_stopping_point_z_cm (a copter still
+        it is (stopped; in wind, where AC_PosControl::get_stopping_point_xy_cm puts the copter
+        following its target), vertically AC_PosControl::get_stopping_point_z_cm (a copter still
         climbing after its takeoff starts its first leg above itself)."""
         if stopping_point is None:
             point = self.position.copy()
+            if self._windy():  # the copter following its target is not stopped
+                point[:2] = stopping_point_xy(self.position, self.velocity, self.nav_params())
             point[2] = stopping_point_z(float(self.position[2]), float(self.velocity[2]),
                                         self.nav_params())
         else:
@@ -564,8 +574,12 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
             return
         if self._enter is not None:
             # ModeAuto::init does not stop the copter: AC_WPNav starts from its stopping
-            # point (vertically too, _start_nav); other modes' entries brake first here
-            if not self.landed and self._brake(dt, vertical=self._enter != self._auto_enter):
+            # point (vertically too, _start_nav); other modes' entries brake first here.
+            # In wind the copter follows its targets (AC_PosControl, the airframe's drag)
+            # and AUTO takes it as it is, moving, horizontally too
+            auto = self._enter == self._auto_enter
+            if (not self.landed and not (auto and self._windy())
+                    and self._brake(dt, vertical=not auto)):
                 return
             enter, self._enter = self._enter, None
             enter()
@@ -600,23 +614,29 @@ class Autopilot(ModeAuto, ModeGuided, ModeRTL, ModeLand, ModeBrake):
         the parameters changed); vertically too (:meth:`_climb`), unless ``vertical`` is
         False: then it is on its vertical target."""
         nav = self.nav_params()
-        wind = (0.0, 0.0, 0.0) if self.gusts is None else self.gusts.wind.velocity_xyz
         follower = self._follower
         if (follower is None or (follower.nav is not nav and follower.nav != nav)
                 or self._followed_until is None
                 or abs(self._followed_until - (self.time - dt)) > 1e-9):
-            kind = PositionFollower
-            if self.compiled:
-                from ..ardupilot.compiled import CompiledFollower as kind
-            follower = self._follower = kind(
-                self.position[:2], self.velocity[:2], nav=nav,
-                airframe=self.options.limits.airframe, wind=wind[:2])
+            follower = self._new_follower()
         follower.step(dt, target, target_vel, target_accel)
         self._followed_until = self.time
         z, vz = (self._climb(dt, target[2], target_vel[2], target_accel[2]) if vertical
                  else (target[2], target_vel[2]))
         self.position = np.array([follower.px, follower.py, z])
         self.velocity = np.array([follower.vx, follower.vy, vz])
+
+    def _new_follower(self, *, airborne: bool = True) -> PositionFollower:
+        """AC_PosControl::init_xy_controller: a horizontal follower started where the
+        copter is (``airborne`` False: leaving the ground, nothing held against the wind)."""
+        wind = (0.0, 0.0, 0.0) if self.gusts is None else self.gusts.wind.velocity_xyz
+        kind = PositionFollower
+        if self.compiled:
+            from ..ardupilot.compiled import CompiledFollower as kind
+        self._follower = kind(self.position[:2], self.velocity[:2], nav=self.nav_params(),
+                              airframe=self.options.limits.airframe, wind=wind[:2],
+                              airborne=airborne)
+        return self._follower
 
     def _climb(self, dt: float, target: float, target_vel: float, target_accel: float
                ) -> tuple[float, float]:

@@ -26,7 +26,10 @@ that target by an error :class:`Gusts` carries, per copter:
 
 The steady wind itself moves no copter off its target for long: the velocity
 integrator takes it up, the same for every copter of a formation (their paths are the
-same shape).
+same shape). Except where it has not yet: a copter lifts off level (ArduCopter's takeoff
+relaxes the horizontal controller on the ground) and is blown downwind, 0.8-0.9 m in
+6.6 m/s, coming back over seconds (the emulator's takeoff follows its target with the
+airframe's drag, ``ftlbo_mav/sim/modes/guided.py``; tests/conformance/test_takeoff_wind.py).
 
 What turns small gusts into formation error is AC_WPNav's track clock
 (:meth:`~ftlbo_mav.sim.physics.WaypointNav.advance` with the copter's own position and
