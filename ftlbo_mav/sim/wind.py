@@ -171,19 +171,3 @@ class Gusts:
             error[k] = error[k] + error_vel[k] * dt
         self.error_vel, self.error = np.array(error_vel), np.array(error)
         return self.error
-        gust = self._draw_xyz(dt)
-        slope = self.drag_scale * 2 * G * max(airspeed_m_s, 1.0) / REF_SPEED ** 2
-        disturbance = slope * gust
-        n = self.nav  # PSC_POSXY_P / PSC_POSZ_P, PSC_VELXY_P / PSC_VELZ_P, PSC_VELXY_I
-        pos_p = np.array([n.psc_posxy_p, n.psc_posxy_p, n.psc_posz_p])
-        vel_p = np.array([n.psc_velxy_p, n.psc_velxy_p, n.psc_velz_p])
-        vel_i = np.array([n.psc_velxy_i, n.psc_velxy_i, 0.0])  # the z loop's I is on accel
-        vel_err = -(self.error_vel + pos_p * self.error)
-        self._integral += vel_err * dt
-        wanted = vel_p * vel_err + vel_i * self._integral
-        # what the controller asks reaches the airframe through attitude and thrust
-        self._accel += (wanted - self._accel) * min(dt / max(self.response_s, 1e-3), 1.0)
-        accel = self._accel + disturbance
-        self.error_vel = self.error_vel + accel * dt
-        self.error = self.error + self.error_vel * dt
-        return self.error
