@@ -309,11 +309,14 @@ def test_abort_from_another_terminal_reaches_a_running_flight(plan_dir):
              "--control-port", str(control), "--connect", " ".join(fleet.urls)],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
+            said = []
             for line in flying.stderr:
+                said.append(line)
                 if "starting the missions together" in line:
                     break
             else:
-                pytest.fail(f"fly ended before the start: {flying.communicate()}")
+                pytest.fail(f"fly ended before the start: {''.join(said)}"
+                            f"{flying.communicate()}")
             time.sleep(2.0)
             result = CliRunner().invoke(main, ["abort", "--sysid", "1..3",
                                                "--control-port", str(control)])
