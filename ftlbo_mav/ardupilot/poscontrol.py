@@ -53,6 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .navigation import GRAVITY_M_S2, Navigation, sqrt_controller
+from .wpnav import stopping_distance
 
 STEP_S = 0.0025  # AC_PosControl runs at the main loop's 400 Hz (SCHED_LOOP_RATE)
 SEA_LEVEL_DENSITY = 1.225  # kg/m^3, ArduPilot's reference for EK3_DRAG_MCOEF
@@ -262,12 +263,9 @@ def stopping_point_xy(position, velocity, nav: Navigation = DEFAULT_NAV) -> np.n
     x, y = float(position[0]), float(position[1])
     vx, vy = float(velocity[0]), float(velocity[1])
     speed = math.hypot(vx, vy)
-    p, accel = nav.psc_posxy_p, nav.wp_accel
-    if speed <= 0 or p <= 0 or accel <= 0:
+    dist = stopping_distance(min(speed, nav.wp_speed), nav.psc_posxy_p, nav.wp_accel)
+    if speed <= 0 or dist <= 0:
         return np.array([x, y])
-    v = min(speed, nav.wp_speed)
-    linear = accel / p
-    dist = v / p if v < linear else linear / (2 * p) + v * v / (2 * accel)
     return np.array([x + vx * dist / speed, y + vy * dist / speed])
 
 
@@ -278,15 +276,8 @@ def stopping_point_z(position_z: float, velocity_z: float, nav: Navigation = DEF
     inv_sqrt_controller with PSC_POSZ_P and WPNAV_ACCEL_Z), at most 3 m up and 2 m down.
     AC_WPNav::wp_and_spline_init starts a mission's first leg there (ModeAuto::init), so a
     copter still climbing 0.1 m/s starts it 0.1 m above itself."""
-    p, accel = nav.psc_posz_p, nav.wp_accel_z
-    if p <= 0 or accel <= 0:
-        return position_z
-    linear = accel / p
-    v = velocity_z
-    if abs(v) < linear:
-        dist = v / p
-    else:
-        dist = math.copysign(linear / (2 * p) + v * v / (2 * accel), v)
+    dist = math.copysign(stopping_distance(abs(velocity_z), nav.psc_posz_p, nav.wp_accel_z),
+                         velocity_z)
     return position_z + max(-STOPPING_DIST_DOWN_MAX_M, min(dist, STOPPING_DIST_UP_MAX_M))
 
 
