@@ -233,13 +233,9 @@ def spread_repeats(problem: PlanningProblem, best: np.ndarray) -> np.ndarray:
         # path[i..j] are one point
         if j < n - 1:  # spread path[i+1..j] towards path[j+1]
             a, b, moved = path[i], path[j + 1], range(i + 1, j + 1)
-            steps = j - i + 1
-            for k, idx in enumerate(moved, 1):
-                path[idx] = a + (b - a) * (k / steps)
-        elif i > 0:  # the goal's repeats: spread path[i..j-1] from path[i-1]
-            a, b, moved = path[i - 1], path[j], range(i, j)
-            steps = j - i + 1
-            for k, idx in enumerate(moved, 1):
-                path[idx] = a + (b - a) * (k / steps)
+        else:  # the goal's repeats: spread path[i..j-1] from path[i-1]
+            a, b, moved = path[i - 1], path[j], range(i, j) if i > 0 else ()
+        for k, idx in enumerate(moved, 1):
+            path[idx] = a + (b - a) * (k / (j - i + 1))
         i = j + 1
     return path[1:-1][None]
