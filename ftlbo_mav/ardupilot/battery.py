@@ -34,6 +34,7 @@ Pure data and arithmetic.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,6 +70,9 @@ BATTERY_PARAM_DEFAULTS = {
 after booting with copter.parm (battery.json ``params_after_boot``)."""
 
 LOW_TEXT = "Battery {n} is {kind} {volts:.2f}V used {mah:.0f} mAh"
+LOW_PATTERN = re.compile(r"^Battery \d+ is (low|critical) ")
+""":data:`LOW_TEXT` as the ground side reads it (AP_BattMonitor::check_failsafes sends it
+whatever BATT_FS_*_ACT says; recorded: ``Battery 1 is low 12.60V used 1321 mAh``)."""
 FAILSAFE_TEXT = "Battery Failsafe"
 DISARMING_TEXT = "Battery Failsafe - Disarming"
 

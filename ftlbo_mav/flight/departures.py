@@ -15,8 +15,10 @@ vehicle
   ``stall_s`` plus the item's hold time): ``no progress``;
 - lands (disarms) farther than ``landed_away_m`` from where its mission lands:
   ``landed away``;
-- has less charge left than the rest of its mission needs with half the plan's reserve
-  (:mod:`.battery`; a plan with a ``[battery]``): ``battery``;
+- has less charge left than the rest of its mission needs with half its reserve
+  (:mod:`.battery`: the plan's ``[battery]``, else each copter's own BATT_CAPACITY and
+  floor), or announces its own low battery with no failsafe action of its own:
+  ``battery``;
 - no longer knows well enough where it is (its GPS or EKF past the plan's navigation
   budget, a GPS glitch, ArduCopter's own glitch or EKF variance announcement:
   :mod:`.navigation`): ``navigation``;
@@ -131,6 +133,7 @@ class Seen:
     ekf: EkfReport | None = None
     gps_jump_m: float = 0.0
     battery_pct: int | None = None
+    battery_current_a: float | None = None
 
 
 @dataclass(frozen=True)
@@ -315,6 +318,8 @@ class DepartureWatch:
         tr.texts_read = s.text_count
         for _t, _severity, text in (list(s.texts)[-new:] if new > 0 else []):
             kind = departure_text(text)
+            if self.battery is not None:
+                kind = self.battery.text_kind(i, text, kind)
             if kind is not None:
                 out += self._once(i, kind, f'"{text.strip()}"', now)
         # where it is: its GPS and EKF held to the plan's budget, in the air
@@ -324,7 +329,8 @@ class DepartureWatch:
                 out += self._once(i, NAVIGATION, why, now)
         # its charge against the rest of its mission, in the air
         if self.battery is not None and s.armed and s.alt_m > o.airborne_m:
-            why = self.battery.check(i, s.battery_pct, s.seq)
+            why = self.battery.check(i, s.battery_pct, s.seq, current_a=s.battery_current_a,
+                                     now=now)
             if why is not None:
                 out += self._once(i, BATTERY, why, now)
         # mode

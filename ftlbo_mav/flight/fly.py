@@ -107,8 +107,8 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     is sent to ``options.abort_mode`` before the interrupt propagates.
     """
     say("pre-flight: firmware, missions, GPS, pre-arm checks")
-    preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s,
-              any_firmware=options.any_firmware, any_params=options.any_params, say=say)
+    own = preflight(planned, vehicles, timing=timing, ready_timeout_s=options.ready_timeout_s,
+                    any_firmware=options.any_firmware, any_params=options.any_params, say=say)
     if keeper is None and options.keeper.enabled:
         keeper = make_keeper(planned, options.keeper)
     if keeper is not None and keeper.options.enabled and keeper.cruise_speed_m_s is None:
@@ -125,7 +125,8 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
     policy = options.policy
     fw = FlightWatch(planned, vehicles, say=say, on_event=on_event, options=options.watch,
                      budget_s=options.departure_budget_s, lost_wait_s=options.lost_wait_s,
-                     policy=FaultPolicy.LAND if policy is FaultPolicy.CONTINUE else policy)
+                     policy=FaultPolicy.LAND if policy is FaultPolicy.CONTINUE else policy,
+                     batteries=own)
     gates_written = False
     try:
         try:

@@ -22,8 +22,8 @@ from ..link.geofence import fence_differences
 from ..link.mission_protocol import download_mission
 from ..link.params import read_params
 from ..link.transfer import Timing
-from .battery import preflight_problem as battery_preflight
-from .fit import fit_fleet
+from .battery import CopterBattery, OwnBatteries, own_batteries_for
+from .fit import fit_fleet, predict_fleet
 from .fleet import concurrently
 from .navigation import describe, ekf_report, gps_report, preflight_problems
 from .planned import PlannedFlight
@@ -100,10 +100,15 @@ def firmware_problems(vehicles: Sequence[FlightVehicle], *, timeout_s: float
 def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
               timing: Timing, ready_timeout_s: float, any_firmware: bool = False,
               any_params: bool = False,
-              say: Callable[[str], None] = lambda _t: None) -> None:
+              say: Callable[[str], None] = lambda _t: None) -> OwnBatteries | None:
     """Raise :class:`PreflightError` unless every vehicle is ready to fly its mission.
     A vehicle whose firmware is not ArduCopter 4.5.x or 4.6.x is one that is not, unless
-    ``any_firmware``: then ``say`` hears what is no longer promised for it."""
+    ``any_firmware``: then ``say`` hears what is no longer promised for it.
+
+    A plan without a ``[battery]``: each copter's own battery as read from it, for the
+    flight's battery watch (a copter that has not the charge for its mission and its
+    floor is refused); None with a ``[battery]`` (the plan's) or when it could not be
+    read."""
     fleet = planned.fleet()
     firmware = firmware_problems(vehicles, timeout_s=timing.timeout_s)
     for v, problem in zip(vehicles, firmware):
@@ -111,6 +116,7 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
             say(f"warning: {v.name} (sysid {v.sysid}): {any_firmware_warning(problem)}")
 
     values: dict[int, Mapping[str, float | None]] = {}
+    batteries: dict[int, CopterBattery] = {}
 
     def onboard_problems(pair) -> list[str]:
         vehicle, expected, fence, copter = pair
@@ -120,6 +126,9 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                 fence_diff = ([] if fence is None
                               else fence_differences(channel, fence, timing=timing))
                 values[vehicle.sysid] = read_params(channel, FLIGHT_PARAMS, timing=timing)
+                if planned.battery is None:
+                    batteries[vehicle.sysid] = CopterBattery.from_params(
+                        read_params(channel, CopterBattery.PARAMS, timing=timing))
         except FtlboError as exc:
             return [f"cannot read its mission or fence back: {exc}"]
         param_diff = vehicle_param_differences(copter.to_set(), values[vehicle.sysid])
@@ -152,14 +161,18 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
             if not any(onboard):  # a promise lost by all of them: said for each
                 onboard = [[f"the plan does not fit the fleet: {'; '.join(verdict.broken)}"]
                            for _v in vehicles]
+        own = own_batteries(planned, actual, [batteries.get(v.sysid) for v in vehicles])
+    else:
+        own = None
     deadline = clock.monotonic() + ready_timeout_s
 
-    def reported(v: FlightVehicle) -> bool:
+    def reported(v: FlightVehicle, i: int) -> bool:
+        watched = planned.battery is not None or (own is not None and own.copters[i].watched)
         return (v.status.gps_raw is not None and v.status.ekf_raw is not None
-                and (planned.battery is None or v.status.battery_pct is not None))
+                and (not watched or v.status.battery_pct is not None))
 
     while clock.monotonic() < deadline and not all(
-            is_ready(v.link, v.sysid) and reported(v) for v in vehicles):
+            is_ready(v.link, v.sysid) and reported(v, i) for i, v in enumerate(vehicles)):
         clock.sleep(0.1)
     # an EKF that has not yet got its absolute position is waited for a few seconds more
     # (SITL through a radio: one copter's EKF_STATUS_REPORT lacked it at the first look
@@ -176,12 +189,28 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
         if not is_ready(v.link, v.sysid):
             why += readiness_problems(v.link, v.sysid)
         why += navigation_problems(planned, v)
-        if planned.battery is not None:
-            short = battery_preflight(planned.battery, i, v.status.battery_pct)
+        batt = planned.battery if planned.battery is not None else own
+        if batt is not None:
+            short = batt.preflight_problem(i, v.status.battery_pct)
             why += [short] if short else []
+        if own is not None and (unwatched := own.unwatched(i, v.status.battery_pct)):
+            say(f"note: {v.name} (sysid {v.sysid}) {unwatched}")
         if v.status.armed:
             why.append("already armed")
         if why:
             problems.append(f"{v.name} (sysid {v.sysid}): " + "; ".join(why))
     if problems:
         raise PreflightError(problems)
+    return own
+
+
+def own_batteries(planned: PlannedFlight, copters, batteries) -> OwnBatteries | None:
+    """Without a ``[battery]``: each copter's battery (``batteries``, as read; None where
+    not) against its mission predicted with its own values (``copters``)."""
+    if planned.battery is not None or any(b is None for b in batteries):
+        return None
+    prediction = predict_fleet(planned, copters)
+    if prediction is None:
+        return None
+    return own_batteries_for(planned.missions, prediction, [c.nav for c in copters],
+                             batteries)

@@ -20,7 +20,7 @@ from .. import clock
 from ..ardupilot.fence import rtl_target
 from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
-from .battery import BatteryWatch
+from .battery import BatteryWatch, OwnBatteries
 from .departures import (
     DEFAULT_WATCH,
     DepartureWatch,
@@ -118,11 +118,13 @@ def last_leg_seq(mission) -> int:
     return mission[-1].seq - 1 if mission[-1].command != CMD_NAV_LOITER_UNLIM else mission[-1].seq
 
 
-def battery_watch(planned: PlannedFlight | None) -> BatteryWatch | None:
-    """The in-flight battery watch of a plan with a ``[battery]`` (None: without)."""
-    if planned is None or planned.battery is None:
+def battery_watch(planned: PlannedFlight | None, own: OwnBatteries | None = None
+                  ) -> BatteryWatch | None:
+    """The in-flight battery watch: of the plan's ``[battery]``, else of the copters' own
+    batteries as read before the flight (``own``); None with neither."""
+    if planned is None or (planned.battery is None and own is None):
         return None
-    return BatteryWatch(planned.battery, planned.missions)
+    return BatteryWatch(planned.battery or own, planned.missions)
 
 
 def observe(v: FlightVehicle, planned: PlannedFlight | None, *,
@@ -148,7 +150,7 @@ def observe(v: FlightVehicle, planned: PlannedFlight | None, *,
                 link_up=v.link_up, asked_mode=v.asked_mode, asked_t=v.asked_t,
                 texts=tuple(s.text_log), text_count=s.text_count, position=position,
                 seq=s.seq, gps=gps, ekf=ekf_report(s.ekf_raw), gps_jump_m=s.gps_jump_m,
-                battery_pct=s.battery_pct)
+                battery_pct=s.battery_pct, battery_current_a=s.battery_current_a)
 
 
 def watch_from_outside(departures: DepartureWatch, vehicles: Sequence[FlightVehicle],
@@ -197,13 +199,14 @@ class FlightWatch:
                  options: WatchOptions = DEFAULT_WATCH, budget_s: float = 50.0,
                  lost_wait_s: float = 15.0,
                  say: Callable[[str], None] = lambda _t: None,
-                 on_event: Callable[[str], None] = lambda _t: None) -> None:
+                 on_event: Callable[[str], None] = lambda _t: None,
+                 batteries: OwnBatteries | None = None) -> None:
         self.planned, self.vehicles, self.say = planned, list(vehicles), say
         self.on_event = on_event
         self.departures = DepartureWatch(len(vehicles), options=options,
                                          landing=landing_points(planned),
                                          navigation=planned.navigation,
-                                         battery=battery_watch(planned),
+                                         battery=battery_watch(planned, batteries),
                                          formation=formation_bound(planned))
         self.response = Response(policy, budget_s=budget_s,
                                  lost_wait_s=lost_wait_s,
