@@ -9,8 +9,8 @@ on a full battery before the flight, at the current the copter reports once it f
 Its own ``Battery N is low`` / ``Battery Failsafe`` with BATT_FS_*_ACT 0 (announced, no
 action of its own) is a departure too (:meth:`BatteryWatch.text_kind`).
 
-With a ``[battery]``, the plan (``[battery]``, :mod:`ftlbo_mav.energy`) predicts what each mission uses from
-each of its points to the end, its landing included (plan.json ``uavs[i].battery``). A
+With a ``[battery]`` (:mod:`ftlbo_mav.energy`), the plan predicts what each mission uses
+from each of its points to the end, its landing included (plan.json ``uavs[i].battery``). A
 vehicle reports what is left as a percentage (SYS_STATUS ``battery_remaining``, which
 ArduPilot computes from BATT_CAPACITY and the charge it has counted:
 :mod:`ftlbo_mav.ardupilot.battery`); the plan's capacity turns it into mAh.
