@@ -21,13 +21,14 @@ from __future__ import annotations
 
 import math
 import queue
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
 
 from .. import clock
 from ..ardupilot.navigation import vehicle_navigation
+from ..geo import segment_distance
 from ..link.swarm import upload_and_verify
 from ..link.transfer import Timing
 from ..mission.items import CMD_DO_SET_CAM_TRIGG_DIST, build_return
@@ -45,6 +46,9 @@ position a route was planned from can be a second old (an outage) and the copter
 stopped yet: on SITL one started 5 m off its route's first point, crossed a tree's fence
 and ended 0.39 m inside the tree's radius."""
 """A vehicle below this height within this distance of its home is on the ground there."""
+ESCAPE_MARGIN_M = 0.3
+"""How far past the reach of a vehicle in doubt a vehicle inside it first flies, straight
+out at its own height, before its way home (which then keeps clear of that reach)."""
 KEEP_OUT_SPEED_M_S = 5.0
 """How fast a vehicle that left is taken to move, at the least (its last ground speed if
 faster), for how far it can have gone since it was last heard of."""
@@ -70,19 +74,102 @@ def return_world(planned: PlannedFlight) -> World:
                  pair_error_m=planned.navigation.pair_m)
 
 
-def keep_out(planned: PlannedFlight, v: FlightVehicle, now: float) -> KeepOut | None:
+def keep_out(planned: PlannedFlight, v: FlightVehicle, now: float, *, doubt_m: float = 0.0
+             ) -> KeepOut | None:
     """Where vehicle ``v`` (one that left) may be: its last known position, grown by
-    ``min_separation`` and by how far it can have moved since (its last ground speed, at
-    least :data:`KEEP_OUT_SPEED_M_S`, times the age of that position); None when it was
-    never placed."""
+    ``min_separation``, by how far it can have moved since (its last ground speed, at
+    least :data:`KEEP_OUT_SPEED_M_S`, times the age of that position) and by ``doubt_m``
+    (how far from its estimate it may truly be: a GPS jump); None when it was never
+    placed."""
     s = v.status
     if s.lat_deg is None:
         return None
-    here = planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg, alt_m=s.alt_m)
+    here = np.asarray(planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
+                                           alt_m=s.alt_m), float)[:2]
     age = max(now - s.position_t, 0.0) * s.clock_rate  # its seconds (a simulator run fast)
     radius = (planned.min_separation_m + planned.navigation.pair_m
               + max(s.ground_speed_m_s, KEEP_OUT_SPEED_M_S) * age)
-    return KeepOut(np.asarray(here, float)[:2], radius)
+    if doubt_m <= 0:
+        return KeepOut(here, radius)
+    # in doubt after its GPS jumped by J: held where its estimate is, it truly drifts by
+    # up to -J as EKF3 takes the jump up (flight/navigation.py jump_vector): it is truly
+    # somewhere from here to here - J, and within the rest of its doubt of that
+    jump = np.asarray(s.gps_jump_enu, float) if doubt_m >= s.gps_jump_m else np.zeros(2)
+    half = float(np.hypot(*jump)) / 2.0
+    return KeepOut(here - jump / 2.0, radius + doubt_m - half)
+
+
+def escape(here: np.ndarray, reaches: Sequence[KeepOut], planned: PlannedFlight,
+           others: Sequence[np.ndarray] = ()) -> np.ndarray | None:
+    """Where a vehicle stopped at ``here`` ``(3,)`` inside the reach of a vehicle in doubt
+    (``reaches``: their keep-outs) first flies: straight out of it at its own height, to
+    the nearest point :data:`ESCAPE_MARGIN_M` past its edge (every 15 degrees around it)
+    whose line from ``here`` keeps the plan's clearance from the obstacles and
+    ``min_separation`` and the navigation budget from the ``others`` (the other vehicles,
+    ``(2,)`` or ``(3,)`` each); None when it is in no reach or no such line is found (its
+    way home then begins where it is, as any other's). A vehicle in doubt drifts within
+    its reach, at its own height and down through every layer as it lands: a way home
+    that climbs or descends to its layer inside that reach could meet it there (the
+    emulator, a 3 m GPS jump: 1.5 m)."""
+    here = np.asarray(here, float)
+    inside = [k for k in reaches if float(np.hypot(*(here[:2] - k.centre))) < k.radius_m]
+    if not inside:
+        return None
+    apart = planned.min_separation_m + planned.navigation.pair_m
+    kept = planned.clearance_m + planned.navigation.horizontal_m
+    for q in _ring(inside[0], here[:2]):
+        if any(float(np.hypot(*(q - r.centre))) < r.radius_m for r in reaches):
+            continue
+        if len(others) and float(segment_distance(
+                np.array([np.asarray(o, float)[:2] for o in others]), here[:2], q).min()) < apart:
+            continue
+        if len(planned.centres) and float((segment_distance(
+                np.asarray(planned.centres)[:, :2], here[:2], q) - planned.radii).min()) < kept:
+            continue
+        return np.array([*q, here[2]])
+    return None
+
+
+def _ring(reach: KeepOut, near: np.ndarray) -> np.ndarray:
+    """Points :data:`ESCAPE_MARGIN_M` past the edge of ``reach``, every 15 degrees, the
+    nearest to ``near`` first."""
+    angles = np.radians(np.arange(0, 360, 15))
+    ring = reach.centre + (reach.radius_m + ESCAPE_MARGIN_M) * np.column_stack(
+        [np.cos(angles), np.sin(angles)])
+    return ring[np.argsort(np.hypot(*(ring - near).T))]
+
+
+def landing_out_of_reach(land: np.ndarray, reaches: Sequence[KeepOut],
+                         planned: PlannedFlight, others: Sequence[np.ndarray]
+                         ) -> np.ndarray | None:
+    """Where a vehicle whose landing point ``land`` ``(2,)`` lies in the reach of a vehicle
+    in doubt lands instead (None: it does not lie in one): the nearest point just out of
+    that reach (:data:`ESCAPE_MARGIN_M` past its edge, every 15 degrees around it) that
+    keeps the plan's clearance from the obstacles, lies in its area and keeps
+    ``min_separation`` and the navigation budget from the ``others``' landing points. The
+    one in doubt lands somewhere in its reach, drifting as it comes down (the emulator, a
+    3 m jump at take-off: it drifted onto the home of the copter beside it). No such
+    point: its own (the way home is then refused there)."""
+    inside = [k for k in reaches
+              if float(np.hypot(*(np.asarray(land, float) - k.centre))) < k.radius_m]
+    if not inside:
+        return None
+    ring = _ring(inside[0], np.asarray(land, float))
+    apart = planned.min_separation_m + planned.navigation.pair_m
+    kept = planned.clearance_m + planned.navigation.horizontal_m
+    for q in ring:
+        if any(float(np.hypot(*(q - r.centre))) < r.radius_m for r in reaches):
+            continue
+        if any(float(np.hypot(*(q - np.asarray(o, float)[:2]))) < apart for o in others):
+            continue
+        if len(planned.centres) and float((np.hypot(*(np.asarray(planned.centres)[:, :2]
+                                                      - q).T) - planned.radii).min()) < kept:
+            continue
+        if planned.area is not None and not (np.all(q >= planned.area[0])
+                                             and np.all(q <= planned.area[1])):
+            continue
+        return q
+    return None
 
 
 class GoingHome:
@@ -95,12 +182,16 @@ class GoingHome:
         self.planned, self.vehicles, self.say = planned, list(vehicles), say
         self.timing = timing or Timing()
         self.plan: ReturnPlan | None = None  # every route home planned so far
+        self.stopped_at: dict[int, np.ndarray] = {}  # where a vehicle that escapes first is
+        self.moved_landing: dict[int, float] = {}  # landing moved out of a reach: how far
         self.started_t: float | None = None  # when the first were planned
         self._done: queue.SimpleQueue = clock.SimpleQueue()
 
-    def start(self, answered: Sequence[int], left: Sequence[int], now: float) -> dict[int, str]:
+    def start(self, answered: Sequence[int], left: Sequence[int], now: float, *,
+              doubt: Mapping[int, float] | None = None) -> dict[int, str]:
         """Plan the way home of the ``answered`` vehicles (stopped where they are), the
-        ``left`` ones kept out, and start flying it; returns the vehicles that have no
+        ``left`` ones kept out (grown by their ``doubt``, metres: a position in doubt),
+        and start flying it; returns the vehicles that have no
         way home and why (they are left to the policy's RTL-or-LAND). Called again for a
         vehicle answered later (its link back), its route keeps clear of those already
         flying home, on their clock."""
@@ -121,9 +212,24 @@ class GoingHome:
                 refused[j] = "still on the ground at its home"
                 continue
             positions[j] = here
-        outs = tuple(k for j in left
-                     if (k := keep_out(planned, self.vehicles[j], now)) is not None)
+        doubt = doubt or {}
+        outs = tuple(k for j in left if (k := keep_out(planned, self.vehicles[j], now,
+                                                       doubt_m=doubt.get(j, 0.0))) is not None)
+        doubted = [k for j in left if j in doubt
+                   and (k := keep_out(planned, self.vehicles[j], now, doubt_m=doubt[j]))]
+        for j, here in list(positions.items()):
+            others = [self._where(k) for k in range(len(self.vehicles))
+                      if k != j and k not in doubt and self._where(k) is not None]
+            out = escape(here, doubted, planned, others)
+            if out is not None:
+                self.stopped_at[j], positions[j] = here, out
         landings = {j: np.asarray(planned.paths[j][0][:2], float) for j in positions}
+        for j, land in list(landings.items()):  # a landing in the reach of one in doubt
+            others = [q for k, q in landings.items() if k != j]
+            out = landing_out_of_reach(land, doubted, planned, others)
+            if out is not None:
+                landings[j] = out
+                self.moved_landing[j] = float(np.hypot(*(out - land)))
         before = self.plan
         if before is None:
             self.started_t = now
@@ -146,6 +252,14 @@ class GoingHome:
             clock.Thread(target=self._fly_home, args=(j,), daemon=True,
                              name=f"{self.vehicles[j].name} home").start()
         return refused
+
+    def _where(self, k: int) -> np.ndarray | None:
+        """Vehicle k's last reported position (ENU), None when it has none."""
+        s = self.vehicles[k].status
+        if s.lat_deg is None:
+            return None
+        return np.asarray(self.planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
+                                                    alt_m=s.alt_m), float)
 
     def mission(self, j: int) -> list:
         """Vehicle j's mission home (:func:`~ftlbo_mav.mission.items.build_return`)."""
@@ -183,6 +297,11 @@ class GoingHome:
             self._done.put((j, False, f"its route home could not be started ({exc})"))
             return
         wait = f", waiting {route.wait_s:.0f} s on it" if route.wait_s else ""
+        if j in self.stopped_at:
+            wait += ", first straight out of the reach of the one in doubt"
+        if j in self.moved_landing:
+            wait += (f", landing {self.moved_landing[j]:.1f} m from its home, out of the "
+                     "reach of the one in doubt")
         self._done.put((j, True, (
             f"flying home on a planned route ({len(route.points) - 2} waypoint(s) at "
             f"{route.layer_m:.1f} m{wait}; predicted clearance {route.clearance_m:.2f} m, "
@@ -197,7 +316,7 @@ class GoingHome:
             return "its position is unknown"
         here = np.asarray(self.planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
                                                     alt_m=s.alt_m), float)
-        start = np.asarray(self.plan.routes[j].points[0], float)
+        start = np.asarray(self.stopped_at.get(j, self.plan.routes[j].points[0]), float)
         off = float(np.linalg.norm(here[:2] - start[:2]))
         age = clock.monotonic() - s.position_t
         if age > 1.0:

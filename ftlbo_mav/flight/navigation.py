@@ -151,18 +151,25 @@ M_PER_DEGREE = 111_319.49  # metres per degree of latitude (spherical, for a few
 def report_jump(prev, cur, fallback_velocity=None) -> float:
     """How far GPS_RAW_INT ``cur`` is from where ``prev`` and their mean velocity put it,
     metres (0 when they cannot be compared: no fix, out of order, far apart in time)."""
+    return float(np.hypot(*jump_vector(prev, cur, fallback_velocity)))
+
+
+def jump_vector(prev, cur, fallback_velocity=None) -> np.ndarray:
+    """:func:`report_jump` as ``(east, north)`` metres: which way the GPS jumped. A copter
+    holds its estimate where it was (every mode flies on it) while EKF3 takes the jump up
+    (:mod:`ftlbo_mav.sim.gps`): it drifts the other way by as much, where it truly is."""
     if prev is None or cur.fix_type < 3 or prev.fix_type < 3:
-        return 0.0
+        return np.zeros(2)
     dt = (cur.time_usec - prev.time_usec) * 1e-6
     if not 0 < dt <= GPS_STALE_S:
-        return 0.0
+        return np.zeros(2)
     north = (cur.lat - prev.lat) * 1e-7 * M_PER_DEGREE
     east = ((cur.lon - prev.lon) * 1e-7 * M_PER_DEGREE
             * float(np.cos(np.radians(cur.lat * 1e-7))))
     v = [w for w in (_velocity(prev, fallback_velocity), _velocity(cur, fallback_velocity))
          if w is not None]
     mean = np.mean(v, axis=0) if v else np.zeros(2)
-    return float(np.hypot(east - mean[0] * dt, north - mean[1] * dt))
+    return np.array([east - mean[0] * dt, north - mean[1] * dt])
 
 
 def _velocity(msg, fallback):

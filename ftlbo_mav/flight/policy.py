@@ -20,6 +20,16 @@
   obstacles are vertical cylinders);
 - ``continue``: the others carry on with their missions; the flight ends when they have.
 
+A vehicle whose position is in doubt (a ``navigation`` departure: its GPS jumped, its fix
+or accuracy fell short, its EKF doubts itself) is not flown on its own estimate, whatever
+the policy: it lands where it is (LAND, straight down), and every route home of the others
+keeps it out by its doubt too (the jump, at least the navigation budget). ArduCopter flies
+any mode on the estimate, and EKF3 takes a jump of the GPS up over seconds
+(:mod:`ftlbo_mav.sim.gps`, recorded): a copter held where its estimate was drifts by
+the jump where it truly is, so its doubt is where it may truly be, and a route home
+planned from its estimate would carry that error to the others' landing spots (ArduCopter
+4.5.6 SITL, 3 m glitch: it landed 0.05 m from another).
+
 The vehicle that left is never commanded against what its pilot, its failsafe or another
 station chose (:data:`~ftlbo_mav.flight.departures.VEHICLE_CHOSE`). One that left
 without choosing (its link was lost and came back, it made no progress) is answered as
@@ -34,12 +44,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from .. import clock
-from .departures import LINK_BACK, LINK_LOST, DepartureWatch, Event
+from .departures import LINK_BACK, LINK_LOST, NAVIGATION, DepartureWatch, Event
 from .vehicle import FlightError, FlightVehicle
 
 STOPPED_M_S = 0.3
 STOP_AGAIN_S = 1.0  # a vehicle not slowing this long after its pause is paused again
 HOME_BUDGET_FACTOR = 1.5  # the flight home is watched this many times its predicted length
+DOUBT_HOLD_S = 30.0  # a vehicle in doubt holds at most this long for the others to leave
 
 
 class FaultPolicy(enum.Enum):
@@ -75,8 +86,12 @@ class Response:
                  t0: float | None = None,
                  route_check: Callable[[int], str | None] = lambda _j: None,
                  landing: Callable[[int], bool] = lambda _j: False,
-                 homeward=None) -> None:
+                 homeward=None, doubt: Callable[[int], float] = lambda _j: 0.0,
+                 clear_of: Callable[[int], bool] = lambda _j: True) -> None:
         self.policy = policy
+        self.doubt = doubt  # vehicle -> how far from its estimate it may truly be (m)
+        self.doubtful: dict[int, float] = {}  # in doubt: landed where it is, kept out
+        self.clear_of = clear_of  # vehicle in doubt -> every other one is out of its reach
         # the collective return (flight/homeward.GoingHome), for the rally policy; None:
         # each vehicle RTL or LAND as its line allows
         self.homeward = homeward
@@ -114,6 +129,11 @@ class Response:
                                  note=f"link back at {self._at(e.t)}")
                 continue
             self.left.setdefault(e.index, []).append(e)
+            if e.kind == NAVIGATION and e.index not in self.doubtful:
+                self.doubtful[e.index] = self.doubt(e.index)
+                a = self.answers.get(e.index)
+                if a is not None and a.mode != "LAND":  # answered before: land it instead
+                    self.history.setdefault(e.index, []).extend(self.answers.pop(e.index).done)
             if e.kind == LINK_LOST:
                 self.lost[e.index] = e.t
             if e.vehicle_chose:
@@ -124,6 +144,8 @@ class Response:
             watch.expect(e.index, None)
             watch.legs(e.index, False)
             watch.stop_landing_check(e.index)
+            if e.index in self.doubtful:  # whatever the policy, as soon as it is named
+                self._answer(e.index, vehicles, watch, now)
             if self.first_t is None:
                 self.first_t = e.t
                 if self.policy is not FaultPolicy.CONTINUE:
@@ -134,9 +156,10 @@ class Response:
 
     def _answer(self, j: int, vehicles: Sequence[FlightVehicle], watch: DepartureWatch,
                 now: float, *, note: str | None = None) -> None:
-        """Stop vehicle j (BRAKE) unless it chose otherwise, cannot be reached or landed."""
-        if (self.policy is FaultPolicy.CONTINUE or j in self.chose or j in self.lost
-                or j in self.answers):
+        """Stop vehicle j (BRAKE) unless it chose otherwise, cannot be reached or landed
+        (one in doubt too: :meth:`_doubt_step` lands it)."""
+        if ((self.policy is FaultPolicy.CONTINUE and j not in self.doubtful)
+                or j in self.chose or j in self.lost or j in self.answers):
             return
         v = vehicles[j]
         if not v.status.armed:
@@ -181,6 +204,9 @@ class Response:
                     v.send_pause(True)
                 except FlightError:
                     pass  # its link: the watch reports that
+            if j in self.doubtful:
+                self._doubt_step(j, a, v, watch, now)
+                continue
             if a.stage == "stop" and then is not None and not self._going_home(j):
                 slow = v.status.ground_speed_m_s < STOPPED_M_S
                 if slow or now - a.since >= self.stop_s:
@@ -208,6 +234,41 @@ class Response:
                     except FlightError:
                         pass  # its link: the watch reports that
 
+    def _doubt_step(self, j: int, a: _Answer, v: FlightVehicle, watch: DepartureWatch,
+                    now: float) -> None:
+        """Vehicle j, in doubt, stopped with the others (on its track: their stops alike
+        keep them apart), holds there while the others leave its reach (their ways home
+        begin by leaving it), at most :data:`DOUBT_HOLD_S`, then lands where it is: its
+        descent, drifting as EKF3 takes its jump up, never crosses the layer of a copter
+        still beside it."""
+        if a.stage == "stop" and (v.status.ground_speed_m_s < STOPPED_M_S
+                                  or now - a.since >= self.stop_s):
+            a.stage, a.since = "hold", now
+            a.done.append(f"its position in doubt by {self.doubtful[j]:.1f} m: holding where "
+                          f"it stopped until the others are out of its reach")
+        if a.stage == "hold":
+            clear = self.clear_of(j)
+            if clear or now - a.since >= DOUBT_HOLD_S:
+                a.stage, a.mode, a.tries, a.sent_t = "then", "LAND", 0, now - 1.0
+                a.done.append(("the others out of its reach" if clear else
+                               f"the others still in its reach after {DOUBT_HOLD_S:g} s")
+                              + f": landing where it is (LAND), not flown on its estimate, "
+                              f"at {self._at(now)}")
+        if a.stage == "then" and v.status.mode != "LAND" and now - a.sent_t >= 1.0:
+            if a.tries >= self.confirm_tries:
+                a.stage = "failed"
+                a.done.append(f"did not switch to LAND (still {v.status.mode})")
+                return
+            a.sent_t, a.tries = now, a.tries + 1
+            try:
+                v.send_mode("LAND")
+            except FlightError:
+                pass  # its link: the watch reports that
+        elif a.stage == "then" and v.status.mode == "LAND":
+            a.stage = "sent"
+            a.done.append(f"LAND at {self._at(now)}")
+            watch.expect(j, "LAND")
+
     def _going_home(self, j: int) -> bool:
         """Vehicle j waits for (or is in) the collective return, not for its own RTL."""
         return (self.policy is FaultPolicy.RALLY and self.homeward is not None
@@ -221,16 +282,16 @@ class Response:
         # the first answered go together once all have stopped; one answered later (its
         # link back) once it has stopped, its route clear of those already on their way
         stopping = {j: a for j, a in self.answers.items()
-                    if a.stage == "stop" and j not in self.home_tried}
+                    if a.stage == "stop" and j not in self.home_tried and j not in self.doubtful}
         ready = bool(stopping) and all(
             vehicles[j].status.ground_speed_m_s < STOPPED_M_S or now - a.since >= self.stop_s
             for j, a in stopping.items())
         if ready:
             self.home_started = True
             self.home_tried.update(stopping)
-            left = [j for j in self.left if j not in self.answers]
+            left = [j for j in self.left if j not in self.answers or j in self.doubtful]
             try:
-                refused = self.homeward.start(list(stopping), left, now)
+                refused = self.homeward.start(list(stopping), left, now, doubt=self.doubtful)
             except Exception as exc:  # noqa: BLE001 - never leave the others in the air
                 refused = {j: f"the routes home could not be planned ({exc})" for j in stopping}
             plan = getattr(self.homeward, "plan", None)

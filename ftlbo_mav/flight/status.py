@@ -118,6 +118,7 @@ class Status:
     gps_raw: object | None = None
     ekf_raw: object | None = None
     gps_jump_m: float = 0.0  # the largest GPS jump while armed (flight/navigation.py)
+    gps_jump_enu: tuple[float, float] = (0.0, 0.0)  # that jump, east and north (m)
     # SYS_STATUS: the charge left (per cent; None: not reported, -1 on the wire) and the
     # current drawn (A)
     battery_pct: int | None = None

@@ -11,6 +11,7 @@ naming the vehicle and the step.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as R
@@ -21,7 +22,7 @@ from ..ardupilot.streams import flight_streams
 from ..errors import FtlboError
 from ..link.endpoints import LinkError
 from ..link.firmware import version_request
-from .navigation import report_jump
+from .navigation import jump_vector
 from .status import Status
 
 REBOOT_BACK_S = 5.0  # a position report this much older than the last: the vehicle rebooted
@@ -150,8 +151,10 @@ class FlightVehicle:
                 s.seq = msg.seq
             elif kind == "GPS_RAW_INT":
                 if s.armed:  # a glitch is measured on every report, whoever watches
-                    s.gps_jump_m = max(s.gps_jump_m, report_jump(s.gps_raw, msg,
-                                                                 s.velocity_enu))
+                    east, north = jump_vector(s.gps_raw, msg, s.velocity_enu)
+                    if math.hypot(east, north) > s.gps_jump_m:
+                        s.gps_jump_m = math.hypot(east, north)
+                        s.gps_jump_enu = (float(east), float(north))
                 s.gps_raw = msg
             elif kind == "EKF_STATUS_REPORT":
                 s.ekf_raw = msg

@@ -30,7 +30,7 @@ from .departures import (
     Together,
     WatchOptions,
 )
-from .homeward import GoingHome
+from .homeward import GoingHome, keep_out
 from .keeper import FormationKeeper
 from .navigation import ekf_report, gps_report
 from .outcome import FlightLeftPlan, aborted
@@ -211,7 +211,8 @@ class FlightWatch:
         self.response = Response(policy, budget_s=budget_s,
                                  lost_wait_s=lost_wait_s,
                                  route_check=self.rtl_problem, landing=self.landing,
-                                 homeward=GoingHome(planned, vehicles, say=say))
+                                 homeward=GoingHome(planned, vehicles, say=say),
+                                 doubt=self.doubt, clear_of=self.clear_of)
         self.keeper: FormationKeeper | None = None
         self.started = False
         self.memo: dict = {}  # positions_now's last answer (the keeper asks it again)
@@ -222,6 +223,32 @@ class FlightWatch:
         mission, seq = self.planned.missions[j], self.vehicles[j].status.seq
         return 0 < seq < len(mission) and mission[seq].command == CMD_NAV_LAND and all(
             it.command != CMD_NAV_WAYPOINT for it in mission[seq + 1:])
+
+    def doubt(self, j: int) -> float:
+        """How far vehicle j may truly be from where it says it is, once its position is
+        in doubt: the largest jump its GPS made, what its receiver says of its accuracy,
+        at least the plan's navigation budget (m)."""
+        s = self.vehicles[j].status
+        gps = gps_report(s.gps_raw, self.planned.frame) if s.gps_raw is not None else None
+        acc = gps.h_acc_m if gps is not None and gps.h_acc_m is not None else 0.0
+        return max(s.gps_jump_m, acc, self.planned.navigation.horizontal_m)
+
+    def clear_of(self, j: int) -> bool:
+        """Every other vehicle is out of the reach of vehicle j, in doubt (its keep-out,
+        :func:`~ftlbo_mav.flight.homeward.keep_out`): j may land, drifting within it."""
+        reach = keep_out(self.planned, self.vehicles[j], clock.monotonic(),
+                         doubt_m=self.response.doubtful.get(j, 0.0))
+        if reach is None:
+            return True
+        for k, v in enumerate(self.vehicles):
+            s = v.status
+            if k == j or k in self.response.lost or s.lat_deg is None:
+                continue
+            here = self.planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
+                                             alt_m=s.alt_m)
+            if float(np.hypot(*(np.asarray(here[:2], float) - reach.centre))) < reach.radius_m:
+                return False
+        return True
 
     def rtl_problem(self, j: int) -> str | None:
         """Why vehicle j's RTL from where it is now would not be safe, or None."""

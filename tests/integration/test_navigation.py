@@ -17,14 +17,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ftlbo_mav import clock
+from ftlbo_mav.ardupilot.modes import mode_name
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE
 
 from ..conftest import EXAMPLE
-from .fleet import vehicles
+from .fleet import BACKEND, vehicles
 from .test_departures import (
     HOMES,
     OPTIONS,
@@ -164,3 +166,149 @@ def test_a_copter_whose_gps_puts_it_ahead_of_its_start_moves_there_before_the_le
                                    lon_deg=[float(first["lon_deg"])])
         off = float(np.hypot(*(enu[0, :2] - planned.paths[n][0][:2])))
         assert off < 0.3, (n + 1, off)
+
+
+# -- the answer judged where the copters truly are (SIM_STATE) -----------------------------
+
+class Truth(SecondPort):
+    """A vehicle's second link recording SIM_STATE (the simulator's true position) at
+    10 Hz on the test's clock, and its HEARTBEAT."""
+
+    def __init__(self, url: str, sysid: int, home_alt_m: float) -> None:
+        super().__init__(url, sysid)
+        self.home_alt_m = home_alt_m
+        self.rows: list[tuple[float, float, float, float]] = []  # t, lat, lon, alt (home)
+        self.stop = clock.Event()
+        self.thread = clock.Thread(self._run, name=f"truth uav{sysid}")
+        self.thread.start()
+
+    def _run(self) -> None:
+        next_ask = 0.0
+        while not self.stop.is_set():
+            now = clock.monotonic()
+            if now >= next_ask:
+                self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_SET_MESSAGE_INTERVAL,
+                                                0, R.MAVLINK_MSG_ID_SIM_STATE, 1e5,
+                                                0, 0, 0, 0, 0)
+                next_ask = now + 5.0
+            try:
+                msg = self.conn.recv_match(blocking=False)
+            except OSError:
+                return
+            if msg is None:
+                self.conn.select(0.05)
+                continue
+            if msg.get_srcSystem() != self.sysid:
+                continue
+            if msg.get_type() == "SIM_STATE":
+                lat = msg.lat_int * 1e-7 if getattr(msg, "lat_int", 0) else msg.lat
+                lon = msg.lon_int * 1e-7 if getattr(msg, "lon_int", 0) else msg.lon
+                self.rows.append((now, lat, lon, msg.alt - self.home_alt_m))
+            elif msg.get_type() == "HEARTBEAT" and msg.type != R.MAV_TYPE_GCS:
+                self.mode = mode_name(msg.custom_mode)
+                self.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
+
+    def wait(self, predicate, timeout_s: float) -> bool:
+        deadline = clock.monotonic() + timeout_s
+        while clock.monotonic() < deadline:
+            if predicate(self):
+                return True
+            clock.sleep(0.02)
+        return False
+
+    def enu(self, frame) -> np.ndarray:
+        """``(T, 4)``: time, east, north, up above home."""
+        t, lat, lon, alt = np.array(self.rows, float).T
+        return np.column_stack([t, frame.to_enu(lat_deg=lat, lon_deg=lon, alt_m=alt)])
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(timeout=2.0)
+        super().close()
+
+
+GLITCHES = {  # SIM_GPS_GLITCH_X / _Y (degrees) of a 3 m jump
+    "north": (GLITCH_M / METRES_PER_DEGREE, 0.0),
+    "south": (-GLITCH_M / METRES_PER_DEGREE, 0.0),
+    "east": (0.0, GLITCH_M / (METRES_PER_DEGREE * math.cos(math.radians(HOMES[0][0])))),
+    "west": (0.0, -GLITCH_M / (METRES_PER_DEGREE * math.cos(math.radians(HOMES[0][0])))),
+}
+
+
+def _kept_where_they_truly_are(planned, tracks: list[np.ndarray], since: float) -> dict:
+    """From ``since`` (the fault) on, where the copters truly were: the smallest
+    separation of each pair and clearance of each copter in the air, against what they
+    were at ``since`` and the plan's promises: each may not go below the lesser of the
+    two (min_separation; clearance less 0.05 m)."""
+    t = np.linspace(since, min(tr[-1, 0] for tr in tracks), 3000)
+    at = np.stack([np.column_stack([np.interp(t, tr[:, 0], tr[:, k]) for k in (1, 2, 3)])
+                   for tr in tracks])  # (N, T, 3)
+    up = at[..., 2] > 0.3
+    out = {"separation": {}, "clearance": {}}
+    for a in range(len(at)):
+        for b in range(a + 1, len(at)):
+            d = np.linalg.norm(at[a] - at[b], axis=1)
+            air = up[a] | up[b]
+            if not air.any():
+                continue
+            floor = min(float(d[0]), planned.min_separation_m)
+            k = int(np.argmin(np.where(air, d, np.inf)))
+            out["separation"][f"uav{a + 1}-uav{b + 1}"] = (round(float(d[k]), 2),
+                                                          round(floor, 2))
+            out.setdefault("closest_s", {})[f"uav{a + 1}-uav{b + 1}"] = round(t[k] - since, 1)
+        gap = (np.hypot(*(at[a][:, None, :2] - planned.centres[None]).transpose(2, 0, 1))
+               - planned.radii).min(axis=1)
+        floor = min(float(gap[0]), planned.clearance_m - 0.05)
+        if up[a].any():  # (one still on the ground is no obstacle's concern)
+            out["clearance"][f"uav{a + 1}"] = (round(float(gap[up[a]].min()), 2),
+                                               round(floor, 2))
+    out["kept"] = all(v >= f - 1e-3 for part in ("separation", "clearance")
+                      for v, f in out[part].values())
+    return out
+
+
+@pytest.mark.parametrize("when,who,direction", [
+    ("legs", 0, "north"), ("legs", 0, "south"), ("legs", 0, "east"), ("legs", 0, "west"),
+    ("take-off", 2, "east"), ("take-off", 2, "west")])
+def test_a_copter_whose_gps_jumped_lands_where_it_is_and_the_others_keep_clear(
+        plan_dir, when, who, direction):
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
+        _upload(plan_dir, fleet.urls)
+        truth = [Truth(url, i + 1, HOMES[i][2]) for i, url in enumerate(fleet.serial1_urls)]
+        station = SecondPort(fleet.serial1_urls[who], who + 1)
+        times = {}
+
+        def fault():
+            if when == "legs":
+                _in_auto_for(station, 3.0, fleet.time_scale)
+            else:  # climbing, 2 m up
+                assert truth[who].wait(lambda p: p.rows and p.rows[-1][3] > 2.0, 120.0)
+            times["fault"] = clock.monotonic()
+            north, east = GLITCHES[direction]
+            station.set_param("SIM_GPS_GLITCH_X", north)
+            station.set_param("SIM_GPS_GLITCH_Y", east)
+            return times["fault"]
+
+        try:
+            result, _took = _fly_with(plan_dir, fleet.urls, fault)
+            for tr in truth:
+                assert tr.wait(lambda p: not p.armed, 120.0)
+            clock.sleep(0.5)
+        finally:
+            station.close()
+            for tr in truth:
+                tr.close()
+    out = result.output
+    judged = _kept_where_they_truly_are(planned, [tr.enu(planned.frame) for tr in truth],
+                                        times["fault"])
+    import os, pickle
+    if os.environ.get("DUMP_TRUTH"):
+        pickle.dump(([tr.enu(planned.frame) for tr in truth], times["fault"], out), open(f"/tmp/gps-{direction}-{when}.pkl", "wb"))
+    print(f"[{BACKEND}] GPS of uav{who + 1} jumped 3 m {direction} ({when}): {judged}")
+    assert result.exit_code == 1 and "Traceback" not in out, out
+    line = [x for x in out.splitlines() if x.strip().startswith(f"uav{who + 1} (sysid")][-1]
+    assert "navigation" in line and "landing where it is (LAND)" in line, line
+    assert "holding where it stopped" in line, line
+    assert line.endswith("landed (disarmed)"), line
+    assert judged["kept"], judged
