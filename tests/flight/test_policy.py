@@ -134,7 +134,7 @@ class Homeward:
         self.pending = []
         self.plan = None
 
-    def start(self, answered, left, now):
+    def start(self, answered, left, now, *, doubt=None):
         self.started_with = (sorted(answered), sorted(left), now)
 
         class Plan:
@@ -191,8 +191,8 @@ def test_a_vehicle_answered_late_goes_home_on_its_own_route_once_it_has_stopped(
     home = Homeward()
     calls = []
     real = home.start
-    home.start = lambda answered, left, now: calls.append((sorted(answered), now)) or real(
-        answered, left, now)
+    home.start = lambda answered, left, now, doubt=None: calls.append(
+        (sorted(answered), now)) or real(answered, left, now)
     r = response(homeward=home)
     vs[1].link_up = False
     r.react([Event(1, LINK_LOST, "closed", 5.0)], vs, watch, 5.0)
