@@ -106,7 +106,7 @@ def escape(here: np.ndarray, reaches: Sequence[KeepOut], planned: PlannedFlight,
     the nearest point :data:`ESCAPE_MARGIN_M` past its edge (every 15 degrees around it)
     whose line from ``here`` keeps the plan's clearance from the obstacles and
     ``min_separation`` and the navigation budget from the ``others`` (the other vehicles,
-    ``(2,)`` or ``(3,)`` each); None when it is in no reach or no such line is found (its
+    ``(2,)`` or ``(3,)`` each; from one already nearer, no nearer than it is); None when it is in no reach or no such line is found (its
     way home then begins where it is, as any other's). A vehicle in doubt drifts within
     its reach, at its own height and down through every layer as it lands: a way home
     that climbs or descends to its layer inside that reach could meet it there (the
@@ -120,9 +120,11 @@ def escape(here: np.ndarray, reaches: Sequence[KeepOut], planned: PlannedFlight,
     for q in _ring(inside[0], here[:2]):
         if any(float(np.hypot(*(q - r.centre))) < r.radius_m for r in reaches):
             continue
-        if len(others) and float(segment_distance(
-                np.array([np.asarray(o, float)[:2] for o in others]), here[:2], q).min()) < apart:
-            continue
+        if len(others):  # never closer to one than it is already, if that is nearer
+            near = np.array([np.asarray(o, float)[:2] for o in others])
+            floor = np.minimum(apart, np.hypot(*(near - here[:2]).T) - 1e-6)
+            if np.any(segment_distance(near, here[:2], q) < floor):
+                continue
         if len(planned.centres) and float((segment_distance(
                 np.asarray(planned.centres)[:, :2], here[:2], q) - planned.radii).min()) < kept:
             continue

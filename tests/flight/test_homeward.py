@@ -8,7 +8,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from ftlbo_mav.flight.homeward import GoingHome, keep_out, return_world
+from ftlbo_mav.flight.homeward import (
+    ESCAPE_MARGIN_M,
+    GoingHome,
+    escape,
+    keep_out,
+    landing_out_of_reach,
+    return_world,
+)
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.mission.items import (
     CMD_DO_CHANGE_SPEED,
@@ -34,6 +41,8 @@ class Status:
     position_t: float = 0.0
     ground_speed_m_s: float = 0.0
     clock_rate: float = 1.0
+    gps_jump_m: float = 0.0
+    gps_jump_enu: tuple[float, float] = (0.0, 0.0)
 
 
 @dataclass
@@ -162,3 +171,47 @@ def test_rtl_is_refused_where_its_line_crosses_another_vehicles_route_home(plann
     assert why is not None and "another vehicle's route home" in why
     far = crossing + np.array([0.0, 60.0, 0.0])
     assert rtl_line_problem(planned, 1, here, [], routes=[far]) is None
+
+
+def _placed(planned, east, north, **status):
+    lat, lon, _ = planned.frame.to_lla(np.array([east, north, 5.0]))
+    return StandIn(status=Status(lat_deg=float(lat), lon_deg=float(lon), **status))
+
+
+def test_a_copter_in_doubt_is_kept_out_where_its_jump_makes_it_drift(planned):
+    # its GPS jumped 3 m east: held on its estimate it drifts up to 3 m west, truly
+    v = _placed(planned, 30.0, 20.0, gps_jump_m=3.0, gps_jump_enu=(3.0, 0.0))
+    k = keep_out(planned, v, 0.0, doubt_m=3.0)
+    assert np.allclose(k.centre, [28.5, 20.0], atol=1e-6)
+    assert k.radius_m == pytest.approx(2.0 + planned.navigation.pair_m + 1.5)
+    # from here to 3 m west, every point it may truly be, min_separation away and more
+    for west in (0.0, 1.5, 3.0):
+        assert np.hypot(*(k.centre - [30.0 - west, 20.0])) + 2.0 <= k.radius_m + 1e-9
+    # a doubt without a jump (its accuracy) is a disc around where it says it is
+    k = keep_out(planned, _placed(planned, 30.0, 20.0), 0.0, doubt_m=1.2)
+    assert np.allclose(k.centre, [30.0, 20.0]) and k.radius_m == pytest.approx(
+        2.0 + planned.navigation.pair_m + 1.2)
+
+
+def test_a_copter_inside_the_reach_first_leaves_it_away_from_the_others(planned):
+    reach = keep_out(planned, _placed(planned, 30.0, 20.0), 0.0, doubt_m=1.0)
+    here = np.array([32.0, 20.0, 3.0])
+    out = escape(here, [reach], planned)
+    assert out[2] == 3.0  # at its own height
+    assert np.hypot(*(out[:2] - reach.centre)) == pytest.approx(
+        reach.radius_m + ESCAPE_MARGIN_M, abs=1e-6)
+    assert out[0] > 32.0  # straight out, away from the one in doubt
+    # another vehicle where that line goes: round the reach, clear of it
+    other = np.array([34.5, 20.0])
+    moved = escape(here, [reach], planned, [other])
+    assert np.hypot(*(moved[:2] - other)) >= 2.0 + planned.navigation.pair_m
+    assert escape(np.array([40.0, 20.0, 3.0]), [reach], planned) is None  # out of reach
+
+
+def test_a_landing_point_in_the_reach_moves_out_clear_of_the_others(planned):
+    reach = keep_out(planned, _placed(planned, 30.0, 20.0), 0.0, doubt_m=1.0)
+    land = np.array([31.0, 20.0])
+    out = landing_out_of_reach(land, [reach], planned, [np.array([35.0, 20.0])])
+    assert np.hypot(*(out - reach.centre)) > reach.radius_m
+    assert np.hypot(*(out - [35.0, 20.0])) >= 2.0 + planned.navigation.pair_m
+    assert landing_out_of_reach(np.array([40.0, 20.0]), [reach], planned, []) is None

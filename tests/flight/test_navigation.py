@@ -19,6 +19,7 @@ from ftlbo_mav.flight.navigation import (
     GpsReport,
     NavigationWatch,
     preflight_problems,
+    jump_vector,
     report_jump,
 )
 from ftlbo_mav.gnss import CLASSES, NO_BUDGET, budget
@@ -89,6 +90,9 @@ def test_moving_at_speed_is_no_glitch_but_a_jump_is():
     assert max(jumps) < 0.05
     assert report_jump(prev, raw(east_m=east, north_m=3.0, v=(5.0, 0.0), t=5.0)) == (
         pytest.approx(3.0, abs=0.05))
+    # which way: north, the copter's own motion east taken out
+    assert jump_vector(prev, raw(east_m=east, north_m=3.0, v=(5.0, 0.0), t=5.0)) == (
+        pytest.approx([0.0, 3.0], abs=0.05))
     assert report_jump(prev, raw(east_m=east, t=5.0 + 10.0)) == 0.0  # too far apart
     assert report_jump(prev, raw(east_m=40.0, t=5.0, fix=1)) == 0.0  # no fix
 

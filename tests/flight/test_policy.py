@@ -9,6 +9,7 @@ from ftlbo_mav.flight.departures import (
     LINK_BACK,
     LINK_LOST,
     MODE,
+    NAVIGATION,
     NO_PROGRESS,
     DepartureWatch,
     Event,
@@ -225,3 +226,49 @@ def test_a_stop_that_does_not_slow_the_vehicle_is_sent_again():
     assert vs[0].sent == ["pause", "pause"] and vs[1].sent == ["pause"]
     r.step(vs, watch, 11.5)
     assert vs[0].sent == ["pause", "pause"]  # a second between
+
+
+def test_a_copter_in_doubt_holds_where_it_stopped_until_the_others_are_clear_then_lands():
+    vs, watch = fleet(), DepartureWatch(3)
+    clear = {"now": False}
+    starts = []
+
+    class Home:
+        plan = None
+
+        def start(self, answered, left, now, *, doubt=None):
+            starts.append((sorted(answered), sorted(left), dict(doubt or {})))
+            return {}
+
+        def results(self):
+            return []
+
+    r = response(homeward=Home(), doubt=lambda j: 3.0, clear_of=lambda j: clear["now"])
+    r.react([Event(0, NAVIGATION, "GPS position jumped 3.0 m", 10.0)], vs, watch, 10.0)
+    assert [v.sent for v in vs] == [["pause"], ["pause"], ["pause"]]  # stopped alike
+    for v in vs:
+        v.status.ground_speed_m_s = 0.1
+    r.step(vs, watch, 11.0)
+    # the others go home, the one in doubt kept out by its doubt; it holds
+    assert starts == [([1, 2], [0], {0: 3.0})]
+    assert vs[0].sent == ["pause"]
+    r.step(vs, watch, 12.0)
+    assert vs[0].sent == ["pause"]
+    clear["now"] = True
+    r.step(vs, watch, 13.0)
+    assert vs[0].sent == ["pause", "LAND"]
+    vs[0].status.mode = "LAND"
+    r.step(vs, watch, 13.2)
+    line = r.lines(vs)[0]
+    assert ("its position in doubt by 3.0 m: holding where it stopped until the others are "
+            "out of its reach; the others out of its reach: landing where it is (LAND)") in line
+
+
+def test_a_copter_in_doubt_lands_even_when_the_others_carry_on():
+    vs, watch = fleet(), DepartureWatch(3)
+    r = response(FaultPolicy.CONTINUE, doubt=lambda j: 2.0)
+    r.react([Event(1, NAVIGATION, "fix lost", 10.0)], vs, watch, 10.0)
+    assert [v.sent for v in vs] == [[], ["pause"], []]
+    vs[1].status.ground_speed_m_s = 0.0
+    r.step(vs, watch, 11.0)  # the others are clear (default): it lands at once
+    assert vs[1].sent == ["pause", "LAND"]
