@@ -106,11 +106,11 @@ def escape(here: np.ndarray, reaches: Sequence[KeepOut], planned: PlannedFlight,
     the nearest point :data:`ESCAPE_MARGIN_M` past its edge (every 15 degrees around it)
     whose line from ``here`` keeps the plan's clearance from the obstacles and
     ``min_separation`` and the navigation budget from the ``others`` (the other vehicles,
-    ``(2,)`` or ``(3,)`` each; from one already nearer, no nearer than it is); None when it is in no reach or no such line is found (its
-    way home then begins where it is, as any other's). A vehicle in doubt drifts within
-    its reach, at its own height and down through every layer as it lands: a way home
-    that climbs or descends to its layer inside that reach could meet it there (the
-    emulator, a 3 m GPS jump: 1.5 m)."""
+    ``(2,)`` or ``(3,)`` each; from one already nearer, no nearer than it is). None when
+    it is in no reach or no such line is found: its way home then begins where it is, as
+    any other's. A vehicle in doubt drifts within its reach, at its own height and down
+    through every layer as it lands: a way home that climbs or descends to its layer
+    inside that reach could meet it there (the emulator, a 3 m GPS jump: 1.5 m)."""
     here = np.asarray(here, float)
     inside = [k for k in reaches if float(np.hypot(*(here[:2] - k.centre))) < k.radius_m]
     if not inside:

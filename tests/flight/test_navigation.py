@@ -18,8 +18,8 @@ from ftlbo_mav.flight.navigation import (
     EkfReport,
     GpsReport,
     NavigationWatch,
-    preflight_problems,
     jump_vector,
+    preflight_problems,
     report_jump,
 )
 from ftlbo_mav.gnss import CLASSES, NO_BUDGET, budget
