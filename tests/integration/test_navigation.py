@@ -302,10 +302,6 @@ def test_a_copter_whose_gps_jumped_lands_where_it_is_and_the_others_keep_clear(
     out = result.output
     judged = _kept_where_they_truly_are(planned, [tr.enu(planned.frame) for tr in truth],
                                         times["fault"])
-    import os
-    import pickle
-    if os.environ.get("DUMP_TRUTH"):
-        pickle.dump(([tr.enu(planned.frame) for tr in truth], times["fault"], out), open(f"/tmp/gps-{direction}-{when}.pkl", "wb"))
     print(f"[{BACKEND}] GPS of uav{who + 1} jumped 3 m {direction} ({when}): {judged}")
     assert result.exit_code == 1 and "Traceback" not in out, out
     line = [x for x in out.splitlines() if x.strip().startswith(f"uav{who + 1} (sysid")][-1]
