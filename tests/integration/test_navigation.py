@@ -172,7 +172,8 @@ def test_a_copter_whose_gps_puts_it_ahead_of_its_start_moves_there_before_the_le
 
 class Truth(SecondPort):
     """A vehicle's second link recording SIM_STATE (the simulator's true position) at
-    10 Hz on the test's clock, and its HEARTBEAT."""
+    10 Hz on the test's clock, its HEARTBEAT and MISSION_CURRENT; the one station on that
+    port (SITL's SERIAL1 takes one connection), which the test also sends its knobs by."""
 
     def __init__(self, url: str, sysid: int, home_alt_m: float) -> None:
         super().__init__(url, sysid)
@@ -187,9 +188,11 @@ class Truth(SecondPort):
         while not self.stop.is_set():
             now = clock.monotonic()
             if now >= next_ask:
-                self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_SET_MESSAGE_INTERVAL,
-                                                0, R.MAVLINK_MSG_ID_SIM_STATE, 1e5,
-                                                0, 0, 0, 0, 0)
+                for msgid, us in ((R.MAVLINK_MSG_ID_SIM_STATE, 1e5),
+                                  (R.MAVLINK_MSG_ID_MISSION_CURRENT, 2e5)):
+                    self.conn.mav.command_long_send(self.sysid, 1,
+                                                    R.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msgid,
+                                                    us, 0, 0, 0, 0, 0)
                 next_ask = now + 5.0
             try:
                 msg = self.conn.recv_match(blocking=False)
@@ -204,6 +207,8 @@ class Truth(SecondPort):
                 lat = msg.lat_int * 1e-7 if getattr(msg, "lat_int", 0) else msg.lat
                 lon = msg.lon_int * 1e-7 if getattr(msg, "lon_int", 0) else msg.lon
                 self.rows.append((now, lat, lon, msg.alt - self.home_alt_m))
+            elif msg.get_type() == "MISSION_CURRENT":
+                self.seq = msg.seq
             elif msg.get_type() == "HEARTBEAT" and msg.type != R.MAV_TYPE_GCS:
                 self.mode = mode_name(msg.custom_mode)
                 self.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
@@ -276,7 +281,7 @@ def test_a_copter_whose_gps_jumped_lands_where_it_is_and_the_others_keep_clear(
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
         _upload(plan_dir, fleet.urls)
         truth = [Truth(url, i + 1, HOMES[i][2]) for i, url in enumerate(fleet.serial1_urls)]
-        station = SecondPort(fleet.serial1_urls[who], who + 1)
+        station = truth[who]
         times = {}
 
         def fault():
@@ -296,7 +301,6 @@ def test_a_copter_whose_gps_jumped_lands_where_it_is_and_the_others_keep_clear(
                 assert tr.wait(lambda p: not p.armed, 120.0)
             clock.sleep(0.5)
         finally:
-            station.close()
             for tr in truth:
                 tr.close()
     out = result.output
