@@ -22,13 +22,16 @@
 
 A vehicle whose position is in doubt (a ``navigation`` departure: its GPS jumped, its fix
 or accuracy fell short, its EKF doubts itself) is not flown on its own estimate, whatever
-the policy: it lands where it is (LAND, straight down), and every route home of the others
-keeps it out by its doubt too (the jump, at least the navigation budget). ArduCopter flies
-any mode on the estimate, and EKF3 takes a jump of the GPS up over seconds
-(:mod:`ftlbo_mav.sim.gps`, recorded): a copter held where its estimate was drifts by
-the jump where it truly is, so its doubt is where it may truly be, and a route home
-planned from its estimate would carry that error to the others' landing spots (ArduCopter
-4.5.6 SITL, 3 m glitch: it landed 0.05 m from another).
+the policy. ArduCopter flies every mode on the estimate and EKF3 takes a jump of the GPS up
+over seconds (:mod:`ftlbo_mav.sim.gps`, recorded on SITL): a copter held where its estimate
+is drifts, where it truly is, by as much as its GPS jumped, the other way. So it stops as
+the others do (on its track: stops alike keep them apart), holds there while the others
+leave its reach (its keep-out grown by its doubt and shifted the way it drifts,
+:func:`~ftlbo_mav.flight.homeward.keep_out`; their ways home first fly straight out of
+it and land out of it), at most :data:`DOUBT_HOLD_S`, then lands where it is (LAND,
+straight down). Before, a route home planned from its estimate carried the error to the
+others' landing spots (ArduCopter 4.5.6 SITL, a 3 m glitch: it landed 0.05 m from
+another).
 
 The vehicle that left is never commanded against what its pilot, its failsafe or another
 station chose (:data:`~ftlbo_mav.flight.departures.VEHICLE_CHOSE`). One that left
