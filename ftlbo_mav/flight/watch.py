@@ -258,7 +258,23 @@ class FlightWatch:
         others = [s.position for i, s in enumerate(seen) if i != j and s.position is not None]
         plan = self.response.homeward.plan if self.response.homeward is not None else None
         routes = [] if plan is None else [r.points for k, r in plan.routes.items() if k != j]
-        return rtl_line_problem(self.planned, j, seen[j].position, others, routes=routes)
+        why = rtl_line_problem(self.planned, j, seen[j].position, others, routes=routes)
+        if why is not None:
+            return why
+        # ArduCopter's RTL line out of the reach of one in doubt (it drifts within it)
+        home = np.asarray(self.planned.paths[j][0][:2], float)
+        rally = rally_points(self.planned, j)
+        k = rtl_target(seen[j].position[:2], home, rally)
+        target = home if k is None else rally[k]
+        for d, doubt in self.response.doubtful.items():
+            reach = keep_out(self.planned, self.vehicles[d], clock.monotonic(), doubt_m=doubt)
+            if reach is not None and d != j and float(segment_distance(
+                    reach.centre[None], np.asarray(seen[j].position[:2], float),
+                    target)[0]) < reach.radius_m:
+                return (f"the straight line to its home or rally point crosses the reach of "
+                        f"{self.vehicles[d].name}, whose position is in doubt; landing where "
+                        "it stopped")
+        return None
 
     def expect(self, mode: str | None) -> None:
         """The mode every vehicle still on the plan is in from now on."""
