@@ -90,13 +90,13 @@ def keep_out(planned: PlannedFlight, v: FlightVehicle, now: float, *, doubt_m: f
     radius = (planned.min_separation_m + planned.navigation.pair_m
               + max(s.ground_speed_m_s, KEEP_OUT_SPEED_M_S) * age)
     if doubt_m <= 0:
-        return KeepOut(here, radius)
+        return KeepOut(here, radius, float(s.alt_m))
     # in doubt after its GPS jumped by J: held where its estimate is, it truly drifts by
     # up to -J as EKF3 takes the jump up (flight/navigation.py jump_vector): it is truly
     # somewhere from here to here - J, and within the rest of its doubt of that
     jump = np.asarray(s.gps_jump_enu, float) if doubt_m >= s.gps_jump_m else np.zeros(2)
     half = float(np.hypot(*jump)) / 2.0
-    return KeepOut(here - jump / 2.0, radius + doubt_m - half)
+    return KeepOut(here - jump / 2.0, radius + doubt_m - half, float(s.alt_m))
 
 
 def escape(here: np.ndarray, reaches: Sequence[KeepOut], planned: PlannedFlight,
@@ -128,8 +128,21 @@ def escape(here: np.ndarray, reaches: Sequence[KeepOut], planned: PlannedFlight,
         if len(planned.centres) and float((segment_distance(
                 np.asarray(planned.centres)[:, :2], here[:2], q) - planned.radii).min()) < kept:
             continue
-        return np.array([*q, here[2]])
+        return np.array([*q, _escape_height(here[2], inside[0], planned)])
     return None
+
+
+def _escape_height(alt: float, reach: KeepOut, planned: PlannedFlight) -> float:
+    """The height a vehicle at ``alt`` leaves a reach at: one at or above the vehicle in
+    doubt climbs to ``min_separation`` and the navigation budget above it (within the
+    altitude band), so that wherever its drift takes it below, they stay apart (SITL, a
+    3 m jump in the take-off: the one beside it, 0.5 m higher and leaving level, came
+    within 1.8 m); one below it stays at its height (it is not flown towards it)."""
+    if reach.alt_m is None or alt < reach.alt_m - 0.5:
+        return float(alt)
+    top = planned.band[1] if planned.band is not None else float(planned.paths[..., 2].max())
+    above = reach.alt_m + planned.min_separation_m + planned.navigation.pair_m
+    return float(max(alt, min(above, top)))
 
 
 def _ring(reach: KeepOut, near: np.ndarray) -> np.ndarray:

@@ -74,6 +74,7 @@ class KeepOut:
 
     centre: np.ndarray
     radius_m: float
+    alt_m: float | None = None  # its height above home, where known
 
 
 @dataclass(frozen=True, eq=False)
