@@ -206,6 +206,9 @@ def test_a_copter_inside_the_reach_first_leaves_it_away_from_the_others(planned)
     moved = escape(here, [reach], planned, [other])
     assert np.hypot(*(moved[:2] - other)) >= 2.0 + planned.navigation.pair_m
     assert escape(np.array([40.0, 20.0, 3.0]), [reach], planned) is None  # out of reach
+    # at or above the one in doubt (5 m): it climbs clear of wherever that drifts below
+    up = escape(np.array([32.0, 20.0, 5.2]), [reach], planned)
+    assert up[2] == pytest.approx(min(5.0 + 2.0 + planned.navigation.pair_m, planned.band[1]))
 
 
 def test_a_landing_point_in_the_reach_moves_out_clear_of_the_others(planned):
