@@ -135,7 +135,7 @@ class Response:
             if e.kind == NAVIGATION and e.index not in self.doubtful:
                 self.doubtful[e.index] = self.doubt(e.index)
                 a = self.answers.get(e.index)
-                if a is not None and a.mode != "LAND":  # answered before: land it instead
+                if a is not None and a.mode != "LAND":  # answered before: answered anew
                     self.history.setdefault(e.index, []).extend(self.answers.pop(e.index).done)
             if e.kind == LINK_LOST:
                 self.lost[e.index] = e.t
