@@ -125,10 +125,12 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
                 onboard = download_mission(channel, timing=timing)
                 fence_diff = ([] if fence is None
                               else fence_differences(channel, fence, timing=timing))
-                values[vehicle.sysid] = read_params(channel, FLIGHT_PARAMS, timing=timing)
-                if planned.battery is None:
-                    batteries[vehicle.sysid] = CopterBattery.from_params(
-                        read_params(channel, CopterBattery.PARAMS, timing=timing))
+                # its battery's values too without a [battery], in the same exchange
+                extra = CopterBattery.PARAMS if planned.battery is None else ()
+                read = read_params(channel, (*FLIGHT_PARAMS, *extra), timing=timing)
+                values[vehicle.sysid] = {n: read[n] for n in FLIGHT_PARAMS}
+                if extra:
+                    batteries[vehicle.sysid] = CopterBattery.from_params(read)
         except FtlboError as exc:
             return [f"cannot read its mission or fence back: {exc}"]
         param_diff = vehicle_param_differences(copter.to_set(), values[vehicle.sysid])
