@@ -49,46 +49,62 @@ def _reset(port: SecondPort, percent: float) -> None:
                                     0, 0, 0, 0, 0)
 
 
-def test_a_copter_without_the_charge_for_its_mission_is_refused(battery_plan, tmp_path):
+def _refused_before_the_flight(plan: Path) -> str:
+    """uav2 reset to 8 % before ``fly``: what ``fly`` said (nothing may arm)."""
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
-        _upload(battery_plan, fleet.urls)
+        _upload(plan, fleet.urls)
         port = SecondPort(fleet.serial1_urls[1], 2)
         try:
-            _reset(port, 8)  # 264 mAh: the mission needs ~230 and the reserve 825
-            result, _took = _fly_with(battery_plan, fleet.urls, clock.monotonic)
+            _reset(port, 8)  # 264 of its 3300 mAh
+            result, _took = _fly_with(plan, fleet.urls, clock.monotonic)
             assert not port.wait(lambda p: p.armed, 1.0)
         finally:
             port.close()
     out = result.output
     assert result.exit_code != 0 and "Traceback" not in out, out
     assert "pre-flight failed, nothing armed" in out
-    assert "uav2 (sysid 2): battery at 8 % (264 of 3300 mAh)" in out, out
     assert "uav1 (sysid 1): battery" not in out and "uav3 (sysid 3): battery" not in out
+    return out
 
 
-def test_a_copter_running_short_mid_leg_is_a_departure_and_the_flight_ends(battery_plan):
+def _short_mid_leg(plan: Path) -> str:
+    """uav2 reset to 12 % (396 mAh) 3 s into the legs: what ``fly`` said, once it and the
+    others have landed (exit 1, the departure in summary.json, within 60 s)."""
     with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
-        _upload(battery_plan, fleet.urls)
+        _upload(plan, fleet.urls)
         port = SecondPort(fleet.serial1_urls[1], 2)
 
         def fault():
             _in_auto_for(port, 3.0, fleet.time_scale)
-            _reset(port, 12)  # 396 mAh: less than what is left and half the reserve
+            _reset(port, 12)
             return clock.monotonic()
 
         try:
-            result, took = _fly_with(battery_plan, fleet.urls, fault)
+            result, took = _fly_with(plan, fleet.urls, fault)
         finally:
             port.close()
     out = result.output
     assert result.exit_code == 1 and "Traceback" not in out, out
-    # 12 % is 396 mAh; the copter draws on, so ArduPilot's whole per cent may say 11
-    assert re.search(r"uav2 \(sysid 2\): battery: 1[12] % left \(3\d\d mAh\): the rest of "
-                     r"its mission needs \d+ mAh", out), out
     assert "stopped on its track (pause)" in out
     assert took < 60.0
-    summary = json.loads((battery_plan / "flight" / "summary.json").read_text())
-    assert any(line.startswith("uav2 (sysid 2): battery") for line in summary["departures"])
+    summary = json.loads((plan / "flight" / "summary.json").read_text())
+    assert [line.split(":")[0] for line in summary["departures"]] == ["uav2 (sysid 2)"]
+    assert out.count("landed (disarmed)") == 3, out
+    return out
+
+
+def test_a_copter_without_the_charge_for_its_mission_is_refused(battery_plan):
+    # the mission needs ~230 mAh and the plan's 25 % reserve 825
+    out = _refused_before_the_flight(battery_plan)
+    assert "uav2 (sysid 2): battery at 8 % (264 of 3300 mAh)" in out, out
+
+
+def test_a_copter_running_short_mid_leg_is_a_departure_and_the_flight_ends(battery_plan):
+    out = _short_mid_leg(battery_plan)
+    # 12 % is 396 mAh: less than what is left and half the reserve; the copter draws on,
+    # so ArduPilot's whole per cent may say 11
+    assert re.search(r"uav2 \(sysid 2\): battery: 1[12] % left \(3\d\d mAh\): the rest of "
+                     r"its mission needs \d+ mAh", out), out
 
 
 @pytest.fixture
@@ -101,47 +117,17 @@ def example_plan(tmp_path) -> Path:
 
 
 def test_without_a_battery_table_a_copter_at_8_percent_is_refused(example_plan):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
-        _upload(example_plan, fleet.urls)
-        port = SecondPort(fleet.serial1_urls[1], 2)
-        try:
-            _reset(port, 8)  # 264 of its 3300 mAh: 825 (25 %) is kept to land with
-            result, _took = _fly_with(example_plan, fleet.urls, clock.monotonic)
-            assert not port.wait(lambda p: p.armed, 1.0)
-        finally:
-            port.close()
-    out = result.output
+    out = _refused_before_the_flight(example_plan)
     print(out)
-    assert result.exit_code != 0 and "Traceback" not in out, out
-    assert "pre-flight failed, nothing armed" in out
     assert re.search(r"uav2 \(sysid 2\): battery at 8 % \(264 of 3300 mAh\): its mission needs "
                      r"about \d+ mAh .*it keeps 825 mAh to land with \(25 % of its "
                      r"BATT_CAPACITY, as no BATT_LOW_MAH is set\)", out), out
-    assert "uav1 (sysid 1): battery" not in out and "uav3 (sysid 3): battery" not in out
 
 
 def test_without_a_battery_table_12_percent_mid_leg_ends_the_flight(example_plan):
-    with vehicles(3, homes=HOMES, speedup=SPEEDUP, virtual=True, **OPTIONS) as fleet:
-        _upload(example_plan, fleet.urls)
-        port = SecondPort(fleet.serial1_urls[1], 2)
-
-        def fault():
-            _in_auto_for(port, 3.0, fleet.time_scale)
-            _reset(port, 12)  # 396 mAh: less than the rest of it and half of 825
-            return clock.monotonic()
-
-        try:
-            result, took = _fly_with(example_plan, fleet.urls, fault)
-            landed = [p.wait(lambda s: not s.armed, 120.0) for p in [port]]
-        finally:
-            port.close()
-    out = result.output
-    assert result.exit_code == 1 and "Traceback" not in out, out
-    # what it draws is measured in the air (SITL's quad: 28 A), and said
+    out = _short_mid_leg(example_plan)
+    # less than the rest of it and half of 825; what it draws is measured in the air
+    # (SITL's quad: 28 A), and said
     assert re.search(r"uav2 \(sysid 2\): battery: 1[12] % left \(3\d\d mAh\): the rest of "
                      r"its mission needs \d+ mAh at the \d+\.\d A it draws and it would land "
                      r"below half its reserve \(25 % of its BATT_CAPACITY", out), out
-    assert "stopped on its track (pause)" in out
-    assert landed == [True] and took < 60.0
-    summary = json.loads((example_plan / "flight" / "summary.json").read_text())
-    assert [line.split(":")[0] for line in summary["departures"]] == ["uav2 (sysid 2)"]

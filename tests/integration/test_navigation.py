@@ -260,7 +260,8 @@ def _kept_where_they_truly_are(planned, tracks: list[np.ndarray], since: float) 
             k = int(np.argmin(np.where(air, d, np.inf)))
             out["separation"][f"uav{a + 1}-uav{b + 1}"] = (round(float(d[k]), 2),
                                                           round(floor, 2))
-            out.setdefault("closest_s", {})[f"uav{a + 1}-uav{b + 1}"] = round(float(t[k] - since), 1)
+            pair = f"uav{a + 1}-uav{b + 1}"
+            out.setdefault("closest_s", {})[pair] = round(float(t[k] - since), 1)
         gap = (np.hypot(*(at[a][:, None, :2] - planned.centres[None]).transpose(2, 0, 1))
                - planned.radii).min(axis=1)
         floor = min(float(gap[0]), planned.clearance_m - 0.05)
