@@ -61,14 +61,18 @@ class Track(SecondPort):
         self.thread = clock.Thread(self._run, name=f"track uav{sysid}")
         self.thread.start()
 
+    ASKS = ((R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 1e5),)
+    """The messages asked for (id, interval in microseconds), again every 5 s."""
+
     def _run(self) -> None:
         next_ask = 0.0
         while not self.stop.is_set():
             now = clock.monotonic()
             if now >= next_ask:
-                self.conn.mav.command_long_send(self.sysid, 1, R.MAV_CMD_SET_MESSAGE_INTERVAL,
-                                                0, R.MAVLINK_MSG_ID_GLOBAL_POSITION_INT, 1e5,
-                                                0, 0, 0, 0, 0)
+                for msgid, interval_us in self.ASKS:
+                    self.conn.mav.command_long_send(self.sysid, 1,
+                                                    R.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msgid,
+                                                    interval_us, 0, 0, 0, 0, 0)
                 next_ask = now + 5.0
             try:
                 msg = self.conn.recv_match(blocking=False)
@@ -79,16 +83,20 @@ class Track(SecondPort):
                 return  # its vehicle is gone
             if msg.get_srcSystem() != self.sysid:
                 continue
-            kind = msg.get_type()
-            if kind == "GLOBAL_POSITION_INT":
-                self.rows.append((now, msg.time_boot_ms / 1000.0, msg.lat * 1e-7,
-                                  msg.lon * 1e-7, msg.relative_alt / 1000.0))
-            elif kind == "HEARTBEAT" and msg.type != R.MAV_TYPE_GCS:
+            if msg.get_type() == "HEARTBEAT" and msg.type != R.MAV_TYPE_GCS:
                 mode = mode_name(msg.custom_mode)
                 if mode != self.mode:
                     self.modes.append((now, mode))
                 self.mode = mode
                 self.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
+            else:
+                self.record(msg, now)
+
+    def record(self, msg, now: float) -> None:
+        """One message other than HEARTBEAT, received at ``now``."""
+        if msg.get_type() == "GLOBAL_POSITION_INT":
+            self.rows.append((now, msg.time_boot_ms / 1000.0, msg.lat * 1e-7,
+                              msg.lon * 1e-7, msg.relative_alt / 1000.0))
 
     def wait(self, predicate, timeout_s: float) -> bool:
         """As :meth:`SecondPort.wait`, on what the recording thread reads."""

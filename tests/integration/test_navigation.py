@@ -20,7 +20,6 @@ from click.testing import CliRunner
 from pymavlink.dialects.v20 import ardupilotmega as R
 
 from ftlbo_mav import clock
-from ftlbo_mav.ardupilot.modes import mode_name
 from ftlbo_mav.cli import main
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.sim.gps import METRES_PER_DEGREE
@@ -36,6 +35,7 @@ from .test_departures import (
     _summary,
     _upload,
 )
+from .test_homeward import Track
 
 
 @pytest.fixture(scope="module")
@@ -170,66 +170,29 @@ def test_a_copter_whose_gps_puts_it_ahead_of_its_start_moves_there_before_the_le
 
 # -- the answer judged where the copters truly are (SIM_STATE) -----------------------------
 
-class Truth(SecondPort):
+class Truth(Track):
     """A vehicle's second link recording SIM_STATE (the simulator's true position) at
     10 Hz on the test's clock, its HEARTBEAT and MISSION_CURRENT; the one station on that
     port (SITL's SERIAL1 takes one connection), which the test also sends its knobs by."""
 
+    ASKS = ((R.MAVLINK_MSG_ID_SIM_STATE, 1e5), (R.MAVLINK_MSG_ID_MISSION_CURRENT, 2e5))
+
     def __init__(self, url: str, sysid: int, home_alt_m: float) -> None:
-        super().__init__(url, sysid)
         self.home_alt_m = home_alt_m
-        self.rows: list[tuple[float, float, float, float]] = []  # t, lat, lon, alt (home)
-        self.stop = clock.Event()
-        self.thread = clock.Thread(self._run, name=f"truth uav{sysid}")
-        self.thread.start()
+        super().__init__(url, sysid)
 
-    def _run(self) -> None:
-        next_ask = 0.0
-        while not self.stop.is_set():
-            now = clock.monotonic()
-            if now >= next_ask:
-                for msgid, us in ((R.MAVLINK_MSG_ID_SIM_STATE, 1e5),
-                                  (R.MAVLINK_MSG_ID_MISSION_CURRENT, 2e5)):
-                    self.conn.mav.command_long_send(self.sysid, 1,
-                                                    R.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msgid,
-                                                    us, 0, 0, 0, 0, 0)
-                next_ask = now + 5.0
-            try:
-                msg = self.conn.recv_match(blocking=False)
-            except OSError:
-                return
-            if msg is None:
-                self.conn.select(0.05)
-                continue
-            if msg.get_srcSystem() != self.sysid:
-                continue
-            if msg.get_type() == "SIM_STATE":
-                lat = msg.lat_int * 1e-7 if getattr(msg, "lat_int", 0) else msg.lat
-                lon = msg.lon_int * 1e-7 if getattr(msg, "lon_int", 0) else msg.lon
-                self.rows.append((now, lat, lon, msg.alt - self.home_alt_m))
-            elif msg.get_type() == "MISSION_CURRENT":
-                self.seq = msg.seq
-            elif msg.get_type() == "HEARTBEAT" and msg.type != R.MAV_TYPE_GCS:
-                self.mode = mode_name(msg.custom_mode)
-                self.armed = bool(msg.base_mode & R.MAV_MODE_FLAG_SAFETY_ARMED)
-
-    def wait(self, predicate, timeout_s: float) -> bool:
-        deadline = clock.monotonic() + timeout_s
-        while clock.monotonic() < deadline:
-            if predicate(self):
-                return True
-            clock.sleep(0.02)
-        return False
+    def record(self, msg, now: float) -> None:
+        if msg.get_type() == "SIM_STATE":
+            lat = msg.lat_int * 1e-7 if getattr(msg, "lat_int", 0) else msg.lat
+            lon = msg.lon_int * 1e-7 if getattr(msg, "lon_int", 0) else msg.lon
+            self.rows.append((now, lat, lon, msg.alt - self.home_alt_m))  # t, lat, lon, up
+        elif msg.get_type() == "MISSION_CURRENT":
+            self.seq = msg.seq
 
     def enu(self, frame) -> np.ndarray:
         """``(T, 4)``: time, east, north, up above home."""
         t, lat, lon, alt = np.array(self.rows, float).T
         return np.column_stack([t, frame.to_enu(lat_deg=lat, lon_deg=lon, alt_m=alt)])
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(timeout=2.0)
-        super().close()
 
 
 GLITCHES = {  # SIM_GPS_GLITCH_X / _Y (degrees) of a 3 m jump
