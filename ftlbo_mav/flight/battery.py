@@ -57,12 +57,10 @@ the current it reports replaces it."""
 MEASURED_AFTER_S = 3.0  # seconds of reports in the air before the measured current counts
 
 
-@dataclass(frozen=True, eq=False)
-class MissionBattery:
-    """The plan's battery and, per vehicle, its mission's charge (mAh) in all and from
-    each path point to the end (``to_end[i]``, ``(P,)``)."""
+class _Charges:
+    """Each vehicle's mission charge (mAh): ``total_mah[i]`` in all, ``to_end[i]`` ``(P,)``
+    from each path point to the end."""
 
-    battery: Battery
     total_mah: tuple[float, ...]
     to_end: tuple[np.ndarray, ...]
 
@@ -75,6 +73,16 @@ class MissionBattery:
             return self.total_mah[i]
         k = int(np.searchsorted(waypoints, seq, side="left"))  # heading for point k
         return float(self.to_end[i][min(k - 1, len(self.to_end[i]) - 1)])
+
+
+@dataclass(frozen=True, eq=False)
+class MissionBattery(_Charges):
+    """The plan's battery and, per vehicle, its mission's charge (mAh) in all and from
+    each path point to the end (``to_end[i]``, ``(P,)``)."""
+
+    battery: Battery
+    total_mah: tuple[float, ...]
+    to_end: tuple[np.ndarray, ...]
 
     def remaining_mah(self, pct: int, i: int = 0) -> float:
         return self.battery.capacity_mah * pct / 100.0
@@ -138,7 +146,7 @@ class CopterBattery:
 
 
 @dataclass(frozen=True, eq=False)
-class OwnBatteries:
+class OwnBatteries(_Charges):
     """No ``[battery]``: each copter's own (``copters``), its mission's charge at
     ``assumed_a`` amperes in all (``total_mah``) and from each path point to the end
     (``to_end``), as :class:`MissionBattery` has them from the plan."""
@@ -148,8 +156,6 @@ class OwnBatteries:
     total_mah: tuple[float, ...]
     to_end: tuple[np.ndarray, ...]
     seconds: tuple[float, ...]
-
-    need_mah = MissionBattery.need_mah
 
     def capacity_mah(self, i: int) -> float:
         return self.copters[i].capacity_mah
