@@ -201,7 +201,7 @@ def _fit_check(todo: Sequence[Assignment], found, versions: Mapping[int, int | N
     def read(a: Assignment) -> dict[str, float | None]:
         emit(ProgressEvent(a.name, a.sysid, "parameters"))
         with found[a.sysid].channel(a.sysid) as channel:
-            return read_params(channel, FLIGHT_PARAMS, timing=timing)
+            return read_params(channel, FLIGHT_PARAMS, timing=timing, alone=True)
 
     with clock.Executor(len(todo)) as pool:
         onboard = list(pool.map(read, todo))
