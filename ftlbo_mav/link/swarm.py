@@ -193,18 +193,14 @@ def _set_vehicle_params(channel, a: Assignment, timing: Timing) -> tuple[bool, s
     return True, "set " + ", ".join(f"{n} {old:g} -> {new:g}" for n, old, new in changed)
 
 
-def _fit_check(todo: Sequence[Assignment], found, versions: Mapping[int, int | None],
-               fit, timing: Timing, emit, on_note, any_params: bool = False
+def _fit_check(todo: Sequence[Assignment], read: Mapping[int, Mapping[str, float | None]],
+               versions: Mapping[int, int | None], fit, on_note, any_params: bool = False
                ) -> dict[int, str]:
-    """Read every vehicle's flight parameters, judge the plan with them (``fit``) and say
-    what will be set; per system id why nothing may be sent (empty: go on)."""
-    def read(a: Assignment) -> dict[str, float | None]:
-        emit(ProgressEvent(a.name, a.sysid, "parameters"))
-        with found[a.sysid].channel(a.sysid) as channel:
-            return read_params(channel, FLIGHT_PARAMS, timing=timing, alone=True)
-
-    with clock.Executor(len(todo)) as pool:
-        onboard = list(pool.map(read, todo))
+    """Judge the plan with every vehicle's flight parameters as ``read`` (by system id;
+    read while its firmware was asked: a round trip saved) and the release it runs
+    (``fit``) and say what will be set; per system id why nothing may be sent (empty: go
+    on)."""
+    onboard = [read[a.sysid] for a in todo]
     actual = []
     for a, values in zip(todo, onboard):
         silent = [n for n in a.params if values.get(n) is None]
@@ -360,9 +356,22 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
                 {a.sysid: mavlink1_problem(a.sysid, found[a.sysid].url) for a in old},
                 "not uploaded: " + ", ".join(f"sysid {a.sysid}" for a in old)
                 + " speaks MAVLink 1 only; nothing was sent")
+        judged = todo and fit is not None and len(todo) == len(assignments) and all(
+            a.copter is not None for a in todo)
+        onboard: dict[int, dict[str, float | None]] = {}
+
+        def flight_params(a: Assignment) -> None:  # read while the firmware is asked
+            emit(ProgressEvent(a.name, a.sysid, "parameters"))
+            with found[a.sysid].channel(a.sysid) as channel:
+                onboard[a.sysid] = read_params(channel, FLIGHT_PARAMS, timing=timing,
+                                               alone=True)
+
         if todo:
-            with clock.Executor(len(todo)) as pool:
+            with clock.Executor(2 * len(todo)) as pool:
+                reads = [pool.submit(flight_params, a) for a in todo] if judged else []
                 answers = list(pool.map(firmware, todo))
+                for r in reads:
+                    r.result()
             problems = [p for _silent, p in answers]
             # a vehicle silent to the request is not refused here: the upload finds out
             # whether it answers at all, and fly's pre-flight refuses an unknown firmware
@@ -382,9 +391,8 @@ def upload_swarm(assignments: Sequence[Assignment], urls: Sequence[str], *,
             for a, p in refused:
                 if on_warning is not None:
                     on_warning(a.name, a.sysid, any_firmware_warning(p))
-        if todo and fit is not None and len(todo) == len(assignments) and all(
-                a.copter is not None for a in todo):
-            why = _fit_check(todo, found, versions, fit, timing, emit, on_note, any_params)
+        if judged:
+            why = _fit_check(todo, onboard, versions, fit, on_note, any_params)
             if why:
                 return refuse_all(why, "not uploaded: " + next(iter(why.values())))
         if todo:
