@@ -3,6 +3,7 @@ time): read and compared, set where they differ and read back."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as R
 
@@ -122,3 +123,26 @@ def test_an_answer_that_differs_from_the_set_is_read_back_before_it_counts():
     ch = _StaleFirst()
     set_params(ch, {"FENCE_ALT_MAX": 8.0}, timing=TIMING)
     assert ch.sent == ["PARAM_SET", "PARAM_REQUEST_READ"] and ch.held["FENCE_ALT_MAX"] == 8.0
+
+
+def test_a_lost_answer_is_asked_again_after_a_few_round_trips_not_the_whole_time_out():
+    """Over a lossy link of 0.1 s each way, a read learns the round trip from its answers
+    and asks again after 2.5 of them: 33 parameters with a fifth of the frames lost take a
+    few seconds, not the time-out (3 s here) for every loss (virtual time)."""
+    from ftlbo_mav.link.params import read_params
+
+    slow = Timing(timeout_s=3.0, retries=3)
+    ch = channel(faults=Faults(latency_s=0.1, loss_up=0.1, loss_down=0.1),
+                 rng=np.random.default_rng(4))
+    t0 = ch.clock()
+    got = read_params(ch, PLANNED, timing=slow)
+    took = ch.clock() - t0
+    assert all(v is not None for v in got.values())
+    assert took < 3.0, took
+    # without learning it (a vehicle that stores a resend twice: adaptive off) a loss costs
+    # the time-out
+    ch = channel(faults=Faults(latency_s=0.1, loss_up=0.1, loss_down=0.1),
+                 rng=np.random.default_rng(4))
+    t0 = ch.clock()
+    read_params(ch, PLANNED, timing=Timing(timeout_s=3.0, retries=3, adaptive=False))
+    assert ch.clock() - t0 >= 3.0
