@@ -292,7 +292,9 @@ class BatteryWatch:
               now: float | None = None) -> str | None:
         """Why vehicle ``i`` is short (None: it is not); ``current_a`` what it reports it
         draws at ``now`` (seconds, any clock), in the air."""
-        if current_a is not None and now is not None:
+        if current_a is not None and current_a > 0 and now is not None:
+            # (0: a monitor without a current sensor, SYS_STATUS current_battery -1: the
+            # assumed current stays)
             last, self._last[i] = self._last[i], now
             if last is not None and 0.0 < now - last < 2.0:
                 self._amps[i][0] += current_a * (now - last)

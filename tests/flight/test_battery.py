@@ -101,6 +101,11 @@ def test_in_flight_the_need_goes_with_the_current_the_copter_draws():
     assert why == ("13 % left (429 mAh): the rest of its mission needs 60 mAh at the 33.0 A it "
                    "draws and it would land below half its reserve (25 % of its "
                    "BATT_CAPACITY, as no BATT_LOW_MAH is set)")
+    # a monitor that measures no current (0 A reported) leaves the assumed current
+    quiet = BatteryWatch(own, [MISSION])
+    for k in range(41):
+        quiet.check(0, 14, landing, current_a=0.0, now=k * 0.1)
+    assert quiet.measured_a(0) is None
     # with the plan's [battery] the plan's model goes on: what it draws changes nothing
     planned = BatteryWatch(PLAN, [MISSION])
     for k in range(41):
