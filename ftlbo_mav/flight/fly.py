@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from ..link.transfer import Timing
 from .departures import WatchOptions
 from .fleet import Fleet, concurrently
-from .keeper import FormationKeeper, KeeperOptions, link_note, planned_speed
+from .keeper import FormationKeeper, KeeperOptions, planned_speed
 from .launch import align_at_start, take_off, takeoff_item
 from .outcome import FlightLeftPlan, abort, aborted
 from .planned import PlannedFlight
@@ -118,10 +118,6 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
                                  "in the missions, WPNAV_SPEED unanswered or not the same "
                                  "on every vehicle)")
             say(f"formation keeper off: {keeper.off_reason}")
-    if keeper is not None and keeper.active:
-        note = link_note([v.status.jitter_s() for v in vehicles], keeper.options)
-        if note is not None:
-            say(f"note: {note}")
     if aborted(vehicles):
         raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     # before the start a departure ends the flight for all: the others land where they

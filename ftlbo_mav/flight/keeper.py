@@ -382,24 +382,6 @@ class FormationKeeper:
         return out
 
 
-def link_note(jitters_s, options: KeeperOptions) -> str | None:
-    """What ``fly`` says before take-off when the link's delays (each vehicle's
-    :meth:`~ftlbo_mav.flight.status.Status.jitter_s`, None where not known yet) already
-    vary by more than the keeper can time a pause by (``options.max_jitter_s``): it will
-    stand aside while they do, and the formation is what the copters hold on their own.
-    On ArduCopter SITL behind the rough-day radio it paused no copter in five flights and
-    the formation was 0.063-0.352 m worst (docs/link.md); None when the link is steady
-    enough or not yet measured."""
-    known = [j for j in jitters_s if j is not None]
-    if not known or max(known) <= options.max_jitter_s:
-        return None
-    return (f"the link's delays vary by {max(known):.2f} s (90th percentile of the "
-            f"position reports'), more than the formation keeper can time a pause by "
-            f"({options.max_jitter_s:g} s): it will stand aside while they do, and the "
-            "formation is then what the copters hold on their own (ArduCopter SITL behind "
-            "a rough radio: up to 0.35 m worst)")
-
-
 def planned_speed(missions) -> float | None:
     """The speed the missions set with their first DO_CHANGE_SPEED (None: none does, the
     vehicles fly at their own WPNAV_SPEED)."""

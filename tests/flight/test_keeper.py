@@ -10,7 +10,6 @@ import pytest
 from ftlbo_mav.flight.keeper import (
     FormationKeeper,
     KeeperOptions,
-    link_note,
     planned_speed,
     progress_along,
     still_to_lose_s,
@@ -261,11 +260,3 @@ def test_no_pause_while_the_link_has_lately_gone_silent():
     assert keeper.log.rough_s == pytest.approx(1.0) and keeper.log.worst_gap_s == 1.0
     # short silences only (a frame or two lost): the lead is answered
     assert keeper.update(positions_at([6.1, 5.5, 5.5]), speeds, 1.1, gap_s=0.3) == {0: True}
-
-
-def test_a_link_too_uneven_for_the_keeper_is_said_before_take_off():
-    options = KeeperOptions()
-    assert link_note([0.07, None, 0.12], options) is None  # the good day: it keeps
-    assert link_note([None, None], options) is None  # not measured yet: nothing said
-    note = link_note([0.09, 0.31, None], options)
-    assert note.startswith("the link's delays vary by 0.31 s") and "stand aside" in note
