@@ -54,6 +54,7 @@ STOPPED_M_S = 0.3
 STOP_AGAIN_S = 1.0  # a vehicle not slowing this long after its pause is paused again
 HOME_BUDGET_FACTOR = 1.5  # the flight home is watched this many times its predicted length
 DOUBT_HOLD_S = 30.0  # a vehicle in doubt holds at most this long for the others to leave
+LAND_SPEED_M_S = 0.5  # LAND's slowest descent (ArduCopter's LAND_SPEED default), for its budget
 
 
 class FaultPolicy(enum.Enum):
@@ -249,6 +250,10 @@ class Response:
             a.stage, a.since = "hold", now
             a.done.append(f"its position in doubt by {self.doubtful[j]:.1f} m: holding where "
                           f"it stopped until the others are out of its reach")
+            # watched until it is down: its hold, then LAND's descent from where it is
+            descent_s = max(v.status.alt_m, 0.0) / LAND_SPEED_M_S
+            self.budget_s = max(self.budget_s, now - (self.first_t or now) + DOUBT_HOLD_S
+                                + descent_s + 10.0)
         if a.stage == "hold":
             clear = self.clear_of(j)
             if clear or now - a.since >= DOUBT_HOLD_S:

@@ -252,6 +252,8 @@ def test_a_copter_in_doubt_holds_where_it_stopped_until_the_others_are_clear_the
     # the others go home, the one in doubt kept out by its doubt; it holds
     assert starts == [([1, 2], [0], {0: 3.0})]
     assert vs[0].sent == ["pause"]
+    # watched until it is down: its hold and LAND's descent from 10 m at 0.5 m/s
+    assert r.budget_s >= 1.0 + 30.0 + 20.0
     r.step(vs, watch, 12.0)
     assert vs[0].sent == ["pause"]
     clear["now"] = True
