@@ -20,6 +20,7 @@ from .. import clock
 from ..ardupilot.fence import rtl_target
 from ..geo import segment_distance
 from ..mission.items import CMD_NAV_LAND, CMD_NAV_LOITER_UNLIM, CMD_NAV_WAYPOINT
+from ..planning.homeward import KeepOut
 from .battery import BatteryWatch, OwnBatteries
 from .departures import (
     DEFAULT_WATCH,
@@ -71,14 +72,16 @@ def rally_points(planned: PlannedFlight, j: int) -> np.ndarray:
 
 def rtl_line_problem(planned: PlannedFlight, j: int, position: np.ndarray,
                      others: Sequence[np.ndarray], *, separation_m: float = 2.0,
-                     routes: Sequence[np.ndarray] = ()) -> str | None:
+                     routes: Sequence[np.ndarray] = (),
+                     reaches: Sequence[tuple[str, KeepOut]] = ()) -> str | None:
     """Why ArduCopter's RTL from ``position`` (ENU) would not be safe for vehicle j, or
     None: RTL climbs where it is and flies straight to its rally point or home
     (:func:`~ftlbo_mav.ardupilot.fence.rtl_target`); that line must keep the plan's
     clearance from every obstacle and ``separation_m`` from the other vehicles, where they
     are and along the ``routes`` home they fly (``(P, 3)`` each: RTL climbs through their
     layers; on SITL one sent to RTL for want of a route came 0.65 m from one on its
-    route)."""
+    route), and stay out of the ``reaches`` (``(name, keep-out)``) of those whose position
+    is in doubt (each drifts within its own)."""
     home = np.asarray(planned.paths[j][0][:2], float)
     rally = rally_points(planned, j)
     k = rtl_target(position[:2], home, rally)
@@ -101,6 +104,10 @@ def rtl_line_problem(planned: PlannedFlight, j: int, position: np.ndarray,
         if near < separation_m:
             return (f"the straight line to {name} passes {near:.1f} m from another "
                     "vehicle's route home; landing where it stopped")
+    for who, reach in reaches:
+        if float(segment_distance(reach.centre[None], here, target)[0]) < reach.radius_m:
+            return (f"the straight line to {name} crosses the reach of {who}, whose position "
+                    "is in doubt; landing where it stopped")
     return None
 
 
@@ -258,23 +265,12 @@ class FlightWatch:
         others = [s.position for i, s in enumerate(seen) if i != j and s.position is not None]
         plan = self.response.homeward.plan if self.response.homeward is not None else None
         routes = [] if plan is None else [r.points for k, r in plan.routes.items() if k != j]
-        why = rtl_line_problem(self.planned, j, seen[j].position, others, routes=routes)
-        if why is not None:
-            return why
-        # ArduCopter's RTL line out of the reach of one in doubt (it drifts within it)
-        home = np.asarray(self.planned.paths[j][0][:2], float)
-        rally = rally_points(self.planned, j)
-        k = rtl_target(seen[j].position[:2], home, rally)
-        target = home if k is None else rally[k]
-        for d, doubt in self.response.doubtful.items():
-            reach = keep_out(self.planned, self.vehicles[d], clock.monotonic(), doubt_m=doubt)
-            if reach is not None and d != j and float(segment_distance(
-                    reach.centre[None], np.asarray(seen[j].position[:2], float),
-                    target)[0]) < reach.radius_m:
-                return (f"the straight line to its home or rally point crosses the reach of "
-                        f"{self.vehicles[d].name}, whose position is in doubt; landing where "
-                        "it stopped")
-        return None
+        now = clock.monotonic()
+        reaches = [(self.vehicles[d].name, reach) for d, doubt in self.response.doubtful.items()
+                   if d != j and (reach := keep_out(self.planned, self.vehicles[d], now,
+                                                    doubt_m=doubt)) is not None]
+        return rtl_line_problem(self.planned, j, seen[j].position, others, routes=routes,
+                                reaches=reaches)
 
     def expect(self, mode: str | None) -> None:
         """The mode every vehicle still on the plan is in from now on."""

@@ -171,6 +171,14 @@ def test_rtl_is_refused_where_its_line_crosses_another_vehicles_route_home(plann
     assert why is not None and "another vehicle's route home" in why
     far = crossing + np.array([0.0, 60.0, 0.0])
     assert rtl_line_problem(planned, 1, here, [], routes=[far]) is None
+    # nor may it cross the reach of a copter whose position is in doubt
+    from ftlbo_mav.planning.homeward import KeepOut
+
+    reach = KeepOut(mid, 3.0)
+    why = rtl_line_problem(planned, 1, here, [], reaches=[("uav3", reach)])
+    assert why is not None and "crosses the reach of uav3" in why
+    assert rtl_line_problem(planned, 1, here, [], reaches=[("uav3", KeepOut(
+        mid + np.array([0.0, 60.0]), 3.0))]) is None
 
 
 def _placed(planned, east, north, **status):
