@@ -211,15 +211,14 @@ class GoingHome:
         vehicle answered later (its link back), its route keeps clear of those already
         flying home, on their clock."""
         planned = self.planned
+        where = {k: q for k in range(len(self.vehicles)) if (q := self._where(k)) is not None}
         positions: dict[int, np.ndarray] = {}
         refused: dict[int, str] = {}
         for j in answered:
-            s = self.vehicles[j].status
-            if s.lat_deg is None:
+            if j not in where:
                 refused[j] = "its position is unknown"
                 continue
-            here = np.asarray(planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
-                                                   alt_m=s.alt_m), float)
+            here = where[j]
             home = np.asarray(planned.paths[j][0][:2], float)
             if here[2] < ON_GROUND_M and float(np.hypot(*(here[:2] - home))) < AT_HOME_M:
                 # stopped in its take-off before it left the ground: ArduCopter refuses
@@ -228,13 +227,12 @@ class GoingHome:
                 continue
             positions[j] = here
         doubt = doubt or {}
-        outs = tuple(k for j in left if (k := keep_out(planned, self.vehicles[j], now,
-                                                       doubt_m=doubt.get(j, 0.0))) is not None)
-        doubted = [k for j in left if j in doubt
-                   and (k := keep_out(planned, self.vehicles[j], now, doubt_m=doubt[j]))]
+        kept = {j: k for j in left if (k := keep_out(planned, self.vehicles[j], now,
+                                                     doubt_m=doubt.get(j, 0.0))) is not None}
+        outs = tuple(kept.values())
+        doubted = [k for j, k in kept.items() if j in doubt]
         for j, here in list(positions.items()):
-            others = [self._where(k) for k in range(len(self.vehicles))
-                      if k != j and k not in doubt and self._where(k) is not None]
+            others = [q for k, q in where.items() if k != j and k not in doubt]
             out = escape(here, doubted, planned, others)
             if out is not None:
                 self.stopped_at[j], positions[j] = here, out
