@@ -163,7 +163,7 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
             if not any(onboard):  # a promise lost by all of them: said for each
                 onboard = [[f"the plan does not fit the fleet: {'; '.join(verdict.broken)}"]
                            for _v in vehicles]
-        own = own_batteries(planned, actual, [batteries.get(v.sysid) for v in vehicles])
+        own = batteries_as_read(planned, actual, [batteries.get(v.sysid) for v in vehicles])
     else:
         own = None
     deadline = clock.monotonic() + ready_timeout_s
@@ -206,7 +206,7 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     return own
 
 
-def own_batteries(planned: PlannedFlight, copters, batteries) -> OwnBatteries | None:
+def batteries_as_read(planned: PlannedFlight, copters, batteries) -> OwnBatteries | None:
     """Without a ``[battery]``: each copter's battery (``batteries``, as read; None where
     not) against its mission predicted with its own values (``copters``)."""
     if planned.battery is not None or any(b is None for b in batteries):
