@@ -6,7 +6,8 @@ machine needs nothing but ftlbo-mav installed; it writes them to a temporary fol
 (:func:`.flight.fly_one`: its own emulated copters on ports the system chooses, so several
 flights share a worker) and removes everything. A worker that dies loses only the flights
 it was running, which Dask runs again elsewhere (its ``allowed-failures``); a flight that
-raises is tried again twice (``retries``), then recorded as failed with its error.
+raises is tried again twice (``retries``), then recorded as failed with its error; one
+the scheduler cancels (a key lost with a dying worker) is sent again, twice at most.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import os
 import tempfile
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import CancelledError
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,6 +27,9 @@ from .conditions import Ranges, draw
 from .flight import fly_one
 
 MAX_PLAN_BYTES = 50 * 1024 * 1024
+CANCELLED_AGAIN = 2
+"""How often a flight the scheduler cancelled (not one that failed: Dask's ``retries``
+runs those again) is sent again before it is recorded as failed."""
 NO_PROFILER = {"distributed.worker.profile.enabled": False}
 """Dask's worker samples every thread's stack (``sys._current_frames``) every 10 ms; a
 flight starts and ends a dozen threads, and CPython before 3.12 can deadlock there (the
@@ -72,6 +77,10 @@ def fly_packed(files: dict[str, bytes], ranges: Ranges, seed: int, copters: int,
         record = fly_one(tmp, draw(ranges, seed, copters), time_scale=time_scale)
     record["worker_pid"] = os.getpid()
     return record
+
+
+def _failed(seed: int, why: str) -> dict:
+    return {"seed": seed, "outcome": f"failed: {why}", "exit_code": None, "departures": []}
 
 
 def _stop_profiler(dask_worker=None) -> None:
@@ -125,18 +134,33 @@ def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
         client.run(_stop_profiler)
         slots = max(1, sum(client.nthreads().values()))
         packed = client.scatter(files, broadcast=True)
-        futures = {client.submit(task, packed, ranges, s, planned.count, time_scale,
-                                 key=f"risk-flight-{s}-{os.getpid()}-{started}", pure=False,
-                                 retries=2): s for s in seeds}
+
+        def submit(seed: int, attempt: int, plan) -> object:
+            return client.submit(task, plan, ranges, seed, planned.count, time_scale,
+                                 key=f"risk-flight-{seed}-{os.getpid()}-{started}-{attempt}",
+                                 pure=False, retries=2)
+
+        futures = {submit(s, 0, packed): (s, 0) for s in seeds}
         records: dict[int, dict] = {}
         least, left = None, 0
-        for future in as_completed(futures):
-            seed = futures[future]
+        flights = as_completed(futures)
+        for future in flights:
+            seed, attempt = futures.pop(future)
             try:
                 record = future.result()
+            except CancelledError:
+                # the scheduler let go of it (a worker's death can take a task's key,
+                # or the plan's scattered copy, with it): the flight is not flown,
+                # so it is sent again, the plan along with it
+                if attempt < CANCELLED_AGAIN:
+                    again = submit(seed, attempt + 1, files)
+                    futures[again] = (seed, attempt + 1)
+                    flights.add(again)
+                    continue
+                record = _failed(seed, "cancelled by the scheduler "
+                                       f"{attempt + 1} time{'s' if attempt else ''}")
             except Exception as exc:  # noqa: BLE001 - a flight that kept failing is recorded
-                record = {"seed": seed, "outcome": f"failed: {type(exc).__name__}: {exc}",
-                          "exit_code": None, "departures": []}
+                record = _failed(seed, f"{type(exc).__name__}: {exc}")
             records[seed] = record
             c = record.get("true_min_clearance_m")
             if c is not None:
@@ -144,7 +168,7 @@ def run_flights(plan_dir: Path, ranges: Ranges, seeds: Sequence[int], *,
             left += record.get("outcome") == "left the plan"
             if on_progress is not None:
                 done = len(records)
-                on_progress(Tally(done, len(futures), min(slots, len(futures) - done), least,
+                on_progress(Tally(done, len(seeds), min(slots, len(seeds) - done), least,
                                   left, time.monotonic() - started))
         return [records[s] for s in seeds]
     finally:
