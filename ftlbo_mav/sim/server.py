@@ -33,8 +33,13 @@ MAX_TIME_SCALE = 100.0
 """The fastest the vehicles' clock may run: every tick steps each vehicle's flight in
 20 ms steps (sim/autopilot.py), so 100x is 100 steps per vehicle and tick; far faster
 and a tick never ends, and nothing (not even SIGTERM) is handled."""
-class _SharedUdp(asyncio.DatagramProtocol):
-    """One UDP socket for every vehicle, sending to ``target``; what comes back goes to all.
+class SharedLink:
+    """Every vehicle on one link to the ground station; what comes from the ground goes to
+    all (as a multipoint radio's or a router's UDP output). Transport-free: ``to_ground``
+    sends one frame to the ground station, ``later(delay_s, fn, *args)`` calls ``fn``
+    ``delay_s`` of the vehicles' seconds from now, ``clock()`` is the vehicles' clock; the
+    UDP socket (:class:`_SharedUdp`) and the in-process emulator
+    (:mod:`.inprocess`) give them.
 
     With a ``radio`` (:class:`~ftlbo_mav.sim.radio.SharedRadio`) every frame each way
     goes through its air time, buffers, latency and losses; each radio reports
@@ -42,41 +47,30 @@ class _SharedUdp(asyncio.DatagramProtocol):
     component 68 'D'): the ground's to the ground station, each copter's to its
     autopilot, whose streams slow down by ArduPilot's flow control."""
 
-    def __init__(self, runners: Sequence[VehicleRunner], target: tuple[str, int], *,
-                 radio: SharedRadio | None = None, clock: Callable[[], float] | None = None,
-                 scale: float = 1.0):
-        self.runners = runners
-        self.target = target
-        self.radio, self.clock, self.scale = radio, clock, scale
-        self.atts: list[tuple[VehicleRunner, Attachment]] = []
-        self.transport = None
+    def __init__(self, runners: Sequence[VehicleRunner], to_ground: Callable[[bytes], None], *,
+                 radio: SharedRadio | None, clock: Callable[[], float],
+                 later: Callable[..., None]) -> None:
+        self.runners, self.to_ground = runners, to_ground
+        self.radio, self.clock, self.later = radio, clock, later
         self._next_status = 0.0
         self._status = None if radio is None else StatusSender(radio)
-
-    def connection_made(self, transport) -> None:
-        self.transport = transport
-        for r in self.runners:
-            self.atts.append((r, r.attach(lambda d, s=r.vehicle.sysid: self._down(d, s),
-                                          link="UDP")))
+        self.atts: list[tuple[VehicleRunner, Attachment]] = [
+            (r, r.attach(lambda d, s=r.vehicle.sysid: self._down(d, s), link="UDP"))
+            for r in runners]
 
     def _after(self, arrival: float | None, fn, *args) -> None:
         """``fn(*args)`` when a frame sent now arrives (the vehicles' clock), if it does."""
-        if arrival is None:
-            return
-        loop = asyncio.get_running_loop()
-        loop.call_later(max(0.0, (arrival - self.clock()) / self.scale), fn, *args)
+        if arrival is not None:
+            self.later(max(0.0, arrival - self.clock()), fn, *args)
 
     def _down(self, data: bytes, sysid: int) -> None:
         if self.radio is None:
-            self.transport.sendto(data, self.target)
-            return
-        self._after(self.radio.send(DOWN, len(data), self.clock(), sysid), self._deliver, data)
+            self.to_ground(data)
+        else:
+            self._after(self.radio.send(DOWN, len(data), self.clock(), sysid),
+                        self.to_ground, data)
 
-    def _deliver(self, data: bytes) -> None:
-        if not self.transport.is_closing():
-            self.transport.sendto(data, self.target)
-
-    def datagram_received(self, data: bytes, addr) -> None:
+    def from_ground(self, data: bytes) -> None:
         if self.radio is None:
             self._feed(data)
         else:
@@ -88,15 +82,44 @@ class _SharedUdp(asyncio.DatagramProtocol):
 
     def tick(self) -> None:
         """Each radio's RADIO_STATUS, once a second."""
-        if self.radio is None or self.transport is None:
+        if self.radio is None:
             return
         now = self.clock()
         if now < self._next_status:
             return
         self._next_status = now + RADIO_STATUS_S
-        self._deliver(self._status.frame(self.radio.txbuf_pct(UP, now)))
+        self.to_ground(self._status.frame(self.radio.txbuf_pct(UP, now)))
         for r, att in self.atts:
             r.feed(att, self._status.frame(self.radio.txbuf_pct(DOWN, now, r.vehicle.sysid)))
+
+
+class _SharedUdp(asyncio.DatagramProtocol):
+    """The :class:`SharedLink` on one UDP socket, sending to ``target``."""
+
+    def __init__(self, runners: Sequence[VehicleRunner], target: tuple[str, int], *,
+                 radio: SharedRadio | None, clock: Callable[[], float], scale: float) -> None:
+        self.runners, self.target = runners, target
+        self.radio, self.clock, self.scale = radio, clock, scale
+        self.transport = None
+        self.link: SharedLink | None = None
+
+    def connection_made(self, transport) -> None:
+        self.transport = transport
+        loop = asyncio.get_running_loop()
+        self.link = SharedLink(
+            self.runners, self._send, radio=self.radio, clock=self.clock,
+            later=lambda delay, fn, *args: loop.call_later(delay / self.scale, fn, *args))
+
+    def _send(self, data: bytes) -> None:
+        if not self.transport.is_closing():
+            self.transport.sendto(data, self.target)
+
+    def datagram_received(self, data: bytes, addr) -> None:
+        self.link.from_ground(data)
+
+    def tick(self) -> None:
+        if self.link is not None:
+            self.link.tick()
 
     def error_received(self, exc) -> None:  # nobody listening yet: ICMP port unreachable
         pass

@@ -148,16 +148,18 @@ def vehicles(count: int = 3, *, faults=None, options=None, signing_key: bytes | 
         base = options if options is not None else FAST
         options = [fleet_options(base, 1, firmware=[release])[0] for release, _p in copters]
     if virtual:
-        if udp_out is not None or radio is not None:
-            raise ValueError("a virtual clock's copters have no shared link or radio")
+        if router:
+            raise ValueError("a virtual clock's copters have no TCP ports for a router")
         with _in_process(homes=homes, faults=faults if faults is not None else Faults(),
                          options=options if options is not None else FAST,
-                         signing_key=signing_key, seed=seed) as sim:
+                         signing_key=signing_key, seed=seed, shared_link=shared_link,
+                         radio=radio) as sim:
             if params:
                 sim.call(lambda: [v.autopilot.params.update(params) for v in sim.vehicles])
             for v, (_r, values) in zip(sim.vehicles if copters else (), copters or ()):
                 sim.call(lambda v=v, values=values: v.autopilot.params.update(values))
-            yield Fleet(urls=sim.urls, sim=sim, serial1_urls=sim.serial1_urls, kill=sim.kill)
+            yield Fleet(urls=sim.urls, sim=sim, serial1_urls=sim.serial1_urls, kill=sim.kill,
+                        udp_url=sim.link_url, radio=sim.radio)
         return
     with Simulator(homes=homes, base_port=0, udp_out=udp_out, time_scale=speedup,
                    faults=faults if faults is not None else Faults(),

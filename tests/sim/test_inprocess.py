@@ -15,6 +15,7 @@ from ftlbo_mav.link.discovery import discover
 from ftlbo_mav.link.endpoints import Link, LinkError
 from ftlbo_mav.link.swarm import upload_swarm
 from ftlbo_mav.sim.inprocess import InProcessSimulator
+from ftlbo_mav.sim.radio import RadioOptions
 
 from ..conftest import EXAMPLE
 
@@ -93,3 +94,27 @@ def test_it_runs_only_on_a_virtual_clock(planned):
     with pytest.raises(RuntimeError, match="VirtualClock"), \
             InProcessSimulator(homes=_homes(planned)):
         pass
+
+
+def test_the_shared_link_brings_every_vehicle_through_the_radio_timed_on_the_clock(planned):
+    """``emu:KEY/link``: all three vehicles on one connection, their frames through the
+    radio's air time and latency (the same figures as over UDP, sim/server.py), each
+    radio's RADIO_STATUS once a second; one ground station at a time."""
+    with VirtualClock(start_s=0.0), InProcessSimulator(homes=_homes(planned),
+                                                       radio=RadioOptions()) as sim:
+        link = Link(sim.link_url)
+        try:
+            assert set(discover([link], [1, 2, 3], timeout_s=3.0)[0]) == {1, 2, 3}
+            with pytest.raises(LinkError, match="in use"):
+                Link(sim.link_url, connect_timeout_s=0.0)
+            clock.sleep(5.0)
+        finally:
+            link.close()
+        counts = sim.radio.counts
+        assert counts.delivered["down"] >= 3 * 5  # every vehicle's heartbeat, 5 s long
+        for way in ("up", "down"):  # every frame sent arrived or was lost on the air
+            assert counts.delivered[way] + counts.lost[way] == counts.sent[way] > 0
+    with VirtualClock(start_s=0.0), InProcessSimulator(homes=_homes(planned)) as sim:
+        assert sim.link_url is None
+        with pytest.raises(LinkError, match="no shared link"):
+            Link(f"{sim.key}/link", connect_timeout_s=0.0)
