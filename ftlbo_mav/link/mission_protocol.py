@@ -26,6 +26,10 @@ MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
 - After the last item it ACKs ACCEPTED; a resent last item after a lost ACCEPTED gets
   ACK ERROR (GCS_Common.cpp handle_mission_item: not receiving). The upload then ends
   *unconfirmed* and the read-back decides.
+- It stores an item that comes before it asked for it, as long as its seq is the one it
+  waits for (MissionItemProtocol::handle_mission_item checks the seq, not a request),
+  and asks for the next at once. So an upload to ArduPilot sends :data:`SEND_AHEAD`
+  items past the one asked for: a window of items each round trip, not one.
 """
 
 from __future__ import annotations
@@ -53,6 +57,12 @@ __all__ = [
 ]
 
 CAPACITY_TEXT = re.compile(r"Only (\d+) items are supported")
+
+SEND_AHEAD_ON_LINK = 12
+"""Items sent ahead of the requests at once on one link, divided among the vehicles that
+share it (at most :attr:`Timing.send_ahead <.transfer.Timing.send_ahead>` a transfer): a
+shared radio's buffer is theirs together, and each copter takes a mission, a fence and a
+rally point at once."""
 
 
 class Upload(_Transfer):
@@ -88,6 +98,10 @@ class Upload(_Transfer):
         self.started_at = 0.0
         self.count_sent_at = 0.0
         self.capacity: int | None = None  # what the vehicle said it holds, if it did
+        # items sent past the one asked for (module notes), and when each last went
+        self.ahead = (max(0, min(self.timing.send_ahead, SEND_AHEAD_ON_LINK // self.sharing))
+                      if self.timing.adaptive else 0)
+        self.last_at: dict[int, float] = {}
 
     def _count(self, now: float) -> list:
         self.count_sent_at = now
@@ -102,6 +116,7 @@ class Upload(_Transfer):
 
     def _item(self, seq: int, now: float) -> list:
         self.sent_at.setdefault(seq, now)
+        self.last_at[seq] = now
         self.sends[seq] = self.sends.get(seq, 0) + 1
         if seq == self.n - 1:
             self.last_sent = True
@@ -154,9 +169,27 @@ class Upload(_Transfer):
             self.last_progress = now
             self.resent = self.probing = False
             self.progress("upload", seq, self.n)
+            if self.ahead:
+                return self._ahead(seq, now)
         if seq == self.highest:
             self.deadline = now + self._resend_s()
         return self._item(seq, now)  # every request is answered, stale ones too
+
+    def _ahead(self, seq: int, now: float) -> list:
+        """A new request, sending ahead: the item asked for unless it is on its way, and
+        the next :attr:`ahead` items not sent yet. An item sent ahead is on its way when
+        it went after the last sending of the one before it (a link keeps each
+        direction's order): one that went before it arrived out of sequence (ArduPilot
+        answered INVALID_SEQUENCE and forgot it) and goes again."""
+        self.deadline = now + self._resend_s()
+        out = []
+        went = self.last_at.get(seq)
+        if went is None or (seq > 0 and went < self.last_at.get(seq - 1, went)):
+            out += self._item(seq, now)
+        for q in range(seq + 1, min(self.n, seq + 1 + self.ahead)):
+            if q not in self.sends:
+                out += self._item(q, now)
+        return out
 
     def _on_ack(self, result: int, now: float) -> list:
         if result == R.MAV_MISSION_ACCEPTED:
@@ -172,7 +205,19 @@ class Upload(_Transfer):
             if self.probing and self.highest + 1 < self.n:
                 self.probing = False
                 return self._item(self.highest + 1, now)
+            if self.ahead and self.highest >= 0:
+                # an item sent ahead came out of sequence: one before it was lost, most
+                # likely the one asked for last (else its request for the next was
+                # lost, and the answer to this resend says so): sent again at once,
+                # not after the resend timer, unless it went within a round trip
+                rtt = self.srtt if self.srtt is not None else self.timing.first_resend_s
+                if now - self.last_at.get(self.highest, 0.0) > rtt:
+                    self.probing = True
+                    self.deadline = now + self._resend_s()
+                    return self._item(self.highest, now)
             return []
+        if result == R.MAV_MISSION_ERROR and not self.sends:
+            return []  # about an item of an earlier transfer (none of ours went yet)
         if result == R.MAV_MISSION_ERROR and self.last_sent:
             # A (resent or duplicated) last item reached a vehicle that had finished
             # (GCS_Common.cpp handle_mission_item: not receiving -> ERROR): ACCEPTED was

@@ -104,10 +104,14 @@ SEQ_CHECKING_AUTOPILOTS = frozenset({R.MAV_AUTOPILOT_ARDUPILOTMEGA, R.MAV_AUTOPI
 
 
 def timing_for(heartbeat: Heartbeat, timing: Timing) -> Timing:
-    """``timing``, with early resends only for autopilots that check item sequence numbers."""
-    if heartbeat.autopilot in SEQ_CHECKING_AUTOPILOTS:
+    """``timing``, with early resends only for autopilots that check item sequence numbers
+    and items sent ahead of the requests only to ArduPilot (whose handling of them we
+    follow: :data:`~.mission_protocol.SEND_AHEAD`)."""
+    if heartbeat.autopilot == R.MAV_AUTOPILOT_ARDUPILOTMEGA:
         return timing
-    return replace(timing, adaptive=False)
+    if heartbeat.autopilot in SEQ_CHECKING_AUTOPILOTS:
+        return replace(timing, send_ahead=0)
+    return replace(timing, adaptive=False, send_ahead=0)
 
 
 def _clear_and_confirm(channel, timing: Timing, report: Callable[[str], None]) -> str:

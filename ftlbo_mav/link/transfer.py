@@ -76,6 +76,8 @@ class Timing:
     round trip has been timed (TCP starts at 1 s, RFC 6298; a lost MISSION_COUNT at 30%
     loss should not eat the budget in 1.5 s steps). ``adaptive=False``: always wait
     ``timeout_s`` before a resend (for vehicles that would store a resent item twice).
+    ``send_ahead``: items an upload sends past the one the vehicle asks for (ArduPilot
+    only: :data:`~.mission_protocol.SEND_AHEAD`; 0 is MAVLink's item-per-request).
     """
 
     timeout_s: float = 1.5
@@ -85,6 +87,7 @@ class Timing:
     min_resend_s: float = 0.2
     first_resend_s: float = 0.5
     adaptive: bool = True
+    send_ahead: int = 3
 
     def resend_after(self, srtt: float) -> float:
         """Seconds before a resend once the round trip ``srtt`` (a median) is known."""

@@ -33,8 +33,13 @@ N = len(ITEMS)
 HOME = (ITEMS[0].lat_deg, ITEMS[0].lon_deg, 12.0)
 
 
+ONE_BY_ONE = Timing(send_ahead=0)
+"""MAVLink's mission protocol as written: an item for each request (PX4's, and the
+message-by-message tests of it); ArduPilot's uploads send items ahead (below)."""
+
+
 def upload_machine(items=ITEMS, timing=None):
-    return Upload(items, sysid=1, compid=1, own=(255, 190), timing=timing or Timing(),
+    return Upload(items, sysid=1, compid=1, own=(255, 190), timing=timing or ONE_BY_ONE,
                   progress=None)
 
 
@@ -109,8 +114,44 @@ def test_lost_request_resend_then_invalid_sequence_sends_the_next_item():
     assert up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), up.deadline - 0.05) == []
 
 
+# ------------------------------------------------- sending ahead (ArduPilot's uploads)
+
+
+def test_arducopter_gets_items_ahead_of_its_requests_each_sent_once():
+    up = upload_machine(timing=Timing())
+    up.start(0.0)
+    assert sent_seqs(up.on_message(request(0), 0.10)) == [0, 1, 2, 3]
+    # it stored 1-3 as they came, asking for each: one new item each, none twice
+    assert sent_seqs(up.on_message(request(1), 0.20)) == [4]
+    assert sent_seqs(up.on_message(request(2), 0.21)) == [5]
+    assert sent_seqs(up.on_message(request(3), 0.22)) == [6]
+    assert up.highest == 3 and not up.finished
+
+
+def test_an_item_sent_ahead_of_a_lost_one_goes_again_when_asked_for():
+    """Item 1 lost: 2 and 3 came out of sequence (INVALID_SEQUENCE, forgotten). The
+    answer resends 1 at once, and 2 when asked for it (it went before 1's resend)."""
+    up = upload_machine(timing=Timing())
+    up.start(0.0)
+    up.on_message(request(0), 0.10)              # 0, 1, 2, 3 go; 1 is lost
+    assert sent_seqs(up.on_message(request(1), 0.20)) == [4]  # 1 seems on its way
+    resent = up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), 0.40)
+    assert sent_seqs(resent) == [1]
+    assert sent_seqs(up.on_message(request(2), 0.55)) == [2, 5]
+    # 3 went before 2's resend too; 5 after it: on its way
+    assert sent_seqs(up.on_message(request(3), 0.60)) == [3, 6]
+
+
+def test_an_error_about_an_earlier_transfers_item_does_not_end_a_new_one():
+    up = upload_machine(timing=Timing())
+    up.start(0.0)
+    assert up.on_message(ack(R.MAV_MISSION_ERROR), 0.05) == [] and not up.finished
+    up.on_message(request(0), 0.10)
+    assert not up.finished
+
+
 def test_resends_come_sooner_once_a_round_trip_is_timed_but_within_the_same_budget():
-    timing = Timing(timeout_s=1.5, retries=5)
+    timing = Timing(timeout_s=1.5, retries=5, send_ahead=0)
     up = upload_machine(timing=timing)
     up.start(0.0)
     up.on_message(request(0), 0.010)
@@ -128,7 +169,7 @@ def test_resends_come_sooner_once_a_round_trip_is_timed_but_within_the_same_budg
 
 
 def test_no_answer_to_count_fails_after_the_budget_naming_vehicle_and_step():
-    timing = Timing(timeout_s=0.3, retries=2, first_resend_s=0.3)
+    timing = Timing(timeout_s=0.3, retries=2, first_resend_s=0.3, send_ahead=0)
     up = upload_machine(timing=timing)
     out = up.start(0.0)
     t, counts = 0.0, len(out)
@@ -142,7 +183,7 @@ def test_no_answer_to_count_fails_after_the_budget_naming_vehicle_and_step():
 
 
 def test_no_space_at_boot_is_waited_out_then_the_upload_goes_on():
-    up = upload_machine(timing=Timing(not_ready_s=5.0, not_ready_poll_s=1.0))
+    up = upload_machine(timing=Timing(not_ready_s=5.0, not_ready_poll_s=1.0, send_ahead=0))
     up.start(0.0)
     assert up.on_message(ack(R.MAV_MISSION_NO_SPACE), 0.01) == []
     assert not up.finished
