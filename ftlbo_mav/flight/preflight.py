@@ -122,7 +122,7 @@ def preflight(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
         vehicle, expected, fence, copter = pair
         try:
             with vehicle.link.channel(vehicle.sysid) as channel:
-                onboard = download_mission(channel, timing=timing)
+                onboard = download_mission(channel, timing=timing, expect=len(expected))
                 fence_diff = ([] if fence is None
                               else fence_differences(channel, fence, timing=timing))
                 # its battery's values too without a [battery], in the same exchange

@@ -35,7 +35,7 @@ def fence_differences(channel, expected: FenceSet, *, timing: Timing,
     for label, kind in PARTS:
         want = expected.fence if kind == MISSION_TYPE_FENCE else expected.rally
         back = download_mission(channel, timing=timing, mission_type=kind,
-                                progress=_labelled(progress, label))
+                                progress=_labelled(progress, label), expect=len(want))
         problems += [f"{label}: {p}" for p in mission_differences(want, back, mission_type=kind)]
     problems += [f"parameter {p}" for p in param_differences(channel, expected.params,
                                                              timing=timing)]
@@ -74,7 +74,7 @@ def upload_fence_set(channel, fence_set: FenceSet, *, timing: Timing,
                                progress=_labelled(progress, label))
             else:
                 clear_mission(ch, timing=timing, mission_type=kind)
-            back = download_mission(ch, timing=timing, mission_type=kind,
+            back = download_mission(ch, timing=timing, mission_type=kind, expect=len(items),
                                     progress=_labelled(progress, label))
         except MissionTransferError as exc:
             return f"{label} {exc.step} failed: {exc.problem}" + _cleared(ch, timing, label,

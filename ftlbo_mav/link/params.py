@@ -11,6 +11,7 @@ parameters a plan predicted its flown path with (:func:`set_vehicle_params`,
 
 from __future__ import annotations
 
+import itertools
 import statistics
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
@@ -95,19 +96,22 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     waiting = list(requests)  # not sent yet
     out: dict[str, float] = {}  # sent, unanswered: name -> when first sent
     resent: set[str] = set()  # a round trip is measured only on a request sent once
+    last: dict[str, int] = {}  # sent, unanswered: name -> the order it last went in
+    order = itertools.count()
     deadline = clock() + resend_s
     while waiting or out:
         while waiting and len(out) < window:
             name = waiting.pop(0)
             channel.send(requests[name]())
-            out[name] = clock()
+            out[name], last[name] = clock(), next(order)
         left = deadline - clock()
         if left <= 0:
             now = clock()
             for n in [n for n, first in out.items() if now - first >= timing.budget_s]:
-                del out[n]  # never answered
+                del out[n], last[n]  # never answered
             for n in out:
                 channel.send(requests[n]())
+                last[n] = next(order)
                 resent.add(n)
             deadline = now + resend_s
             continue
@@ -116,11 +120,22 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
             name = _param_name(msg)
             if name in out:
                 first = out.pop(name)
+                now = clock()
                 if name not in resent:  # its own round trip: the resends learn the link's
-                    samples.append(clock() - first)
+                    samples.append(now - first)
                     resend_s = resend_after()
                 got[name] = float(msg.param_value)
-                deadline = clock() + resend_s  # progress
+                deadline = now + resend_s  # progress
+                # ArduPilot answers reads in the order they come (GCS_Param.cpp: one
+                # queue, param_requests) and a link keeps each direction's order: one
+                # sent before this one (sent once: which of its sendings an answer is
+                # to is not known) and not answered was lost, or its answer was
+                if timing.adaptive and name not in resent:
+                    for n in [n for n in out if last[n] < last[name]]:
+                        channel.send(requests[n]())
+                        last[n] = next(order)
+                        resent.add(n)
+                last.pop(name)
     return got
 
 

@@ -170,7 +170,8 @@ def _upload_and_verify(channel, items, machine, *, timing, progress, report):
         cleared = _clear_and_confirm(channel, timing, report)
         return False, f"upload failed: {exc.problem}; {cleared}"
     try:
-        back = download_mission(channel, timing=timing, progress=progress)
+        back = download_mission(channel, timing=timing, progress=progress,
+                                expect=len(items))
     except MissionTransferError as exc:
         return False, (f"uploaded, but the read-back failed ({exc.problem}): the mission is "
                        "NOT verified")

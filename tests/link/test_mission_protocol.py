@@ -129,17 +129,19 @@ def test_arducopter_gets_items_ahead_of_its_requests_each_sent_once():
 
 
 def test_an_item_sent_ahead_of_a_lost_one_goes_again_when_asked_for():
-    """Item 1 lost: 2 and 3 came out of sequence (INVALID_SEQUENCE, forgotten). The
-    answer resends 1 at once, and 2 when asked for it (it went before 1's resend)."""
+    """Item 1 lost: 2 and 3 came out of sequence (INVALID_SEQUENCE, forgotten). Item 1
+    goes again when its request seems lost; asked for 2, it sends 2 again with the window
+    behind it, in order, and the items ahead are on their way again."""
     up = upload_machine(timing=Timing())
     up.start(0.0)
     up.on_message(request(0), 0.10)              # 0, 1, 2, 3 go; 1 is lost
     assert sent_seqs(up.on_message(request(1), 0.20)) == [4]  # 1 seems on its way
-    resent = up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), 0.40)
-    assert sent_seqs(resent) == [1]
-    assert sent_seqs(up.on_message(request(2), 0.55)) == [2, 5]
-    # 3 went before 2's resend too; 5 after it: on its way
-    assert sent_seqs(up.on_message(request(3), 0.60)) == [3, 6]
+    assert up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), 0.30) == []  # 2 forgotten
+    assert sent_seqs(up.on_timeout(up.deadline)) == [1]
+    t = up.deadline - 0.1
+    assert sent_seqs(up.on_message(request(2), t)) == [2, 3, 4, 5]
+    assert sent_seqs(up.on_message(request(3), t + 0.01)) == [6]
+    assert sent_seqs(up.on_message(request(4), t + 0.02)) == [7]
 
 
 def test_an_error_about_an_earlier_transfers_item_does_not_end_a_new_one():
@@ -289,6 +291,28 @@ def test_download_on_a_link_that_reorders_asks_once_more_and_keeps_one_copy():
     assert dl.on_message(_item(0), 0.3) == []  # the answer to the second request
     (done,) = dl.on_message(_item(2), 0.31)
     assert done.type == R.MAV_MISSION_ACCEPTED and [i.seq for i in dl.items] == [0, 1, 2]
+
+
+def test_a_read_back_of_what_was_sent_asks_for_its_first_items_with_the_count():
+    dl = Download(sysid=1, compid=1, own=(255, 190), timing=Timing(), progress=None, expect=3)
+    first = dl.start(0.0)
+    assert [(m.get_type(), getattr(m, "seq", None)) for m in first] == [
+        ("MISSION_REQUEST_LIST", None), ("MISSION_REQUEST_INT", 0),
+        ("MISSION_REQUEST_INT", 1), ("MISSION_REQUEST_INT", 2)]
+    assert dl.on_message(_item(0), 0.1) == [] and not dl.finished  # kept, the count to come
+    assert dl.on_message(R.MAVLink_mission_count_message(255, 190, 3, 0), 0.11) == []
+    dl.on_message(_item(1), 0.12)
+    (done,) = dl.on_message(_item(2), 0.13)
+    assert done.type == R.MAV_MISSION_ACCEPTED and [i.seq for i in dl.items] == [0, 1, 2]
+
+
+def test_a_read_back_that_finds_fewer_items_than_sent_reads_what_is_there():
+    dl = Download(sysid=1, compid=1, own=(255, 190), timing=Timing(), progress=None, expect=3)
+    dl.start(0.0)
+    dl.on_message(_item(0), 0.1)
+    dl.on_message(_item(1), 0.1)
+    (done,) = dl.on_message(R.MAVLink_mission_count_message(255, 190, 1, 0), 0.11)
+    assert done.type == R.MAV_MISSION_ACCEPTED and [i.seq for i in dl.items] == [0]
 
 
 # ----------------------------------------------------------------- against the emulator

@@ -146,3 +146,29 @@ def test_a_lost_answer_is_asked_again_after_a_few_round_trips_not_the_whole_time
     t0 = ch.clock()
     read_params(ch, PLANNED, timing=Timing(timeout_s=3.0, retries=3, adaptive=False))
     assert ch.clock() - t0 >= 3.0
+
+
+def test_a_request_an_answer_overtook_is_asked_again_at_once():
+    """ArduPilot answers reads in the order they come and the link keeps the order: the
+    answer to the second request, come before the first's, says the first was lost. It
+    is asked again then (0.2 s, one round trip), not after the resend timer (virtual
+    time)."""
+    from ftlbo_mav.link.params import read_params
+
+    ch = channel(faults=Faults(latency_s=0.1))
+    first, sent = PLANNED[0] if isinstance(PLANNED, list) else next(iter(PLANNED)), []
+    send = ch.send
+
+    def lossy(msg) -> None:
+        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+        if name.rstrip("\x00") == first:
+            sent.append(ch.clock())
+            if len(sent) == 1:
+                return  # the first request for it is lost
+        send(msg)
+
+    ch.send = lossy
+    t0 = ch.clock()
+    got = read_params(ch, PLANNED, timing=TIMING)
+    assert all(v is not None for v in got.values())
+    assert len(sent) == 2 and sent[1] - t0 == pytest.approx(0.2, abs=0.02)
