@@ -1,0 +1,184 @@
+"""Where SITL's copters truly flew, from their own DataFlash logs: the formation judged by
+the truth, not by the telemetry that reached the ground station.
+
+``python -m sitl.truth DIR [DIR ...] [--json OUT]`` reads each flight folder that
+``benchmarks/flight.py --keep DIR`` kept on SITL (``DIR/runN-STRATEGY``: ``plan/``,
+``samples.json`` and one ``instanceN/logs/*.BIN`` per copter) and prints, per flight,
+the formation error on the legs by the reported positions (as the benchmark measures
+it) and by the true ones, and where the true worst was: which copter, how many seconds
+into the legs, along or across its track.
+
+- **The true position** is SITL's ``SIM`` message (libraries/SITL/SIM_Aircraft.cpp
+  ``Aircraft::update_dynamics`` logs the simulated vehicle's own state, 10 Hz), not its
+  EKF's estimate nor its GPS.
+- **One clock for every copter**: each instance logs ``GPS`` (GPS week and milliseconds
+  of the week) against its own ``TimeUS``; a straight line fitted through them puts its
+  ``SIM`` rows on GPS time, which every instance's simulated GPS takes from the same wall
+  clock (speedup 1). The reported positions are put on one clock from their arrival
+  times (``flight/record.py``): through a radio with tens of milliseconds of jitter,
+  which at 5 m/s is centimetres to decimetres of apparent formation error.
+- **The legs**: the mission item each copter flew, from ``samples.json`` (its
+  ``time_boot_ms`` is the log's ``TimeUS`` clock), as ``flight/report.py`` counts them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+from pymavlink import DFReader
+
+from ftlbo_mav.flight.metrics import formation_error
+from ftlbo_mav.flight.planned import load_planned_flight
+from ftlbo_mav.flight.report import leg_range
+
+RATE_HZ = 20.0
+"""The common grid both measures are resampled on."""
+GPS_WEEK_S = 7 * 24 * 3600.0
+
+
+MOVING_M_S = 0.5
+"""A copter has begun its legs once it moves this fast across the ground, 2 m up."""
+
+
+def read_instance(bin_path: Path) -> dict:
+    """``SIM`` rows on GPS time: ``{"t": (K,) s, "lat", "lon", "alt" (AMSL m)}``, the fit
+    from the log's ``TimeUS`` to GPS seconds (``gps = a + b * TimeUS``) and ``began``,
+    when it first moved across the ground 2 m up (GPS seconds; ``SIM2``, logged at the
+    simulation's own rate: to the millisecond, where ``SIM``'s 10 Hz would say it to
+    0.1 s)."""
+    log = DFReader.DFReader_binary(str(bin_path))
+    sim, gps, began = [], [], None
+    while True:
+        m = log.recv_match(type=["SIM", "SIM2", "GPS"])
+        if m is None:
+            break
+        kind = m.get_type()
+        if kind == "SIM":
+            sim.append((m.TimeUS, m.Lat, m.Lng, m.Alt))
+        elif kind == "SIM2":
+            if began is None and m.PD < -2.0 and math.hypot(m.VN, m.VE) > MOVING_M_S:
+                began = m.TimeUS
+        elif getattr(m, "I", 0) == 0 and m.GWk > 0:
+            gps.append((m.TimeUS, m.GWk * GPS_WEEK_S + m.GMS / 1000.0))
+    if len(sim) < 2 or len(gps) < 2:
+        raise SystemExit(f"{bin_path}: no SIM or GPS messages (a SITL DataFlash log?)")
+    us, g = np.array(gps, float).T
+    b, a = np.polyfit(us, g, 1)
+    rows = np.array(sim, float)
+    return {"t": a + b * rows[:, 0], "lat": rows[:, 1], "lon": rows[:, 2], "alt": rows[:, 3],
+            "fit": (a, b), "began": None if began is None else a + b * began}
+
+
+def _seq_on(times: np.ndarray, stamps: np.ndarray, seqs: np.ndarray) -> np.ndarray:
+    """The mission item at each of ``times`` (the last one reported at or before it; -1
+    before the first report and outside AUTO, which ``samples.json`` leaves out)."""
+    order = np.argsort(stamps, kind="stable")
+    stamps, seqs = stamps[order], seqs[order]
+    idx = np.searchsorted(stamps, times, side="right") - 1
+    out = np.where(idx >= 0, seqs[np.clip(idx, 0, None)], -1)
+    gap = np.diff(stamps, prepend=stamps[0])  # a silence of over 2 s: not in AUTO then
+    late = times - stamps[np.clip(idx, 0, None)] > max(2.0, float(np.median(gap)) * 20)
+    return np.where(late, -1, out)
+
+
+def flight_truth(folder: Path) -> dict:
+    """The formation on the legs of the flight kept in ``folder``, by the truth."""
+    planned = load_planned_flight(folder / "plan")
+    kept = json.loads((folder / "samples.json").read_text())
+    rows = np.array([[r[0], r[1], r[2], r[3], r[4], r[5],
+                      np.nan if r[6] is None else r[6]] for r in kept["rows"]], float)
+    tracks = []
+    for k in range(planned.count):
+        logs = sorted((folder / f"instance{k}" / "logs").glob("*.BIN"))
+        if not logs:
+            raise SystemExit(f"{folder}: no DataFlash log for instance{k}")
+        inst = read_instance(logs[-1])
+        mine = rows[rows[:, 1] == k + 1]
+        a, b = inst["fit"]
+        inst["seq_t"] = a + b * mine[:, 6] * 1000.0  # time_boot_ms on the log's clock
+        inst["seq"] = mine[:, 5]
+        tracks.append(inst)
+    began = [tr["began"] for tr in tracks]
+    first_began = min(b for b in began if b is not None) if any(began) else None
+    try:
+        return {"flight": folder.name, **formation_truth(planned, tracks),
+                "began_after_first_ms": [None if b is None else round(1000 * (b - first_began))
+                                         for b in began]}
+    except ValueError as exc:
+        raise SystemExit(f"{folder}: {exc}") from None
+
+
+def formation_truth(planned, tracks: list[dict]) -> dict:
+    """The formation on the legs, from each copter's true track (``t`` seconds on one
+    clock, ``lat``, ``lon``, ``alt`` AMSL, its first row on the ground) and the mission
+    items it reported (``seq_t``, ``seq``): RMS and worst formation error
+    (:func:`~ftlbo_mav.flight.metrics.formation_error`) and where the worst was."""
+    n = planned.count
+    first, last = leg_range(planned)
+    start = max(tr["t"][0] for tr in tracks)
+    stop = min(tr["t"][-1] for tr in tracks)
+    times = np.arange(start, stop, 1.0 / RATE_HZ)
+    lat = np.stack([np.interp(times, tr["t"], tr["lat"]) for tr in tracks], axis=1)
+    lon = np.stack([np.interp(times, tr["t"], tr["lon"]) for tr in tracks], axis=1)
+    alt = np.stack([np.interp(times, tr["t"], tr["alt"]) - tr["alt"][0] for tr in tracks],
+                   axis=1)  # above where it stood before take-off
+    enu = planned.frame.to_enu(lat_deg=lat.ravel(), lon_deg=lon.ravel(), alt_m=alt.ravel())
+    positions = np.asarray(enu).reshape(len(times), n, 3)
+    seqs = np.stack([_seq_on(times, tr["seq_t"], tr["seq"]) for tr in tracks], axis=1)
+    legs = np.all((seqs >= first) & (seqs <= last), axis=1)
+    if not legs.any():
+        raise ValueError("no time when every copter was on the legs")
+    err = formation_error(positions, planned.offsets)
+    out = {"legs_s": round(float(legs.sum()) / RATE_HZ, 1),
+           "true_rms_m": round(float(np.sqrt(np.mean(err[legs] ** 2))), 3),
+           "true_worst_m": round(float(err[legs].max()), 3)}
+    # where the worst was: the copter furthest from its slot then, along / across its track
+    k = int(np.flatnonzero(legs)[np.argmax(err[legs])])
+    slots = positions[k].mean(axis=0) + planned.offsets - planned.offsets.mean(axis=0)
+    off = positions[k] - slots
+    who = int(np.argmax(np.linalg.norm(off, axis=1)))
+    heading = (positions[min(k + 1, len(times) - 1), who, :2]
+               - positions[max(k - 1, 0), who, :2])
+    heading = heading / (np.linalg.norm(heading) or 1.0)
+    out["true_worst_at"] = {
+        "uav": planned.names[who],
+        "s_into_legs": round(float(times[k] - times[np.flatnonzero(legs)[0]]), 1),
+        "along_m": round(float(off[who, :2] @ heading), 3),
+        "across_m": round(float(off[who, 1] * heading[0] - off[who, 0] * heading[1]), 3)}
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m sitl.truth", description=__doc__.split("\n")[0])
+    p.add_argument("folders", nargs="+", type=Path,
+                   help="flight folders kept by benchmarks/flight.py --keep (runN-STRATEGY)")
+    p.add_argument("--json", type=Path, help="write the figures here too")
+    args = p.parse_args(argv)
+    found = []
+    for folder in args.folders:
+        found += sorted(f for f in folder.glob("run*-*") if f.is_dir()) \
+            if not (folder / "samples.json").exists() else [folder]
+    results = []
+    for folder in found:
+        r = flight_truth(folder)
+        results.append(r)
+        w = r["true_worst_at"]
+        print(f"{folder}: on the legs ({r['legs_s']} s) true formation error "
+              f"{r['true_rms_m']:.3f} m RMS, {r['true_worst_m']:.3f} m worst ({w['uav']}, "
+              f"{w['s_into_legs']} s into the legs, {w['along_m']:+.2f} m along its track, "
+              f"{w['across_m']:+.2f} m across); legs begun, ms after the first: "
+              + ", ".join(f"{name} {ms}" for name, ms in zip(
+                  (f"uav{k + 1}" for k in range(len(r["began_after_first_ms"]))),
+                  r["began_after_first_ms"])))
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
