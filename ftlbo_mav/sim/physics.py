@@ -31,7 +31,6 @@ from ..ardupilot.navigation import (
     sqrt_controller,
 )
 from ..ardupilot.poscontrol import DEFAULT_AIRFRAME, Airframe
-from ..ardupilot.rtc import draw_rtc_lag_s
 from ..ardupilot.wpnav import (  # re-exported: the emulator's autopilot imports them here
     WP_RADIUS_MIN,
     WP_SPEED_MIN,
@@ -62,9 +61,6 @@ class FlightLimits:
     ``disarm_after_touchdown_s``: touchdown to the land detector's disarm (recorded).
     ``start_latency_s``: a mission (AUTO) starts moving this much after it is entered (0
     on ArduPilot itself; per-vehicle variation, :func:`varied`).
-    ``rtc_lag_s``: how far its clock of the day (AP_RTC, set once from its first GPS fix)
-    is behind GPS time: a start gate opens that much later for it
-    (:mod:`ftlbo_mav.ardupilot.rtc`; per-vehicle, :func:`varied`).
     ``airframe``: its drag, with which it follows its position target
     (:mod:`ftlbo_mav.ardupilot.poscontrol`; SITL's default frame).
     ``jerk_factor``: this airframe flies its S-curves with its WPNAV_JERK times this (1 on
@@ -80,7 +76,6 @@ class FlightLimits:
     disarm_after_touchdown_s: float = TOUCHDOWN_TO_DISARM_S
     land_rate_achieved: float = LAND_RATE_ACHIEVED
     start_latency_s: float = 0.0
-    rtc_lag_s: float = 0.0
     jerk_factor: float = 1.0
     airframe: Airframe = DEFAULT_AIRFRAME
     power: Battery = field(default_factory=lambda: SITL_POWER)
@@ -134,18 +129,14 @@ def hovering(limits: FlightLimits, rng: np.random.Generator, *,
 def varied(limits: FlightLimits, rng: np.random.Generator, *, latency_s: float = 0.3,
            jerk_spread: float = 0.05) -> FlightLimits:
     """``limits`` as one copter of a real fleet differs: a start latency drawn from
-    [0, ``latency_s``], the jerk it flies with scaled by a factor drawn from 1 +-
+    [0, ``latency_s``] and the jerk it flies with scaled by a factor drawn from 1 +-
     ``jerk_spread`` (short legs are jerk-limited, so their speed and duration differ by a
-    few percent, as ``benchmarks/flight.py --set SYSID:WPNAV_JERK=..`` shows on SITL) and
-    how far its clock is behind GPS time, one of the recorded SITL copters'
-    (:func:`~ftlbo_mav.ardupilot.rtc.draw_rtc_lag_s`: it begins GPS-time-gated legs that
-    much late).
+    few percent, as ``benchmarks/flight.py --set SYSID:WPNAV_JERK=..`` shows on SITL).
     Its parameters stay those of ``limits``: the fleet holds what the plan predicted
     with, and `fly`'s pre-flight check of them passes."""
     factor = 1.0 + float(rng.uniform(-jerk_spread, jerk_spread))
-    latency = float(rng.uniform(0.0, latency_s))
-    return replace(limits, start_latency_s=latency, jerk_factor=limits.jerk_factor * factor,
-                   rtc_lag_s=draw_rtc_lag_s(rng))
+    return replace(limits, start_latency_s=float(rng.uniform(0.0, latency_s)),
+                   jerk_factor=limits.jerk_factor * factor)
 
 
 @dataclass

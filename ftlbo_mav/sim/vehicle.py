@@ -169,9 +169,7 @@ class Vehicle:
                                    options=AutopilotOptions(boot=self.boot, limits=limits))
         self.autopilot.home_alt_m = alt
         self.utc_offset_s = time.time() - boot_time if utc_offset_s is None else utc_offset_s
-        # its clock of the day (AP_RTC), behind GPS time by what it was set with
-        # (ardupilot/rtc.py): start gates and SYSTEM_TIME go by it; flies only after its fix
-        self.autopilot.utc_offset_s = self.utc_offset_s - options.limits.rtc_lag_s
+        self.autopilot.utc_offset_s = self.utc_offset_s  # flies only after its GPS fix
         self.gps = GpsError(options.gps, self.autopilot.params, lat_deg=lat)
         self._ground_truth: np.ndarray | None = np.zeros(2)  # placed at its home, truly
         self._home_memo: tuple | None = None  # (home_en, current_home()) last converted
@@ -540,7 +538,7 @@ class Vehicle:
             return self.sim_state(now)
         if msgid == R.MAVLINK_MSG_ID_SYSTEM_TIME:
             # GCS_MAVLINK::send_system_time: AP_RTC's UTC (0 until its GPS gave a time)
-            utc_us = int((now + self.autopilot.utc_offset_s) * 1e6) if fix else 0
+            utc_us = int((now + self.utc_offset_s) * 1e6) if fix else 0
             return R.MAVLink_system_time_message(
                 utc_us, int((now - self.boot_time) * 1000) & 0xFFFFFFFF)
         if msgid == R.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
