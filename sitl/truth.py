@@ -4,9 +4,9 @@ the truth, not by the telemetry that reached the ground station.
 ``python -m sitl.truth DIR [DIR ...] [--json OUT]`` reads each flight folder that
 ``benchmarks/flight.py --keep DIR`` kept on SITL (``DIR/runN-STRATEGY``: ``plan/``,
 ``samples.json`` and one ``instanceN/logs/*.BIN`` per copter) and prints, per flight,
-the formation error on the legs by the reported positions (as the benchmark measures
-it) and by the true ones, and where the true worst was: which copter, how many seconds
-into the legs, along or across its track.
+the formation error on the legs by the true positions, where the true worst was (which
+copter, how many seconds into the legs, along or across its track), and for each copter
+when its start gate opened and when it began to move, in milliseconds after the first.
 
 - **The true position** is SITL's ``SIM`` message (libraries/SITL/SIM_Aircraft.cpp
   ``Aircraft::update_dynamics`` logs the simulated vehicle's own state, 10 Hz), not its
@@ -19,6 +19,11 @@ into the legs, along or across its track.
   which at 5 m/s is centimetres to decimetres of apparent formation error.
 - **The legs**: the mission item each copter flew, from ``samples.json`` (its
   ``time_boot_ms`` is the log's ``TimeUS`` clock), as ``flight/report.py`` counts them.
+- **The start**: a copter's gate opened when ArduCopter started the item after it (its
+  ``MSG`` "Mission: N ..."); it began to move when ``SIM2`` (logged at the simulation's
+  rate) first shows it 0.5 m/s across the ground, 2 m up. On fifteen flights of
+  2026-12-07 the gates opened within 5 ms of each other; the copters began to move up to
+  98 ms apart (docs/link.md).
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -35,6 +41,7 @@ from pymavlink import DFReader
 from ftlbo_mav.flight.metrics import formation_error
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.report import leg_range
+from ftlbo_mav.flight.start import start_gate
 
 RATE_HZ = 20.0
 """The common grid both measures are resampled on."""
@@ -42,6 +49,9 @@ GPS_WEEK_S = 7 * 24 * 3600.0
 
 
 MOVING_M_S = 0.5
+MISSION_TEXT = re.compile(r"Mission: (\d+) ")
+"""ArduCopter's announcement of each mission item it starts (ModeAuto::start_command:
+"Mission: 4 ChangeSpeed"), logged as MSG with the time it started."""
 """A copter has begun its legs once it moves this fast across the ground, 2 m up."""
 
 
@@ -52,13 +62,16 @@ def read_instance(bin_path: Path) -> dict:
     simulation's own rate: to the millisecond, where ``SIM``'s 10 Hz would say it to
     0.1 s)."""
     log = DFReader.DFReader_binary(str(bin_path))
-    sim, gps, began = [], [], None
+    sim, gps, began, items = [], [], None, []
     while True:
-        m = log.recv_match(type=["SIM", "SIM2", "GPS"])
+        m = log.recv_match(type=["SIM", "SIM2", "GPS", "MSG"])
         if m is None:
             break
         kind = m.get_type()
-        if kind == "SIM":
+        if kind == "MSG":
+            if (found := MISSION_TEXT.match(m.Message)) is not None:
+                items.append((m.TimeUS, int(found.group(1))))
+        elif kind == "SIM":
             sim.append((m.TimeUS, m.Lat, m.Lng, m.Alt))
         elif kind == "SIM2":
             if began is None and m.PD < -2.0 and math.hypot(m.VN, m.VE) > MOVING_M_S:
@@ -71,7 +84,8 @@ def read_instance(bin_path: Path) -> dict:
     b, a = np.polyfit(us, g, 1)
     rows = np.array(sim, float)
     return {"t": a + b * rows[:, 0], "lat": rows[:, 1], "lon": rows[:, 2], "alt": rows[:, 3],
-            "fit": (a, b), "began": None if began is None else a + b * began}
+            "fit": (a, b), "began": None if began is None else a + b * began,
+            "items": [(a + b * us, seq) for us, seq in items]}
 
 
 def _seq_on(times: np.ndarray, stamps: np.ndarray, seqs: np.ndarray) -> np.ndarray:
@@ -103,14 +117,25 @@ def flight_truth(folder: Path) -> dict:
         inst["seq_t"] = a + b * mine[:, 6] * 1000.0  # time_boot_ms on the log's clock
         inst["seq"] = mine[:, 5]
         tracks.append(inst)
-    began = [tr["began"] for tr in tracks]
-    first_began = min(b for b in began if b is not None) if any(began) else None
+    gate = start_gate(planned.missions[0], planned.frame)
+    # the gate opened when the item after it started (the gate's own announcement comes
+    # when AUTO reaches it, long before)
+    opened = [next((t for t, seq in tr["items"] if gate is not None and seq > gate), None)
+              for tr in tracks]
     try:
         return {"flight": folder.name, **formation_truth(planned, tracks),
-                "began_after_first_ms": [None if b is None else round(1000 * (b - first_began))
-                                         for b in began]}
+                "gate_opened_after_first_ms": _after_first(opened),
+                "began_after_first_ms": _after_first([tr["began"] for tr in tracks])}
     except ValueError as exc:
         raise SystemExit(f"{folder}: {exc}") from None
+
+
+def _after_first(times: list[float | None]) -> list[int | None]:
+    """Milliseconds after the earliest of ``times`` (None stays None)."""
+    known = [t for t in times if t is not None]
+    if not known:
+        return [None] * len(times)
+    return [None if t is None else round(1000 * (t - min(known))) for t in times]
 
 
 def formation_truth(planned, tracks: list[dict]) -> dict:
@@ -165,15 +190,19 @@ def main(argv: list[str] | None = None) -> int:
             if not (folder / "samples.json").exists() else [folder]
     results = []
     for folder in found:
+        if not (folder / "samples.json").exists() or not (folder / "plan").is_dir():
+            print(f"{folder}: not a whole flight (no samples.json or plan/): skipped")
+            continue
         r = flight_truth(folder)
         results.append(r)
         w = r["true_worst_at"]
         print(f"{folder}: on the legs ({r['legs_s']} s) true formation error "
               f"{r['true_rms_m']:.3f} m RMS, {r['true_worst_m']:.3f} m worst ({w['uav']}, "
               f"{w['s_into_legs']} s into the legs, {w['along_m']:+.2f} m along its track, "
-              f"{w['across_m']:+.2f} m across); legs begun, ms after the first: "
-              + ", ".join(f"{name} {ms}" for name, ms in zip(
-                  (f"uav{k + 1}" for k in range(len(r["began_after_first_ms"]))),
+              f"{w['across_m']:+.2f} m across); ms after the first: gate opened "
+              + ", ".join(f"uav{k + 1} {ms}" for k, ms in enumerate(
+                  r["gate_opened_after_first_ms"]))
+              + "; moving " + ", ".join(f"uav{k + 1} {ms}" for k, ms in enumerate(
                   r["began_after_first_ms"])))
     if args.json:
         args.json.write_text(json.dumps(results, indent=1))
