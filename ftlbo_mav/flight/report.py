@@ -32,10 +32,14 @@ AIRBORNE_M = 0.5
 def leg_range(planned: PlannedFlight) -> tuple[int, int]:
     """Mission item numbers of the first and last waypoint legs (towards W_1 .. the goal).
 
-    A leg is named by the item the vehicle flies towards, as MISSION_CURRENT reports it.
+    A leg is named by the item the vehicle flies towards, as MISSION_CURRENT reports it:
+    the first is W_1's, not the item after the start point, which is the start gate (the
+    copters hover there until the start second: counted as a leg, that second or two of
+    hovering thinned the formation figures and lengthened the legs' time, before
+    2026-12-07) or a DO_CHANGE_SPEED.
     """
     nav = [it.seq for it in planned.missions[0][1:] if it.command == CMD_NAV_WAYPOINT]
-    return nav[0] + 1, nav[-1]
+    return (nav[1] if len(nav) > 1 else nav[0] + 1), nav[-1]
 
 
 def summarize(planned: PlannedFlight, times, positions, seqs) -> dict:
