@@ -28,8 +28,9 @@ MissionItemProtocol.cpp, GCS_Common.cpp), and what follows here:
   *unconfirmed* and the read-back decides.
 - It stores an item that comes before it asked for it, as long as its seq is the one it
   waits for (MissionItemProtocol::handle_mission_item checks the seq, not a request),
-  and asks for the next at once. So an upload to ArduPilot sends :data:`SEND_AHEAD`
-  items past the one asked for: a window of items each round trip, not one.
+  and asks for the next at once. So an upload to ArduPilot sends a few
+  items past the one asked for (:data:`SEND_AHEAD_ON_LINK`): a window of items each
+  round trip, not one.
 """
 
 from __future__ import annotations

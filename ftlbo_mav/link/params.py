@@ -72,7 +72,9 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
     ``timing.min_resend_s``), as the mission protocol resends; a name not answered within
     ``timing.budget_s`` of its first request is None. The round trip is learnt from the
     answers as they come (the median of the last few requests sent once), as a mission
-    transfer learns it: before the first, a resend waits ``timing.first_resend_s``. Through
+    transfer learns it: before the first, a resend waits ``timing.first_resend_s``. An
+    answer to a request sent once that overtakes an earlier one's has that one asked
+    again at once (ArduPilot answers in the order asked, the link keeps the order). Through
     the good-day radio a lost request or answer cost a whole ``timeout_s`` before (the
     copters' 33 flight parameters read before an upload: 3.4-5.1 s on the emulator).
 
