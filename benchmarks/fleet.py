@@ -66,8 +66,9 @@ TUNING = ("PSC_VELXY_P", "PSC_VELXY_I", "PSC_VELXY_D", "PSC_POSXY_P", "ANGLE_MAX
 
 
 @contextlib.contextmanager
-def copters(homes, fleet, speedup: float):
-    """Started copters, one per ``(release, boot parameters)``; yields their URLs."""
+def copters(homes, fleet, speedup: float, workdir: Path | None = None):
+    """Started copters, one per ``(release, boot parameters)``; yields their URLs.
+    ``workdir``: SITL's instance folders (their DataFlash logs) there, kept."""
     sitl = os.environ.get("ARDUPILOT_SITL")
     if sitl:
         from sitl import SitlSwarm
@@ -75,7 +76,7 @@ def copters(homes, fleet, speedup: float):
         later = os.environ.get("ARDUPILOT_SITL_4_6")
         if any(r.startswith("4.6") for r, _v in fleet) and not later:
             raise SystemExit("a 4.6 copter on SITL needs ARDUPILOT_SITL_4_6")
-        with SitlSwarm(homes=homes, speedup=speedup,
+        with SitlSwarm(homes=homes, speedup=speedup, workdir=workdir,
                        instance_params=[values for _r, values in fleet],
                        binaries=[later if r.startswith("4.6") else None
                                  for r, _v in fleet]) as swarm:
@@ -112,7 +113,8 @@ def one(scenario: Path, name: str, speedup: float, keep: Path | None = None,
     folder = Path(tempfile.mkdtemp(prefix="ftlbo-fleet-")) / "plan"
     shutil.copytree(scenario.with_suffix(""), folder)
     homes = scenario_homes(load_scenario(scenario))
-    with copters(homes, FLEETS[name], speedup) as (urls, backend):
+    keep_dir = None if keep is None else keep / f"{scenario.stem}-{name}"
+    with copters(homes, FLEETS[name], speedup, keep_dir) as (urls, backend):
         before = tuning(urls)
         args = ["--sysid", f"1..{len(urls)}", "--connect", " ".join(urls)]
         up = CliRunner().invoke(cli, ["upload", str(folder), *args])
@@ -133,8 +135,9 @@ def one(scenario: Path, name: str, speedup: float, keep: Path | None = None,
                  float(load_planned_flight(folder).predicted_clearance.min()))
     summary_path = folder / "flight" / "summary.json"
     s = json.loads(summary_path.read_text()) if summary_path.exists() else {}
-    if keep is not None:  # the flight's own records, to look at where an error came from
-        shutil.copytree(folder, keep / f"{scenario.stem}-{name}", dirs_exist_ok=True)
+    if keep_dir is not None:  # the flight's own records, to look at where an error came from
+        # (the plan and its flight/ in plan/, SITL's logs in instanceN/: python -m sitl.truth)
+        shutil.copytree(folder, keep_dir / "plan", dirs_exist_ok=True)
     shutil.rmtree(folder.parent, ignore_errors=True)
     return {"scenario": scenario.stem, "fleet": name, "backend": backend, "plan": plan_for,
             "upload_exit": up.exit_code, "fly_exit": flown.exit_code,
@@ -156,7 +159,9 @@ def main() -> int:
                     help="fly without the formation keeper (fly --no-keeper): how the "
                     "copters drift apart on their own")
     ap.add_argument("--keep", type=Path, default=None,
-                    help="copy each flight's plan folder (records included) under this folder")
+                    help="keep each flight under this folder: its plan folder (records "
+                    "included) in NAME/plan, on SITL its copters' logs in NAME/instanceN "
+                    "(python -m sitl.truth NAME)")
     args = ap.parse_args()
     rows = []
     print("| scenario | fleet | back end | plan made for | upload / fly exit | tuning written "

@@ -2,8 +2,9 @@
 the truth, not by the telemetry that reached the ground station.
 
 ``python -m sitl.truth DIR [DIR ...] [--json OUT]`` reads each flight folder that
-``benchmarks/flight.py --keep DIR`` kept on SITL (``DIR/runN-STRATEGY``: ``plan/``,
-``samples.json`` and one ``instanceN/logs/*.BIN`` per copter) and prints, per flight,
+``benchmarks/flight.py --keep DIR`` or ``benchmarks/fleet.py --keep DIR`` kept on SITL
+(a folder per flight: ``plan/`` and one ``instanceN/logs/*.BIN`` per copter) and prints,
+per flight,
 the formation error on the legs by the true positions, where the true worst was (which
 copter, how many seconds into the legs, along or across its track), and for each copter
 when its start gate opened and when it began to move, in milliseconds after the first.
@@ -17,8 +18,8 @@ when its start gate opened and when it began to move, in milliseconds after the 
   clock (speedup 1). The reported positions are put on one clock from their arrival
   times (``flight/record.py``): through a radio with tens of milliseconds of jitter,
   which at 5 m/s is centimetres to decimetres of apparent formation error.
-- **The legs**: the mission item each copter flew, from ``samples.json`` (its
-  ``time_boot_ms`` is the log's ``TimeUS`` clock), as ``flight/report.py`` counts them.
+- **The legs**: the mission item each copter flew, from its own log (ArduCopter's "Mission:
+  N ..." as each item starts), as ``flight/report.py`` counts them.
 - **The start**: a copter's gate opened when ArduCopter started the item after it (its
   ``MSG`` "Mission: N ..."); it began to move when ``SIM2`` (logged at the simulation's
   rate) first shows it 0.5 m/s across the ground, 2 m up. On fifteen flights of
@@ -90,7 +91,7 @@ def read_instance(bin_path: Path) -> dict:
 
 def _seq_on(times: np.ndarray, stamps: np.ndarray, seqs: np.ndarray) -> np.ndarray:
     """The mission item at each of ``times`` (the last one reported at or before it; -1
-    before the first report and outside AUTO, which ``samples.json`` leaves out)."""
+    before the first and after a silence of over 2 s)."""
     order = np.argsort(stamps, kind="stable")
     stamps, seqs = stamps[order], seqs[order]
     idx = np.searchsorted(stamps, times, side="right") - 1
@@ -103,19 +104,17 @@ def _seq_on(times: np.ndarray, stamps: np.ndarray, seqs: np.ndarray) -> np.ndarr
 def flight_truth(folder: Path) -> dict:
     """The formation on the legs of the flight kept in ``folder``, by the truth."""
     planned = load_planned_flight(folder / "plan")
-    kept = json.loads((folder / "samples.json").read_text())
-    rows = np.array([[r[0], r[1], r[2], r[3], r[4], r[5],
-                      np.nan if r[6] is None else r[6]] for r in kept["rows"]], float)
     tracks = []
     for k in range(planned.count):
         logs = sorted((folder / f"instance{k}" / "logs").glob("*.BIN"))
         if not logs:
             raise SystemExit(f"{folder}: no DataFlash log for instance{k}")
         inst = read_instance(logs[-1])
-        mine = rows[rows[:, 1] == k + 1]
-        a, b = inst["fit"]
-        inst["seq_t"] = a + b * mine[:, 6] * 1000.0  # time_boot_ms on the log's clock
-        inst["seq"] = mine[:, 5]
+        # the item it flew towards: from its own announcements, as each item started
+        inst["seq_t"] = np.array([t for t, _seq in inst["items"]], float)
+        inst["seq"] = np.array([seq for _t, seq in inst["items"]], float)
+        if not len(inst["seq"]):
+            raise SystemExit(f"{folder}: instance{k}'s log says no mission item started")
         tracks.append(inst)
     gate = start_gate(planned.missions[0], planned.frame)
     # the gate opened when the item after it started (the gate's own announcement comes
@@ -186,12 +185,12 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     found = []
     for folder in args.folders:
-        found += sorted(f for f in folder.glob("run*-*") if f.is_dir()) \
-            if not (folder / "samples.json").exists() else [folder]
+        found += sorted(f for f in folder.iterdir() if (f / "plan").is_dir()) \
+            if not (folder / "plan").is_dir() else [folder]
     results = []
     for folder in found:
-        if not (folder / "samples.json").exists() or not (folder / "plan").is_dir():
-            print(f"{folder}: not a whole flight (no samples.json or plan/): skipped")
+        if not (folder / "plan").is_dir() or not (folder / "instance0").is_dir():
+            print(f"{folder}: not a whole flight (no plan/ or instance0/): skipped")
             continue
         r = flight_truth(folder)
         results.append(r)
