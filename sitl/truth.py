@@ -30,6 +30,7 @@ when its start gate opened and when it began to move, in milliseconds after the 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import math
 import re
@@ -47,6 +48,11 @@ from ftlbo_mav.flight.start import start_gate
 RATE_HZ = 20.0
 """The common grid both measures are resampled on."""
 GPS_WEEK_S = 7 * 24 * 3600.0
+GPS_DISAGREE_S = 0.1
+"""Logs whose GPS times differ by more than this, against the ground's clock, are put on
+the ground's (:func:`_one_clock`). The ground's places a copter's boot clock within 11 ms
+through TCP and 40 ms through the rough-day radio (flights of one release, against their
+GPS times); the releases' GPS times differ by 0.17 s."""
 
 
 MOVING_M_S = 0.5
@@ -82,11 +88,31 @@ def read_instance(bin_path: Path) -> dict:
     if len(sim) < 2 or len(gps) < 2:
         raise SystemExit(f"{bin_path}: no SIM or GPS messages (a SITL DataFlash log?)")
     us, g = np.array(gps, float).T
-    b, a = np.polyfit(us, g, 1)
+    b, a = np.polyfit(us / 1e6, g, 1)
     rows = np.array(sim, float)
-    return {"t": a + b * rows[:, 0], "lat": rows[:, 1], "lon": rows[:, 2], "alt": rows[:, 3],
-            "fit": (a, b), "began": None if began is None else a + b * began,
-            "items": [(a + b * us, seq) for us, seq in items]}
+    return {"s": rows[:, 0] / 1e6, "lat": rows[:, 1], "lon": rows[:, 2], "alt": rows[:, 3],
+            "gps_fit": (a, b), "began_s": None if began is None else began / 1e6,
+            "items_s": [(us / 1e6, seq) for us, seq in items]}
+
+
+def ground_offsets(folder: Path) -> dict[int, float] | None:
+    """Per system id, the ground's clock less the copter's boot clock, from the least
+    delayed of the positions the ground station received (the kept ``samples.json``, or
+    ``plan/flight/flight.csv``); None when neither was kept."""
+    pairs: list[tuple[int, float]] = []
+    if (folder / "samples.json").exists():
+        rows = json.loads((folder / "samples.json").read_text())["rows"]
+        pairs = [(int(r[1]), r[0] - r[6] / 1000.0) for r in rows if r[6] is not None]
+    elif (folder / "plan" / "flight" / "flight.csv").exists():
+        with open(folder / "plan" / "flight" / "flight.csv", newline="") as f:
+            pairs = [(int(r["sysid"]), float(r["t"]) - float(r["boot_s"]))
+                     for r in csv.DictReader(f) if r.get("boot_s")]
+    if not pairs:
+        return None
+    out: dict[int, float] = {}
+    for sysid, offset in pairs:
+        out[sysid] = min(out.get(sysid, offset), offset)
+    return out
 
 
 def _seq_on(times: np.ndarray, stamps: np.ndarray, seqs: np.ndarray) -> np.ndarray:
@@ -109,24 +135,47 @@ def flight_truth(folder: Path) -> dict:
         logs = sorted((folder / f"instance{k}" / "logs").glob("*.BIN"))
         if not logs:
             raise SystemExit(f"{folder}: no DataFlash log for instance{k}")
-        inst = read_instance(logs[-1])
+        tracks.append(read_instance(logs[-1]))
+    clock = _one_clock(tracks, ground_offsets(folder))
+    for k, inst in enumerate(tracks):
+        at = clock["at"][k]
+        inst["t"] = at(inst["s"])
+        inst["began"] = None if inst["began_s"] is None else float(at(inst["began_s"]))
+        inst["items"] = [(float(at(s_)), seq) for s_, seq in inst["items_s"]]
         # the item it flew towards: from its own announcements, as each item started
         inst["seq_t"] = np.array([t for t, _seq in inst["items"]], float)
         inst["seq"] = np.array([seq for _t, seq in inst["items"]], float)
         if not len(inst["seq"]):
             raise SystemExit(f"{folder}: instance{k}'s log says no mission item started")
-        tracks.append(inst)
     gate = start_gate(planned.missions[0], planned.frame)
     # the gate opened when the item after it started (the gate's own announcement comes
     # when AUTO reaches it, long before)
     opened = [next((t for t, seq in tr["items"] if gate is not None and seq > gate), None)
               for tr in tracks]
     try:
-        return {"flight": folder.name, **formation_truth(planned, tracks),
+        return {"flight": folder.name, "clock": clock["name"],
+                **formation_truth(planned, tracks),
                 "gate_opened_after_first_ms": _after_first(opened),
                 "began_after_first_ms": _after_first([tr["began"] for tr in tracks])}
     except ValueError as exc:
         raise SystemExit(f"{folder}: {exc}") from None
+
+
+def _one_clock(tracks: list[dict], ground: dict[int, float] | None) -> dict:
+    """The clock every copter's log is put on: GPS time (each log's own GPS messages), or
+    the ground's (each copter's boot clock as its received reports place it) where their
+    GPS times disagree: ArduCopter 4.6.3 SITL's GPS time is 0.17 s behind 4.5.6's on the
+    same machine (three mixed flights of 2026-12-07: their boot clocks within 11 ms of
+    each other on the ground's, GPS at the same boot time 167-170 ms apart)."""
+    gps = [tr["gps_fit"] for tr in tracks]
+    if ground is not None and all(k + 1 in ground for k in range(len(tracks))):
+        apart = [a - ground[k + 1] for k, (a, _b) in enumerate(gps)]
+        if max(apart) - min(apart) > GPS_DISAGREE_S:
+            return {"name": f"the ground's (their GPS times {1000 * (max(apart) - min(apart)):.0f}"
+                            " ms apart)",
+                    "at": [lambda s_, o=ground[k + 1]: np.asarray(s_) + o
+                           for k in range(len(tracks))]}
+    return {"name": "GPS", "at": [lambda s_, a=a, b=b: a + b * np.asarray(s_) for a, b in gps]}
 
 
 def _after_first(times: list[float | None]) -> list[int | None]:
@@ -195,7 +244,8 @@ def main(argv: list[str] | None = None) -> int:
         r = flight_truth(folder)
         results.append(r)
         w = r["true_worst_at"]
-        print(f"{folder}: on the legs ({r['legs_s']} s) true formation error "
+        print(f"{folder}: on {r['clock']} clock, on the legs ({r['legs_s']} s) true "
+              "formation error "
               f"{r['true_rms_m']:.3f} m RMS, {r['true_worst_m']:.3f} m worst ({w['uav']}, "
               f"{w['s_into_legs']} s into the legs, {w['along_m']:+.2f} m along its track, "
               f"{w['across_m']:+.2f} m across); ms after the first: gate opened "
