@@ -109,6 +109,15 @@ LATE_AFTER_S = 1.5
 (MISSION_CURRENT past the gate, at 2 Hz); one that does not missed the time."""
 
 
+MIN_TRIM_S = 0.001
+"""A trim's least (a NAV_DELAY of 0 s would be one of a time of day)."""
+MAX_TRIM_S = CLOCKS_AGREE_S
+TRIM_MAX_JITTER_S = 0.14
+"""No trim on a link whose reports' delays vary more (the 90th percentile beyond the least
+delayed, :meth:`~.status.Status.jitter_s`): the keeper's own bound, the good-day radio's
+0.07-0.125 s under it, the rough day's 0.148-0.48 s over (docs/flight.md)."""
+
+
 MAX_LEAD_S = 45
 """The gate gives the second of the minute only (a gate left behind by a flight that could
 not restore it holds a copter flown by another ground station a minute at most), so the
@@ -122,6 +131,9 @@ class TimedStart:
 
     utc_s: int
     ground_t: float
+    # per vehicle, how long after its clock reads ``utc_s`` it begins (its seconds): its
+    # clock is ahead of the latest one's by that much (ardupilot/rtc.py)
+    trims_s: tuple[float, ...] = ()
 
     @property
     def hms(self) -> tuple[int, int, int]:
@@ -150,42 +162,106 @@ def choose_start(vehicles: Sequence[FlightVehicle], *, rtt_s: float, now: float
     utc_s = math.ceil(max(utc) + lead)
     ground = [v.status.clock_offset_s + (utc_s - v.status.utc_offset_s) / v.status.clock_rate
               for v in vehicles]
-    return TimedStart(utc_s, float(np.mean(ground)))
+    trims = _trims(vehicles, utc_s)
+    return TimedStart(utc_s, float(np.mean(ground)) if trims is None else trims[0],
+                      () if trims is None else trims[1])
+
+
+def _trims(vehicles: Sequence[FlightVehicle], utc_s: int
+           ) -> tuple[float, tuple[float, ...]] | None:
+    """When the last of them begins at ``utc_s`` of GPS time, on the ground's clock, and
+    how long each is to be held after its own clock reads it (its seconds): when each one's
+    clock reads it on the ground's clock, from its clock against its boot clock
+    (SYSTEM_TIME sends both at once) and its boot clock against the ground's (the least
+    delayed of its last minute of reports, :meth:`~.status.Status.clock_line`). None on a
+    link whose delays vary more than ``TRIM_MAX_JITTER_S``: the least delayed reports of
+    one copter and another then differ by tens of milliseconds, as much as the clocks
+    (SITL through the rough-day radio: a copter held 55 ms that began with the others),
+    or before a minute of reports has the line."""
+    lines = [v.status.clock_line() for v in vehicles]
+    jitter = [v.status.jitter_s() for v in vehicles]
+    if any(x is None for x in lines) or any(j is None or j > TRIM_MAX_JITTER_S
+                                             for j in jitter):
+        return None
+    ground = [offset + (utc_s - v.status.utc_offset_s) / rate
+              for v, (offset, rate) in zip(vehicles, lines)]
+    latest = max(ground)
+    return latest, tuple(min((latest - g) * rate, MAX_TRIM_S)
+                         for g, (_o, rate) in zip(ground, lines))
+
+
+def trim_at(mission, frame: LocalFrame) -> int | None:
+    """The seq before the start gate when the start can be trimmed there: the start
+    point's waypoint, which AUTO skips (:func:`first_leg`), so that ``fly`` can write the
+    gate into it and a trim into the gate's place (:func:`_gate_items`); else None."""
+    gate = start_gate(mission, frame)
+    before = None if gate is None else next((it for it in mission if it.seq == gate - 1), None)
+    return gate - 1 if before is not None and before.command == CMD_NAV_WAYPOINT else None
+
+
+def _gate_items(planned: PlannedFlight, i: int, seq: int, start: TimedStart | None,
+                trimmed: bool) -> list:
+    """What vehicle ``i``'s gate (item ``seq``) is written as. Untrimmed: the gate with
+    ``start``'s second (None: the plan's placeholder). Trimmed: the gate one item earlier,
+    in the start point's place, and in its own a relative NAV_DELAY of the vehicle's trim
+    (ArduPilot times it on its own clock to the loop: ModeAuto::do_nav_delay, seconds > 0),
+    which puts back what its clock of the day is ahead of the latest one's; None: both
+    back as planned."""
+    mission = planned.missions[i]
+    planned_gate = next(it for it in mission if it.seq == seq)
+    if start is None:
+        return ([next(it for it in mission if it.seq == seq - 1)] if trimmed else []) + [
+            planned_gate]
+    fields = items.start_gate(start.hms)
+    gate = replace(planned_gate, **{k: fields[k] for k in ("param1", "param2", "param3",
+                                                           "param4")})
+    if not trimmed:
+        return [gate]
+    trim = max(start.trims_s[i], MIN_TRIM_S) if start.trims_s else MIN_TRIM_S
+    return [replace(gate, seq=seq - 1),
+            replace(planned_gate, param1=round(trim, 3), param2=-1.0, param3=-1.0,
+                    param4=-1.0)]
 
 
 def _write_gate(planned: PlannedFlight, vehicle: FlightVehicle, i: int, seq: int,
-                start: TimedStart | None, timing: Timing) -> None:
-    """Vehicle ``i``'s start gate (item ``seq``) set to ``start`` (None: back to the plan's
-    placeholder), written in place and read back."""
-    fields = items.start_gate(None if start is None else start.hms)
-    planned_gate = next(it for it in planned.missions[i] if it.seq == seq)
-    gate = replace(planned_gate, **{k: fields[k] for k in ("param1", "param2", "param3",
-                                                           "param4")})
+                start: TimedStart | None, timing: Timing, trimmed: bool = False) -> None:
+    """Vehicle ``i``'s start gate (item ``seq``) set to ``start`` (None: back to the plan),
+    trimmed or not (:func:`_gate_items`), written in place and read back."""
+    written = _gate_items(planned, i, seq, start, trimmed)
     try:
         with vehicle.link.channel(vehicle.sysid) as channel:
-            write_items(channel, [gate], timing=timing)
-            (back,) = read_items(channel, [seq], timing=timing)
+            write_items(channel, written, timing=timing)
+            back = read_items(channel, [it.seq for it in written], timing=timing)
     except MissionTransferError as exc:
         raise FlightError(vehicle.name, vehicle.sysid, "start time", str(exc)) from exc
-    if differences := item_differences(gate, back):
-        raise FlightError(vehicle.name, vehicle.sysid, "start time",
-                          f"item {seq} read back as {'; '.join(differences)}")
+    for it, got in zip(written, back):
+        if differences := item_differences(it, got):
+            raise FlightError(vehicle.name, vehicle.sysid, "start time",
+                              f"item {it.seq} read back as {'; '.join(differences)}")
 
 
 def _write_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], gates: list,
-                 start: TimedStart | None, timing: Timing) -> None:
+                 start: TimedStart | None, timing: Timing, trimmed: bool = False) -> None:
     """Every vehicle's start gate set to ``start`` at once (:func:`_write_gate`)."""
-    concurrently(lambda i: _write_gate(planned, vehicles[i], i, gates[i], start, timing),
+    concurrently(lambda i: _write_gate(planned, vehicles[i], i, gates[i], start, timing,
+                                       trimmed),
                  list(range(len(vehicles))))
 
 
 def gate_as_onboard(mission, onboard, frame: LocalFrame) -> list:
     """``mission`` with its start gate's time as ``onboard`` holds it: a time a flight
-    wrote and could not take back is no difference (the next flight writes its own)."""
+    wrote and could not take back is no difference (the next flight writes its own), nor
+    a trimmed start left so (the gate in the start point's place, a trim in its own)."""
     seq = start_gate(mission, frame)
     there = next((it for it in onboard if it.seq == seq), None)
-    if seq is None or there is None or there.command != CMD_NAV_DELAY or there.param1 > 0:
+    if seq is None or there is None or there.command != CMD_NAV_DELAY:
         return list(mission)
+    before = next((it for it in onboard if it.seq == seq - 1), None)
+    if there.param1 > 0:  # a trim: the gate went one item earlier
+        if before is None or before.command != CMD_NAV_DELAY or trim_at(mission, frame) is None:
+            return list(mission)
+        return [before if it.seq == seq - 1 else there if it.seq == seq else it
+                for it in mission]
     return [replace(it, param2=there.param2, param3=there.param3, param4=there.param4)
             if it.seq == seq else it for it in mission]
 
@@ -197,11 +273,13 @@ def restore_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     time) after a flight, so that the mission flies in any ground station as planned;
     the vehicles it could not reach, with why."""
     gates = [start_gate(m, planned.frame) for m in planned.missions]
+    trims = [trim_at(m, planned.frame) for m in planned.missions]
     failed = []
 
     def one(i: int) -> None:
-        try:
-            _write_gate(planned, vehicles[i], i, gates[i], None, timing)
+        try:  # both items back where a start may have been trimmed (harmless if not)
+            _write_gate(planned, vehicles[i], i, gates[i], None, timing,
+                        trimmed=trims[i] is not None)
         except (FtlboError, OSError) as exc:  # best effort: said, never raised
             failed.append(f"{vehicles[i].name}: {exc}")
 
@@ -224,19 +302,31 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     5 m/s for the whole flight (SITL behind the rough-day radio without the keeper: 0.37-
     0.40 m worst). A vehicle whose legs have not begun ``LATE_AFTER_S`` after that time
     missed it (its AUTO came late: ArduCopter would wait for that time the next day) and
-    is started at once. Otherwise the legs begin as the burst arrives."""
+    is started at once. Otherwise the legs begin as the burst arrives.
+
+    Each copter's gate opens by its own clock of the day, which ArduPilot sets once, from
+    its first GPS fix, tens of milliseconds behind GPS time on some (ardupilot/rtc.py;
+    SITL: legs begun 0-98 ms apart, a copter 0.5 m behind its slot for the flight). Where
+    every mission has its start point's waypoint before the gate (AUTO skips it), the
+    start is trimmed: the gate goes in that item, and in the gate's a relative NAV_DELAY
+    holds each copter for what its clock is ahead of the latest one's (the clocks
+    measured by :func:`choose_start`), so that all begin together."""
     starts = [first_leg(m, planned.frame) for m in planned.missions]
     gates = [_gate_at(m, seq) for m, (seq, _speeds) in zip(planned.missions, starts)]
+    trimmed = all(g is not None for g in gates) and all(
+        trim_at(m, planned.frame) is not None for m in planned.missions)
+    # trimmed, AUTO starts at the gate's new place (the start point's, skipped else)
+    current = [g - 1 if trimmed else seq for g, (seq, _s) in zip(gates, starts)]
 
     t = clock.monotonic()
-    concurrently(lambda pair: pair[0].set_current(pair[1][0]), list(zip(vehicles, starts)))
+    concurrently(lambda pair: pair[0].set_current(pair[1]), list(zip(vehicles, current)))
     rtt = clock.monotonic() - t
     if aborted(vehicles):
         raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     # (a lost acknowledgement makes that seconds: a first guess, bounded; a start time
     # written too late is chosen again)
     timed = _timed_start(planned, vehicles, gates, rtt_s=min(rtt, FIRST_RTT_MAX_S),
-                         timing=timing, say=say)
+                         timing=timing, say=say, trimmed=trimmed)
     if timed is None and all(g is not None for g in gates):
         # the radio's timing: AUTO starts past the gates (which may hold a time)
         concurrently(lambda pair: pair[0].set_current(pair[1] + 1), list(zip(vehicles, gates)))
@@ -254,13 +344,13 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     concurrently(cruise, list(zip(vehicles, starts)))
     if timed is None:
         return t
-    _start_late_ones(vehicles, gates, timed, say=say, poll=poll)
+    _start_late_ones(vehicles, gates, timed, say=say, poll=poll, trimmed=trimmed)
     return timed.ground_t
 
 
 def _timed_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
                  gates: list[int | None], *, rtt_s: float, timing: Timing,
-                 say: Callable[[str], None]) -> TimedStart | None:
+                 say: Callable[[str], None], trimmed: bool = False) -> TimedStart | None:
     """Choose the start time and write it to every gate, again (up to
     ``START_ATTEMPTS`` times, further ahead) when the writing took so long that the AUTOs
     might not arrive before it; None: no timed start (said why)."""
@@ -272,12 +362,15 @@ def _timed_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
             say(f"starting on the radio's timing, not at one GPS time: {chosen}")
             return None
         t = clock.monotonic()
-        _write_gates(planned, vehicles, gates, chosen, timing)
+        _write_gates(planned, vehicles, gates, chosen, timing, trimmed)
         took = clock.monotonic() - t
         left = chosen.ground_t - clock.monotonic()
         if left >= max(START_LEAD_S / 2, took / 2):  # AUTO: one way, a resend to spare
+            held = [f"{v.name} {1000 * t:.0f} ms" for v, t in zip(vehicles, chosen.trims_s)
+                    if t >= 0.005]
             say(f"the legs begin at second {chosen.hms[2]:02d} of the minute, GPS time "
-                f"(in {left:.1f} s)")
+                f"(in {left:.1f} s)" + (f"; held for their clocks: {', '.join(held)}"
+                                        if trimmed and held else ""))
             return chosen
         rtt_s = max(rtt_s, took / 3)  # the write and read-back: three round trips
         say(f"the start time took {took:.1f} s to write, {left:.1f} s before it: "
@@ -288,13 +381,16 @@ def _timed_start(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
 
 
 def _start_late_ones(vehicles: Sequence[FlightVehicle], gates: list[int], start: TimedStart,
-                     *, say: Callable[[str], None], poll: Callable[[], None]) -> None:
-    """Wait until every vehicle's legs have begun (MISSION_CURRENT past its gate), at most
-    ``LATE_AFTER_S`` after the start; a vehicle still at its gate then is started at once
-    (its current item moved past the gate)."""
+                     *, say: Callable[[str], None], poll: Callable[[], None],
+                     trimmed: bool = False) -> None:
+    """Wait until every vehicle's legs have begun (MISSION_CURRENT past its gate, and its
+    trim), at most ``LATE_AFTER_S`` after the start; a vehicle still at its gate then is
+    started at once (its current item moved past the gate)."""
+    first = 1 if trimmed else 0
     waiting = wait_while(vehicles, lambda: [
         i for i, v in enumerate(vehicles)
-        if v.status.seq == gates[i] and v.status.ground_speed_m_s < MOVING_M_S],
+        if gates[i] - first <= v.status.seq <= gates[i]
+        and v.status.ground_speed_m_s < MOVING_M_S],
         start.ground_t + LATE_AFTER_S, poll, step_s=0.05)
     for i in waiting:
         v = vehicles[i]

@@ -138,10 +138,12 @@ class FlightVehicle:
                 if s.clock_offset_s is None or boot_s < s.position_boot_s:
                     s._rate_since = (now, boot_s)  # first report, or the vehicle rebooted
                     s._recent.clear()
+                    s._clock_pairs.clear()
                 elif s._rate_since is not None and now - s._rate_since[0] >= CLOCK_RATE_AFTER_S:
                     s.clock_rate = (boot_s - s._rate_since[1]) / (now - s._rate_since[0])
                 # the least delayed of the last few (over seconds the rate's error is nil)
                 s._recent.append((now, boot_s))
+                s._clock_pairs.append((now, boot_s))
                 s.clock_offset_s = min(t - b / s.clock_rate for t, b in s._recent)
                 # how much later than the least delayed this one came (its seconds)
                 s.delays.append((now - s.clock_offset_s) * s.clock_rate - boot_s)

@@ -20,6 +20,7 @@ from ftlbo_mav.cli import main
 from ftlbo_mav.flight.fly import Fleet, FlyOptions, abort, start_together, take_off
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.preflight import preflight
+from ftlbo_mav.flight.start import start_gate
 from ftlbo_mav.link.discovery import discover
 from ftlbo_mav.link.endpoints import open_links
 from ftlbo_mav.link.params import read_params, set_params
@@ -341,3 +342,33 @@ def test_abort_with_no_flight_running_opens_the_links_itself(plan_dir):
     assert result.exit_code == 0, result.output
     assert "through the running flight" not in result.stderr
     assert result.stdout.count("LAND") == 3
+
+
+def test_copters_whose_clocks_lag_begin_their_legs_together(plan_dir):
+    """Clocks of the day 0, 70 and 30 ms behind GPS time (ardupilot/rtc.py: ArduPilot
+    sets it once from its first fix; SITL's copters began their gated legs up to 98 ms
+    apart): the start trimmed for each, all three leave their gates in the same 20 ms
+    step of the emulator (untrimmed: 60 ms apart, the steps of their lags)."""
+    from dataclasses import replace
+
+    lags = (0.0, 0.07, 0.03)
+    options = [replace(OPTIONS, limits=replace(OPTIONS.limits, rtc_lag_s=lag)) for lag in lags]
+    planned = load_planned_flight(plan_dir)
+    with vehicles(3, homes=HOMES, virtual=True, options=options) as fleet:
+        if fleet.sim is None:
+            pytest.skip("the emulator's clocks")
+        left: dict[int, float] = {}
+        gate = start_gate(planned.missions[0], planned.frame)  # the trim's place
+        for i, r in enumerate(fleet.sim.runners):
+            def tick(r=r, i=i, step=r.tick):
+                out = step()
+                if i not in left and r.vehicle.mission_current().seq > gate:
+                    left[i] = r.clock()
+                return out
+            r.tick = tick
+        _upload(plan_dir, fleet.urls)
+        result = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                           "--control-port", "0", "--no-keeper",
+                                           "--connect", " ".join(fleet.urls)])
+        assert result.exit_code == 0, result.output
+    assert len(left) == 3 and max(left.values()) - min(left.values()) <= 0.021, left
