@@ -29,7 +29,7 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
 
 from ..ardupilot.commands import INSTANT_BOOT, BootTimeline
-from ..ardupilot.copters import release_for
+from ..ardupilot.copters import SITL_CLOCK_BEHIND_S, release_for
 from ..ardupilot.fence import (
     FENCE_CAPACITY,
     MISSION_TYPE_FENCE,
@@ -169,7 +169,9 @@ class Vehicle:
                                    options=AutopilotOptions(boot=self.boot, limits=limits))
         self.autopilot.home_alt_m = alt
         self.utc_offset_s = time.time() - boot_time if utc_offset_s is None else utc_offset_s
-        self.autopilot.utc_offset_s = self.utc_offset_s  # flies only after its GPS fix
+        # its clock of the day (AP_RTC, from its GPS), as its release's SITL keeps it:
+        # start gates and SYSTEM_TIME go by it; flies only after its GPS fix
+        self.autopilot.utc_offset_s = self.utc_offset_s - SITL_CLOCK_BEHIND_S.get(release, 0.0)
         self.gps = GpsError(options.gps, self.autopilot.params, lat_deg=lat)
         self._ground_truth: np.ndarray | None = np.zeros(2)  # placed at its home, truly
         self._home_memo: tuple | None = None  # (home_en, current_home()) last converted
@@ -538,7 +540,7 @@ class Vehicle:
             return self.sim_state(now)
         if msgid == R.MAVLINK_MSG_ID_SYSTEM_TIME:
             # GCS_MAVLINK::send_system_time: AP_RTC's UTC (0 until its GPS gave a time)
-            utc_us = int((now + self.utc_offset_s) * 1e6) if fix else 0
+            utc_us = int((now + self.autopilot.utc_offset_s) * 1e6) if fix else 0
             return R.MAVLink_system_time_message(
                 utc_us, int((now - self.boot_time) * 1000) & 0xFFFFFFFF)
         if msgid == R.MAVLINK_MSG_ID_AUTOPILOT_VERSION:
