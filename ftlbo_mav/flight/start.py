@@ -132,7 +132,7 @@ class TimedStart:
     utc_s: int
     ground_t: float
     # per vehicle, how long after its clock reads ``utc_s`` it begins (its seconds): its
-    # clock is ahead of the latest one's by that much (ardupilot/rtc.py)
+    # clock is ahead of the latest one's by that much (:func:`start_together`)
     trims_s: tuple[float, ...] = ()
 
     @property
@@ -305,8 +305,9 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     is started at once. Otherwise the legs begin as the burst arrives.
 
     Each copter's gate opens by its own clock of the day, which ArduPilot sets once, from
-    its first GPS fix, tens of milliseconds behind GPS time on some (ardupilot/rtc.py;
-    SITL: legs begun 0-98 ms apart, a copter 0.5 m behind its slot for the flight). Where
+    its first GPS fix (AP_RTC.cpp), and copters' clocks need not agree: ArduCopter 4.6.3
+    SITL's is 0.17 s behind 4.5.6's (ardupilot/copters.py ``SITL_CLOCK_BEHIND_S``: in a
+    fleet of both its gate opened 163-170 ms late, 0.85 m behind its slot at 5 m/s). Where
     every mission has its start point's waypoint before the gate (AUTO skips it), the
     start is trimmed: the gate goes in that item, and in the gate's a relative NAV_DELAY
     holds each copter for what its clock is ahead of the latest one's (the clocks
