@@ -112,24 +112,36 @@ def escape(here: np.ndarray, reaches: Sequence[KeepOut], planned: PlannedFlight,
     through every layer as it lands: a way home that climbs or descends to its layer
     inside that reach could meet it there (the emulator, a 3 m GPS jump: 1.5 m)."""
     here = np.asarray(here, float)
-    inside = [k for k in reaches if float(np.hypot(*(here[:2] - k.centre))) < k.radius_m]
-    if not inside:
-        return None
     apart = planned.min_separation_m + planned.navigation.pair_m
     kept = planned.clearance_m + planned.navigation.horizontal_m
-    for q in _ring(inside[0], here[:2]):
-        if any(float(np.hypot(*(q - r.centre))) < r.radius_m for r in reaches):
-            continue
-        if len(others):  # never closer to one than it is already, if that is nearer
-            near = np.array([np.asarray(o, float)[:2] for o in others])
-            floor = np.minimum(apart, np.hypot(*(near - here[:2]).T) - 1e-6)
-            if np.any(segment_distance(near, here[:2], q) < floor):
-                continue
-        if len(planned.centres) and float((segment_distance(
-                np.asarray(planned.centres)[:, :2], here[:2], q) - planned.radii).min()) < kept:
-            continue
-        return np.array([*q, _escape_height(here[2], inside[0], planned)])
-    return None
+    near = np.array([np.asarray(o, float)[:2] for o in others]).reshape(-1, 2)
+    # never closer to one than it is already, if that is nearer
+    floor = np.minimum(apart, np.hypot(*(near - here[:2]).T) - 1e-6)
+
+    def fits(q: np.ndarray) -> bool:
+        if len(near) and np.any(segment_distance(near, here[:2], q) < floor):
+            return False
+        return not (len(planned.centres) and float((segment_distance(
+            np.asarray(planned.centres)[:, :2], here[:2], q) - planned.radii).min()) < kept)
+
+    q, reach = _just_out(here[:2], reaches, fits)
+    return None if q is None else np.array([*q, _escape_height(here[2], reach, planned)])
+
+
+def _just_out(point: np.ndarray, reaches: Sequence[KeepOut],
+              fits: Callable[[np.ndarray], bool]) -> tuple[np.ndarray | None, KeepOut | None]:
+    """``(q, reach)``: the nearest point to ``point`` ``(2,)`` just past the edge of the
+    first ``reach`` it lies in (:func:`_ring`) that lies in none of the ``reaches`` and
+    ``fits``; ``(None, reach)`` when none does, ``(None, None)`` when ``point`` lies in no
+    reach."""
+    reach = next((k for k in reaches if float(np.hypot(*(point - k.centre))) < k.radius_m),
+                 None)
+    if reach is None:
+        return None, None
+    for q in _ring(reach, point):
+        if not any(float(np.hypot(*(q - r.centre))) < r.radius_m for r in reaches) and fits(q):
+            return q, reach
+    return None, reach
 
 
 def _escape_height(alt: float, reach: KeepOut, planned: PlannedFlight) -> float:
@@ -165,26 +177,19 @@ def landing_out_of_reach(land: np.ndarray, reaches: Sequence[KeepOut],
     one in doubt lands somewhere in its reach, drifting as it comes down (the emulator, a
     3 m jump at take-off: it drifted onto the home of the copter beside it). No such
     point: its own (the way home is then refused there)."""
-    inside = [k for k in reaches
-              if float(np.hypot(*(np.asarray(land, float) - k.centre))) < k.radius_m]
-    if not inside:
-        return None
-    ring = _ring(inside[0], np.asarray(land, float))
     apart = planned.min_separation_m + planned.navigation.pair_m
     kept = planned.clearance_m + planned.navigation.horizontal_m
-    for q in ring:
-        if any(float(np.hypot(*(q - r.centre))) < r.radius_m for r in reaches):
-            continue
+
+    def fits(q: np.ndarray) -> bool:
         if any(float(np.hypot(*(q - np.asarray(o, float)[:2]))) < apart for o in others):
-            continue
+            return False
         if len(planned.centres) and float((np.hypot(*(np.asarray(planned.centres)[:, :2]
                                                       - q).T) - planned.radii).min()) < kept:
-            continue
-        if planned.area is not None and not (np.all(q >= planned.area[0])
-                                             and np.all(q <= planned.area[1])):
-            continue
-        return q
-    return None
+            return False
+        return planned.area is None or bool(np.all(q >= planned.area[0])
+                                            and np.all(q <= planned.area[1]))
+
+    return _just_out(np.asarray(land, float), reaches, fits)[0]
 
 
 class GoingHome:
@@ -325,10 +330,9 @@ class GoingHome:
         """Why vehicle j is not where its route home begins (a fresh report, within
         :data:`ROUTE_START_M`), or None when it is."""
         s = self.vehicles[j].status
-        if s.lat_deg is None:
+        here = self._where(j)
+        if here is None:
             return "its position is unknown"
-        here = np.asarray(self.planned.frame.to_enu(lat_deg=s.lat_deg, lon_deg=s.lon_deg,
-                                                    alt_m=s.alt_m), float)
         start = np.asarray(self.stopped_at.get(j, self.plan.routes[j].points[0]), float)
         off = float(np.linalg.norm(here[:2] - start[:2]))
         age = clock.monotonic() - s.position_t

@@ -160,11 +160,12 @@ def choose_start(vehicles: Sequence[FlightVehicle], *, rtt_s: float, now: float
         return (f"the start would be {lead:.0f} of the vehicles' seconds ahead (round trip "
                 f"{rtt_s:.2f} s), more than a gate can say ({MAX_LEAD_S} s)")
     utc_s = math.ceil(max(utc) + lead)
+    trims = _trims(vehicles, utc_s)
+    if trims is not None:
+        return TimedStart(utc_s, trims[0], trims[1])
     ground = [v.status.clock_offset_s + (utc_s - v.status.utc_offset_s) / v.status.clock_rate
               for v in vehicles]
-    trims = _trims(vehicles, utc_s)
-    return TimedStart(utc_s, float(np.mean(ground)) if trims is None else trims[0],
-                      () if trims is None else trims[1])
+    return TimedStart(utc_s, float(np.mean(ground)))
 
 
 def _trims(vehicles: Sequence[FlightVehicle], utc_s: int
@@ -190,11 +191,11 @@ def _trims(vehicles: Sequence[FlightVehicle], utc_s: int
                          for g, (_o, rate) in zip(ground, lines))
 
 
-def trim_at(mission, frame: LocalFrame) -> int | None:
-    """The seq before the start gate when the start can be trimmed there: the start
-    point's waypoint, which AUTO skips (:func:`first_leg`), so that ``fly`` can write the
-    gate into it and a trim into the gate's place (:func:`_gate_items`); else None."""
-    gate = start_gate(mission, frame)
+def trim_at(mission, gate: int | None) -> int | None:
+    """The seq before the start gate (item ``gate``, :func:`start_gate`) when the start
+    can be trimmed there: the start point's waypoint, which AUTO skips
+    (:func:`first_leg`), so that ``fly`` can write the gate into it and a trim into the
+    gate's place (:func:`_gate_items`); else None."""
     before = None if gate is None else next((it for it in mission if it.seq == gate - 1), None)
     return gate - 1 if before is not None and before.command == CMD_NAV_WAYPOINT else None
 
@@ -258,7 +259,7 @@ def gate_as_onboard(mission, onboard, frame: LocalFrame) -> list:
         return list(mission)
     before = next((it for it in onboard if it.seq == seq - 1), None)
     if there.param1 > 0:  # a trim: the gate went one item earlier
-        if before is None or before.command != CMD_NAV_DELAY or trim_at(mission, frame) is None:
+        if before is None or before.command != CMD_NAV_DELAY or trim_at(mission, seq) is None:
             return list(mission)
         return [before if it.seq == seq - 1 else there if it.seq == seq else it
                 for it in mission]
@@ -273,7 +274,7 @@ def restore_gates(planned: PlannedFlight, vehicles: Sequence[FlightVehicle],
     time) after a flight, so that the mission flies in any ground station as planned;
     the vehicles it could not reach, with why."""
     gates = [start_gate(m, planned.frame) for m in planned.missions]
-    trims = [trim_at(m, planned.frame) for m in planned.missions]
+    trims = [trim_at(m, g) for m, g in zip(planned.missions, gates)]
     failed = []
 
     def one(i: int) -> None:
@@ -314,8 +315,7 @@ def start_together(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *,
     measured by :func:`choose_start`), so that all begin together."""
     starts = [first_leg(m, planned.frame) for m in planned.missions]
     gates = [_gate_at(m, seq) for m, (seq, _speeds) in zip(planned.missions, starts)]
-    trimmed = all(g is not None for g in gates) and all(
-        trim_at(m, planned.frame) is not None for m in planned.missions)
+    trimmed = all(trim_at(m, g) is not None for m, g in zip(planned.missions, gates))
     # trimmed, AUTO starts at the gate's new place (the start point's, skipped else)
     current = [g - 1 if trimmed else seq for g, (seq, _s) in zip(gates, starts)]
 

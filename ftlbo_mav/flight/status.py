@@ -102,7 +102,8 @@ class Status:
     # vehicle seconds per ground second (1 but on a simulator run faster than real time:
     # an emulator's time scale, SITL's --speedup), from the reports of the last while
     clock_rate: float = 1.0
-    _recent: deque = field(default_factory=lambda: deque(maxlen=CLOCK_REPORTS))
+    # (arrival, its boot time) of its last reports: the least delayed of the last
+    # CLOCK_REPORTS place each report, of all of them the clock line (:meth:`clock_line`)
     _clock_pairs: deque = field(default_factory=lambda: deque(maxlen=CLOCK_LINE_REPORTS))
     # each position report's delay beyond the least delayed of its neighbours (the
     # vehicle's seconds), the last DELAY_REPORTS: how much a link's latency varies

@@ -11,6 +11,7 @@ naming the vehicle and the step.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 
@@ -23,7 +24,7 @@ from ..errors import FtlboError
 from ..link.endpoints import LinkError
 from ..link.firmware import version_request
 from .navigation import jump_vector
-from .status import Status
+from .status import CLOCK_REPORTS, Status
 
 REBOOT_BACK_S = 5.0  # a position report this much older than the last: the vehicle rebooted
 CLOCK_RATE_AFTER_S = 2.0  # a vehicle's clock rate is measured over its reports since then
@@ -137,14 +138,13 @@ class FlightVehicle:
                 s.position_t = now
                 if s.clock_offset_s is None or boot_s < s.position_boot_s:
                     s._rate_since = (now, boot_s)  # first report, or the vehicle rebooted
-                    s._recent.clear()
                     s._clock_pairs.clear()
                 elif s._rate_since is not None and now - s._rate_since[0] >= CLOCK_RATE_AFTER_S:
                     s.clock_rate = (boot_s - s._rate_since[1]) / (now - s._rate_since[0])
                 # the least delayed of the last few (over seconds the rate's error is nil)
-                s._recent.append((now, boot_s))
                 s._clock_pairs.append((now, boot_s))
-                s.clock_offset_s = min(t - b / s.clock_rate for t, b in s._recent)
+                s.clock_offset_s = min(t - b / s.clock_rate for t, b in
+                                       itertools.islice(reversed(s._clock_pairs), CLOCK_REPORTS))
                 # how much later than the least delayed this one came (its seconds)
                 s.delays.append((now - s.clock_offset_s) * s.clock_rate - boot_s)
                 s.position_boot_s = boot_s

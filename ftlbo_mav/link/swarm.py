@@ -106,7 +106,7 @@ SEQ_CHECKING_AUTOPILOTS = frozenset({R.MAV_AUTOPILOT_ARDUPILOTMEGA, R.MAV_AUTOPI
 def timing_for(heartbeat: Heartbeat, timing: Timing) -> Timing:
     """``timing``, with early resends only for autopilots that check item sequence numbers
     and items sent ahead of the requests only to ArduPilot (whose handling of them we
-    follow: :data:`~.mission_protocol.SEND_AHEAD`)."""
+    follow: :data:`~.mission_protocol.SEND_AHEAD_ON_LINK`)."""
     if heartbeat.autopilot == R.MAV_AUTOPILOT_ARDUPILOTMEGA:
         return timing
     if heartbeat.autopilot in SEQ_CHECKING_AUTOPILOTS:

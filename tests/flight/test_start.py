@@ -67,7 +67,7 @@ def test_a_link_too_jittery_to_measure_the_clocks_by_gets_no_trim():
 def test_a_trimmed_gate_goes_in_the_start_points_place_and_its_trim_in_its_own(planned):
     mission = planned.missions[0]
     gate = start_gate(mission, planned.frame)
-    assert trim_at(mission, planned.frame) == gate - 1
+    assert trim_at(mission, gate) == gate - 1 and trim_at(mission, None) is None
     assert next(it for it in mission if it.seq == gate - 1).command == CMD_NAV_WAYPOINT
     start = TimedStart(utc_s=1_765_000_037, ground_t=0.0, trims_s=(0.04, 0.0, 0.0))
     moved, trim = _gate_items(planned, 0, gate, start, trimmed=True)
