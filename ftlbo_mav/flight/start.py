@@ -112,6 +112,13 @@ LATE_AFTER_S = 1.5
 MIN_TRIM_S = 0.001
 """A trim's least (a NAV_DELAY of 0 s would be one of a time of day)."""
 MAX_TRIM_S = CLOCKS_AGREE_S
+TRIM_MIN_SPREAD_S = 0.1
+"""No trim unless the copters' clocks, as measured, are this far apart: the ground measures
+them no better than 11 ms through TCP and 20-40 ms through a radio (SITL; the emulator's
+good-day radio, one flight: 41 ms for clocks that agree), copters of one release agree
+within 5 ms (fifteen SITL flights) and those of 4.5.6 and 4.6.3 SITL are 0.17 s apart. A
+trim for clocks that agree only adds the measurement's error (the emulator's good-day
+radio, held 41 and 16 ms: 0.81 m from its slot, a departure without the keeper)."""
 TRIM_MAX_JITTER_S = 0.14
 """No trim on a link whose reports' delays vary more (the 90th percentile beyond the least
 delayed, :meth:`~.status.Status.jitter_s`): the keeper's own bound, the good-day radio's
@@ -178,7 +185,8 @@ def _trims(vehicles: Sequence[FlightVehicle], utc_s: int
     link whose delays vary more than ``TRIM_MAX_JITTER_S``: the least delayed reports of
     one copter and another then differ by tens of milliseconds, as much as the clocks
     (SITL through the rough-day radio: a copter held 55 ms that began with the others),
-    or before a minute of reports has the line."""
+    before a minute of reports has the line, or when the clocks are less than
+    :data:`TRIM_MIN_SPREAD_S` apart."""
     lines = [v.status.clock_line() for v in vehicles]
     jitter = [v.status.jitter_s() for v in vehicles]
     if any(x is None for x in lines) or any(j is None or j > TRIM_MAX_JITTER_S
@@ -187,6 +195,8 @@ def _trims(vehicles: Sequence[FlightVehicle], utc_s: int
     ground = [offset + (utc_s - v.status.utc_offset_s) / rate
               for v, (offset, rate) in zip(vehicles, lines)]
     latest = max(ground)
+    if latest - min(ground) < TRIM_MIN_SPREAD_S:
+        return None
     return latest, tuple(min((latest - g) * rate, MAX_TRIM_S)
                          for g, (_o, rate) in zip(ground, lines))
 
