@@ -2,6 +2,8 @@
 
 1. Pre-flight (:mod:`.preflight`): every vehicle holds exactly its planned mission and
    fence, has a 3D GPS fix and passes its pre-arm checks; nothing is armed otherwise.
+   What the link showed of itself meanwhile is judged (:mod:`.linkfit`): what the
+   formation cannot count on through it is said before take-off.
 2. Take-off (:mod:`.launch`): GUIDED, arm, take off, all at once; wait until every vehicle
    hovers at its altitude and has stopped climbing.
 3. Synchronized start (:mod:`.start`): every current item set to where the legs begin,
@@ -20,11 +22,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from .. import clock
 from ..link.transfer import Timing
 from .departures import WatchOptions
 from .fleet import Fleet, concurrently
 from .keeper import FormationKeeper, KeeperOptions, planned_speed
 from .launch import align_at_start, take_off, takeoff_item
+from .linkfit import link_findings, look, seen
 from .outcome import FlightLeftPlan, abort, aborted
 from .planned import PlannedFlight
 from .policy import FaultPolicy
@@ -118,6 +122,12 @@ def fly(planned: PlannedFlight, vehicles: Sequence[FlightVehicle], *, options: F
                                  "in the missions, WPNAV_SPEED unanswered or not the same "
                                  "on every vehicle)")
             say(f"formation keeper off: {keeper.off_reason}")
+    since = look([v.status for v in vehicles])
+    now = clock.monotonic()
+    for line in link_findings([seen(v.name, v.status, now, since=since) for v in vehicles],
+                              keeper=keeper.options if keeper is not None and keeper.active
+                              else None, watch=options.watch, position_hz=options.position_hz):
+        say(f"warning: {line}")
     if aborted(vehicles):
         raise FlightAborted(vehicles[0].name, vehicles[0].sysid, aborted(vehicles))
     # before the start a departure ends the flight for all: the others land where they

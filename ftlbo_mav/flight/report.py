@@ -307,10 +307,9 @@ def summary_lines(summary: dict, out_dir: Path) -> list[str]:
         lines.append("formation keeper: " + (keeper_line(waited) if waited
                                               else "no vehicle needed to wait") + (
             f"; stood aside {keeper['link_gaps']}x for link gaps" if keeper["link_gaps"] else "")
-            + (f"; no pauses for {keeper['rough_link_s']:.0f} s: the link's delays varied by "
-               f"up to {keeper['worst_jitter_s']:.2f} s and its reports stopped for up to "
-               f"{keeper.get('worst_gap_s', 0.0):.1f} s (a pause could not be timed or "
-               "undone)" if keeper.get("rough_link_s") else ""))
+            + (f"; no pauses for {keeper['rough_link_s']:.0f} s: " + _rough_link(keeper)
+               + " (a pause could not be timed or undone)" if keeper.get("rough_link_s")
+               else ""))
     link = summary.get("link") or {}
     measured = link.get("measured") or {}
     if measured.get("total") is not None:
@@ -332,6 +331,18 @@ def summary_lines(summary: dict, out_dir: Path) -> list[str]:
                                             f" --progress {out_dir / PROGRESS_FILE}"))
     lines.append(f"flight log, summary and report in {out_dir}/")
     return lines
+
+
+def _rough_link(keeper: dict) -> str:
+    """Why the keeper made no pauses: what of the link was rough (its delays, its
+    silences), only what was."""
+    why = []
+    if keeper.get("worst_jitter_s"):
+        why.append(f"the link's delays varied by up to {keeper['worst_jitter_s']:.2f} s")
+    if keeper.get("worst_gap_s"):
+        whose = "its" if why else "the link's"
+        why.append(f"{whose} reports stopped for up to {keeper['worst_gap_s']:.1f} s")
+    return " and ".join(why) or "the link was rough"
 
 
 def keeper_line(waited: dict, *, listed: int = 6) -> str:

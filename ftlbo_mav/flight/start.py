@@ -107,6 +107,9 @@ MOVING_M_S = 0.5  # a copter this fast has begun its legs, whatever its last MIS
 LATE_AFTER_S = 1.5
 """Ground seconds after the start time by which every vehicle must report its legs begun
 (MISSION_CURRENT past the gate, at 2 Hz); one that does not missed the time."""
+LATE_SILENT_S = 2.0
+"""A vehicle whose reports from ``LATE_AFTER_S`` after the start have not come is waited for
+this much longer (the departure watch's lost link is 1.8 s of silence)."""
 
 
 MIN_TRIM_S = 0.001
@@ -395,16 +398,41 @@ def _start_late_ones(vehicles: Sequence[FlightVehicle], gates: list[int], start:
                      *, say: Callable[[str], None], poll: Callable[[], None],
                      trimmed: bool = False) -> None:
     """Wait until every vehicle's legs have begun (MISSION_CURRENT past its gate, and its
-    trim), at most ``LATE_AFTER_S`` after the start; a vehicle still at its gate then is
-    started at once (its current item moved past the gate)."""
+    trim), at most ``LATE_AFTER_S`` after the start; a vehicle still at its gate then, by
+    a position it reported at least that long after the start (its own clock), is started
+    at once (its current item moved past the gate). One that reported nothing that late
+    is waited for ``LATE_SILENT_S`` more, then left to its gate: a report held back by
+    the link is no evidence, and a start sent to a copter already on its leg restarts
+    the leg from where it is (the emulator's rough-day radio: two copters' reports lost
+    in an outage, each started again on its leg, 4.9 m from its slot)."""
     first = 1 if trimmed else 0
-    waiting = wait_while(vehicles, lambda: [
-        i for i, v in enumerate(vehicles)
-        if gates[i] - first <= v.status.seq <= gates[i]
-        and v.status.ground_speed_m_s < MOVING_M_S],
-        start.ground_t + LATE_AFTER_S, poll, step_s=0.05)
-    for i in waiting:
+
+    def at_gate(i: int) -> bool:
+        st = vehicles[i].status
+        return gates[i] - first <= st.seq <= gates[i] and st.ground_speed_m_s < MOVING_M_S
+
+    def seen_late(i: int) -> bool:
+        st = vehicles[i].status
+        start_boot = st.vehicle_now(start.ground_t)
+        return start_boot is not None and st.position_boot_s >= start_boot + LATE_AFTER_S
+
+    started: list[int] = []
+
+    def start_seen() -> None:  # as soon as each is seen late, not when all are
+        for i, v in enumerate(vehicles):
+            if i not in started and at_gate(i) and seen_late(i):
+                say(f"{v.name} (sysid {v.sysid}): its legs had not begun {LATE_AFTER_S:g} s "
+                    "after the start time (its AUTO came late, or its clock is not GPS "
+                    "time): started now")
+                v.set_current(gates[i] + 1)
+                started.append(i)
+
+    silent = wait_while(vehicles, lambda: [i for i in range(len(vehicles)) if i not in started
+                                           and at_gate(i) and not seen_late(i)],
+                        start.ground_t + LATE_AFTER_S + LATE_SILENT_S, poll,
+                        each_turn=lambda _now, _waiting: start_seen(), step_s=0.05)
+    start_seen()
+    for i in silent:
         v = vehicles[i]
-        say(f"{v.name} (sysid {v.sysid}): its legs had not begun {LATE_AFTER_S:g} s after "
-            "the start time (its AUTO came late, or its clock is not GPS time): started now")
-        v.set_current(gates[i] + 1)
+        say(f"{v.name} (sysid {v.sysid}): no report of its legs {LATE_AFTER_S + LATE_SILENT_S:g} "
+            "s after the start time (its link is silent): left to its gate")

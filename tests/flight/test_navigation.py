@@ -97,6 +97,18 @@ def test_moving_at_speed_is_no_glitch_but_a_jump_is():
     assert report_jump(prev, raw(east_m=40.0, t=5.0, fix=1)) == 0.0  # no fix
 
 
+def test_a_copter_speeding_up_across_a_silence_is_no_glitch_but_a_jump_in_one_still_is():
+    """The emulator's uav1 through the rough-day radio: from a hover to 3 m/s east, 3 m
+    on in 2.8 s without a report; the mean velocity puts it 4.2 m on, and ArduCopter's
+    lean limit can carry a copter that far from the guess (5.7 m/s/s x 2.8^2 / 4)."""
+    hover = raw(t=10.0)
+    assert report_jump(hover, raw(east_m=3.0, v=(3.06, 0.0), t=12.8)) == 0.0
+    # a 3 m jump across a 1 s silence is more than acceleration carries: all of it counts
+    cruise = raw(v=(3.0, 0.0), t=10.0)
+    assert jump_vector(cruise, raw(east_m=3.0, north_m=3.0, v=(3.0, 0.0), t=11.0)) == (
+        pytest.approx([0.0, 3.0], abs=0.05))
+
+
 def test_a_jump_larger_than_the_budget_or_a_metre_is_a_glitch():
     w = NavigationWatch(1, FLOAT)
     assert w.check(0, gps(), HEALTHY, 1.0, jump_m=0.8) is None

@@ -111,3 +111,20 @@ def test_sample_times_remove_link_jitter_using_the_vehicles_clock():
     rebooted = samples[:50] + [Sample(s.t, 1, 0, 0, 0, "AUTO", True, 3, s.boot_s - 30)
                                for s in samples[50:]]
     assert np.array_equal(sample_times(rebooted), arrival)
+
+
+def test_the_keepers_rough_link_line_names_only_what_was_rough(plan_dir):
+    from ftlbo_mav.flight.report import summary_lines
+
+    keeper = {"off_reason": None, "enabled": True, "vehicles": {}, "link_gaps": 1,
+              "rough_link_s": 21.0, "worst_jitter_s": 0.0, "worst_gap_s": 1.3}
+    line = next(t for t in summary_lines({"keeper": keeper}, plan_dir)
+                if t.startswith("formation keeper"))
+    assert line == ("formation keeper: no vehicle needed to wait; stood aside 1x for link "
+                    "gaps; no pauses for 21 s: the link's reports stopped for up to 1.3 s (a pause "
+                    "could not be timed or undone)")
+    keeper["worst_jitter_s"] = 0.31
+    line = next(t for t in summary_lines({"keeper": keeper}, plan_dir)
+                if t.startswith("formation keeper"))
+    assert "the link's delays varied by up to 0.31 s and its reports stopped for up to " \
+           "1.3 s" in line

@@ -10,11 +10,14 @@ from types import SimpleNamespace
 
 import pytest
 
+from ftlbo_mav import clock
+from ftlbo_mav.clock import VirtualClock
 from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.start import (
     MIN_TRIM_S,
     TimedStart,
     _gate_items,
+    _start_late_ones,
     choose_start,
     gate_as_onboard,
     start_gate,
@@ -103,3 +106,57 @@ def test_a_trimmed_start_left_on_board_is_no_difference(planned):
     wrong = [replace(it, lat_deg=it.lat_deg + 1e-4) if it.command == CMD_NAV_WAYPOINT
              and it.seq > gate else it for it in onboard]
     assert gate_as_onboard(mission, wrong, planned.frame) != wrong
+
+
+class _AtGate:
+    """A copter at its gate (seq 4) whose reports come through a link of our making:
+    ``reports(now)`` is ``(its clock of the latest report that arrived, seq, speed)``."""
+
+    def __init__(self, name, reports):
+        self.name, self.sysid, self.aborted_to = name, int(name[-1]), None
+        self.status = Status(clock_offset_s=0.0, clock_rate=1.0)
+        self._reports = reports
+        self.started = []
+        self._update()
+
+    def _update(self):
+        st = self.status
+        st.position_boot_s, st.seq, st.ground_speed_m_s = self._reports(clock.monotonic())
+
+    def wait_for(self, _predicate, timeout_s):
+        clock.sleep(timeout_s)
+        for v in _AtGate.all:
+            v._update()
+        return False
+
+    def set_current(self, seq):
+        self.started.append((round(clock.monotonic(), 2), seq))
+
+
+def test_only_a_copter_seen_at_its_gate_after_the_start_is_started_again():
+    """At 10 s the legs begin. uav1 leaves its gate; uav2 is seen still at it at 11.6 s
+    (its AUTO came late): started; uav3's reports stop at 9.8 s (an outage): no report
+    is evidence, so it is left to its gate, which it left on time (a start sent to a
+    copter on its leg restarts the leg)."""
+    def flying(now):
+        return (now - 0.1, 4 if now < 10.2 else 5, 0.0 if now < 10.2 else 1.0)
+
+    def late(now):
+        return (now - 0.1, 4, 0.0)
+
+    def silent(now):
+        return (min(now, 9.8) - 0.1, 4, 0.0)
+
+    said = []
+    with VirtualClock(start_s=9.0):
+        _AtGate.all = [_AtGate("uav1", flying), _AtGate("uav2", late),
+                       _AtGate("uav3", silent)]
+        _start_late_ones(_AtGate.all, [4, 4, 4], TimedStart(1_765_000_010, 10.0),
+                         say=said.append, poll=lambda: None)
+        uav1, uav2, uav3 = _AtGate.all
+    assert uav1.started == [] and uav3.started == []
+    assert [seq for _t, seq in uav2.started] == [5]
+    # started once seen at its gate 1.5 s after the start by its clock, not when uav3 is
+    assert uav2.started[0][0] == pytest.approx(11.65, abs=0.06)
+    assert said[0].startswith("uav2 (sysid 2): its legs had not begun 1.5 s after")
+    assert said[1].startswith("uav3 (sysid 3): no report of its legs 3.5 s after the start")

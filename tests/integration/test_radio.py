@@ -7,13 +7,14 @@ the copters' TCP ports and the ground station: the emulator's, or ArduPilot SITL
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 from click.testing import CliRunner
 
 from ftlbo_mav import clock
 from ftlbo_mav.cli import main
-from ftlbo_mav.sim.radio import RadioOptions
+from ftlbo_mav.sim.radio import ROUGH_DAY, RadioOptions
 
 from .fleet import BACKEND, vehicles
 from .test_departures import HOMES, example, plan_dir  # noqa: F401 - fixtures
@@ -64,3 +65,24 @@ def test_the_example_uploads_and_flies_through_one_shared_radio(plan_dir, router
     assert link["radio"]["txbuf"] > 50  # the ground radio's RADIO_STATUS was read
     assert counts.lost["down"] > 0 and counts.full["down"] == 0
     assert not summary["departures"]  # 3 % of frames lost: no link taken for lost
+
+
+@pytest.mark.skipif(BACKEND != "emulator", reason="the emulator's own radio, virtual clock")
+def test_a_radio_that_cannot_carry_the_keeper_is_said_before_take_off(plan_dir):  # noqa: F811
+    """Through the rough day's radio (120 +- 80 ms, 10 % lost, a 1 s outage every 15 s)
+    ``fly`` says before it arms that the keeper cannot pause anyone through it, naming
+    the copter and the figure, and flies the formation on its synchronized start."""
+    with vehicles(3, homes=HOMES, speedup=1.0, radio=ROUGH_DAY, virtual=True) as fleet:
+        up = CliRunner().invoke(main, ["upload", str(plan_dir), "--sysid", "1..3",
+                                       "--connect", fleet.udp_url])
+        assert up.exit_code == 0, up.output
+        flown = CliRunner().invoke(main, ["fly", str(plan_dir), "--sysid", "1..3",
+                                          "--control-port", "0", "--link", "sik-64",
+                                          "--connect", fleet.udp_url])
+    print(flown.output)
+    said = flown.output.index("warning: the formation keeper cannot act through this link: ")
+    assert said < flown.output.index("arming and taking off")
+    assert re.search(r"uav\d's reports (stopped for \d\.\d s|' delays vary by \d+ ms)",
+                     flown.output[said:].splitlines()[0])
+    assert flown.exit_code == 0, flown.output
+    assert "formation keeper: no vehicle needed to wait" in flown.output
