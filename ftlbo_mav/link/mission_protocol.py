@@ -328,6 +328,8 @@ class Download(_Transfer):
                 break
             if seq not in self.got and seq not in self.asked:
                 out.append(self._request(seq, now))
+        if self.count is not None and len(self.got) + len(self.asked) >= self.count:
+            self.deadline = now + self._resend_s(tail=True)  # all asked: no cue will come
         return out
 
     def _finish(self) -> list:

@@ -91,21 +91,23 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
             return timing.timeout_s
         if not samples:  # as a mission transfer's first message waits
             return min(timing.timeout_s, timing.first_resend_s)
-        return timing.resend_after(statistics.median(samples))
+        # all sent: no answer to a later request will show a lost one (TAIL_RTTS)
+        return timing.resend_after(statistics.median(samples), tail=not waiting)
 
-    resend_s = resend_after()
     got: dict[str, float | None] = dict.fromkeys(requests)
     waiting = list(requests)  # not sent yet
     out: dict[str, float] = {}  # sent, unanswered: name -> when first sent
     resent: set[str] = set()  # a round trip is measured only on a request sent once
     last: dict[str, int] = {}  # sent, unanswered: name -> the order it last went in
     order = itertools.count()
-    deadline = clock() + resend_s
+    since = clock()  # the last progress (or resend)
     while waiting or out:
         while waiting and len(out) < window:
             name = waiting.pop(0)
             channel.send(requests[name]())
             out[name], last[name] = clock(), next(order)
+        resend_s = resend_after()  # (sooner once the last request is out)
+        deadline = since + resend_s
         left = deadline - clock()
         if left <= 0:
             now = clock()
@@ -115,7 +117,7 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
                 channel.send(requests[n]())
                 last[n] = next(order)
                 resent.add(n)
-            deadline = now + resend_s
+            since = now
             continue
         msg = channel.recv(left)
         if msg is not None and msg.get_type() == "PARAM_VALUE":
@@ -125,9 +127,8 @@ def _exchange(channel, requests: Mapping[str, Callable[[], object]], timing: Tim
                 now = clock()
                 if name not in resent:  # its own round trip: the resends learn the link's
                     samples.append(now - first)
-                    resend_s = resend_after()
                 got[name] = float(msg.param_value)
-                deadline = now + resend_s  # progress
+                since = now  # progress
                 # ArduPilot answers reads in the order they come (GCS_Param.cpp: one
                 # queue, param_requests) and a link keeps each direction's order: one
                 # sent before this one (sent once: which of its sendings an answer is

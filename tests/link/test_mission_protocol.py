@@ -281,6 +281,24 @@ def test_download_asks_a_window_at_a_time_and_again_for_what_was_lost():
     assert done.type == R.MAV_MISSION_ACCEPTED and len(dl.items) == count
 
 
+def test_a_read_backs_last_request_lost_is_asked_again_sooner_than_one_with_others_behind():
+    """Once every item has been asked for, nothing can overtake a lost one: the timer is
+    TAIL_RTTS round trips from the last answer, not RESEND_RTTS."""
+    from ftlbo_mav.link.transfer import RESEND_RTTS, TAIL_RTTS
+
+    dl = Download(sysid=1, compid=1, own=(255, 190), timing=Timing(), progress=None,
+                  srtt=0.2)
+    dl.start(0.0)
+    dl.on_message(R.MAVLink_mission_count_message(255, 190, 3, 0), 0.1)
+    assert dl.deadline == pytest.approx(0.1 + TAIL_RTTS * dl.srtt)  # all three asked
+    dl.on_message(_item(0), 0.3)
+    dl.on_message(_item(1), 0.31)  # item 2's request (or answer) lost
+    assert dl.deadline == pytest.approx(0.31 + TAIL_RTTS * dl.srtt)
+    assert dl.deadline < 0.31 + RESEND_RTTS * dl.srtt - 0.1
+    (again,) = dl.on_timeout(dl.deadline)
+    assert again.seq == 2
+
+
 def test_download_on_a_link_that_reorders_asks_once_more_and_keeps_one_copy():
     dl = Download(sysid=1, compid=1, own=(255, 190), timing=Timing(), progress=None)
     dl.start(0.0)

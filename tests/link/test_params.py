@@ -172,3 +172,32 @@ def test_a_request_an_answer_overtook_is_asked_again_at_once():
     got = read_params(ch, PLANNED, timing=TIMING)
     assert all(v is not None for v in got.values())
     assert len(sent) == 2 and sent[1] - t0 == pytest.approx(0.2, abs=0.02)
+
+
+def test_the_last_request_lost_is_asked_again_after_a_round_trip_and_a_half():
+    """No answer can overtake the last request of a read: when it is lost, it is asked
+    again :data:`~ftlbo_mav.link.transfer.TAIL_RTTS` round trips after the last answer
+    that came (0.3 s on a link of 0.1 s each way), not the 2.5 of a request with others
+    behind it (0.5 s; virtual time)."""
+    from ftlbo_mav.link.params import read_params
+    from ftlbo_mav.link.transfer import RESEND_RTTS, TAIL_RTTS
+
+    ch = channel(faults=Faults(latency_s=0.1))
+    names = list(PLANNED)
+    last, sent = names[-1], []
+    send = ch.send
+
+    def lossy(msg) -> None:
+        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+        if name.rstrip("\x00") == last:
+            sent.append(ch.clock())
+            if len(sent) == 1:
+                return  # the last request is lost
+        send(msg)
+
+    ch.send = lossy
+    got = read_params(ch, PLANNED, timing=TIMING)
+    assert all(v is not None for v in got.values())
+    assert len(sent) == 2
+    waited = sent[1] - sent[0]  # from the last answer that came: TAIL_RTTS round trips
+    assert TAIL_RTTS * 0.2 - 0.01 <= waited < RESEND_RTTS * 0.2 - 0.1
