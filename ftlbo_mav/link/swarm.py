@@ -143,7 +143,8 @@ def upload_and_verify(channel, items: Sequence[MissionItem], *, timing: Timing,
 
     machine = Upload(items, sysid=channel.sysid, compid=1,
                      own=(channel.own_sysid, channel.own_compid), timing=timing,
-                     progress=progress, srtt=channel.srtt)
+                     progress=progress, srtt=channel.srtt,
+                     sharing=getattr(channel, "sharing", 1))
     try:
         return _upload_and_verify(channel, items, machine, timing=timing, progress=progress,
                                   report=report)

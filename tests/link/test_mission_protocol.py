@@ -129,19 +129,45 @@ def test_arducopter_gets_items_ahead_of_its_requests_each_sent_once():
 
 
 def test_an_item_sent_ahead_of_a_lost_one_goes_again_when_asked_for():
-    """Item 1 lost: 2 and 3 came out of sequence (INVALID_SEQUENCE, forgotten). Item 1
-    goes again when its request seems lost; asked for 2, it sends 2 again with the window
-    behind it, in order, and the items ahead are on their way again."""
+    """Item 1 lost: 2 and 3 came out of sequence (INVALID_SEQUENCE, forgotten). The first
+    INVALID_SEQUENCE, with no item sent twice lately, says so: item 1 goes again at once
+    with the window behind it, in order; the acknowledgements of what was sent twice then
+    change nothing, and asked for 2 it sends only what is new."""
     up = upload_machine(timing=Timing())
     up.start(0.0)
     up.on_message(request(0), 0.10)              # 0, 1, 2, 3 go; 1 is lost
     assert sent_seqs(up.on_message(request(1), 0.20)) == [4]  # 1 seems on its way
-    assert up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), 0.30) == []  # 2 forgotten
+    again = up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), 0.30)  # 2 forgotten
+    assert sent_seqs(again) == [1, 2, 3, 4]      # not after the timer (0.35 s on)
+    assert up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), 0.31) == []  # 3 forgotten
+    assert sent_seqs(up.on_message(request(2), 0.42)) == [5]
+    assert sent_seqs(up.on_message(request(3), 0.43)) == [6]
+    assert sent_seqs(up.on_message(request(4), 0.44)) == [7]
+
+
+def test_a_lost_item_resent_by_the_timer_then_goes_with_the_window_behind_it():
+    """Without the INVALID_SEQUENCE (lost as well), item 1 goes again when its request
+    seems lost; asked for 2, it sends 2 again with the window behind it, in order."""
+    up = upload_machine(timing=Timing())
+    up.start(0.0)
+    up.on_message(request(0), 0.10)              # 0, 1, 2, 3 go; 1 is lost
+    assert sent_seqs(up.on_message(request(1), 0.20)) == [4]  # 1 seems on its way
     assert sent_seqs(up.on_timeout(up.deadline)) == [1]
     t = up.deadline - 0.1
     assert sent_seqs(up.on_message(request(2), t)) == [2, 3, 4, 5]
     assert sent_seqs(up.on_message(request(3), t + 0.01)) == [6]
     assert sent_seqs(up.on_message(request(4), t + 0.02)) == [7]
+
+
+def test_an_invalid_sequence_soon_after_a_duplicate_is_not_taken_for_a_loss():
+    """A stale request answered (every request is): the vehicle had that item, and its
+    INVALID_SEQUENCE within 1.5 round trips of the duplicate changes nothing."""
+    up = upload_machine(timing=Timing())
+    up.start(0.0)
+    up.on_message(request(0), 0.10)              # round trips of 0.1 s
+    up.on_message(request(1), 0.20)
+    assert sent_seqs(up.on_message(request(1), 0.25)) == [1]  # a stale request: item 1 again
+    assert up.on_message(ack(R.MAV_MISSION_INVALID_SEQUENCE), 0.30) == []
 
 
 def test_an_error_about_an_earlier_transfers_item_does_not_end_a_new_one():
@@ -514,3 +540,23 @@ def test_early_resends_only_for_autopilots_that_check_item_sequence():
     up.on_message(request(0), 0.01)
     up.on_message(request(1), 0.02)
     assert up.deadline == pytest.approx(0.02 + timing.timeout_s)
+
+
+def test_upload_and_verify_sends_ahead_only_its_share_of_a_shared_link():
+    """Three vehicles heard on one radio: each upload sends one item ahead of the one asked
+    for, not three (a whole burst of three per copter overflowed the good-day radio's
+    buffer on SITL, and items sent ahead were lost: INVALID_SEQUENCE, resends)."""
+    from ftlbo_mav.link.mission_protocol import SEND_AHEAD_ON_LINK
+
+    class Shared(LoopbackChannel):
+        sharing = 3
+
+    ch = Shared(vehicle(), faults=Faults(latency_s=0.1))
+    sent = []
+    send = ch.send
+    ch.send = lambda msg: (sent.append((ch.clock(), msg.get_type())), send(msg))[1]
+    ok, why = upload_and_verify(ch, ITEMS, timing=Timing())
+    assert ok, why
+    first = next(t for t, kind in sent if kind == "MISSION_ITEM_INT")
+    burst = [kind for t, kind in sent if t == first and kind == "MISSION_ITEM_INT"]
+    assert len(burst) == 1 + SEND_AHEAD_ON_LINK // 3 == 2
