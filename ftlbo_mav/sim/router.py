@@ -140,9 +140,14 @@ class RadioRouter:
             self._udp.close()
 
     def _after(self, arrival: float | None, fn, *args) -> None:
-        """``fn(*args)`` when a frame handed to the radio now arrives, if it does."""
+        """``fn(*args)`` when a frame handed to the radio now arrives, if it does: at that
+        instant of the loop's clock (time.monotonic, as :meth:`clock` is), in the radio's
+        order. A delay from "now" instead was off by the microseconds between reading the
+        clock and the loop's reading it, and frames the radio delivers a microsecond apart
+        (in order, each way) went out swapped: on SITL an item sent ahead reached the
+        copter before the one it followed (INVALID_SEQUENCE, a resend)."""
         if arrival is not None:
-            self._loop.call_later(max(0.0, (arrival - self.clock()) / self.scale), fn, *args)
+            self._loop.call_at(arrival / self.scale, fn, *args)
 
     async def _from_vehicle(self, i: int, reader: asyncio.StreamReader) -> None:
         buffer = bytearray()
