@@ -31,6 +31,7 @@ position in AUTO, paused, until the link is back or its own failsafe acts.
 
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -54,7 +55,10 @@ class KeeperOptions:
     five times a lead in space once cruising at 5 m/s, and the others are paused for that
     in turn (the emulator, GPS wander 1.5 m per axis: leads of 3.5 m; docs/flight.md).
     Sized at cruise a pause never costs more than the lead; a lead in time that is still
-    there shows again as the group speeds up and is answered then. What a pause is still
+    there shows again as the group speeds up and is answered then. A lead that grew with
+    the group's speed over the last ``time_lead_window_s`` (the group sped up by at least
+    ``time_lead_min_dv_m_s``) is one in time, and is paused for in seconds of track, as
+    much as it is at the group's speed now (:meth:`FormationKeeper._time_lead_s`). What a pause is still
     to take (its copter's track clock slows to zero and comes back to pace over seconds)
     counts as taken: each vehicle's
     progress is measured less what its pauses have still to cost it, so a lead that keeps
@@ -104,12 +108,14 @@ class KeeperOptions:
     max_jitter_s: float = 0.14
     max_gap_s: float = 0.6
     gap_memory_s: float = 20.0
+    time_lead_window_s: float = 1.0
+    time_lead_min_dv_m_s: float = 0.5
     navigation: Navigation = Navigation()  # ArduCopter's defaults (copter.parm keeps them)
 
     def __post_init__(self) -> None:
         for name in ("engage_m", "engage_s", "floor_m", "max_pause_s", "rest_s",
                      "min_speed_m_s", "period_s", "late_s", "stale_s", "max_gap_s",
-                     "gap_memory_s"):
+                     "gap_memory_s", "time_lead_window_s", "time_lead_min_dv_m_s"):
             value = getattr(self, name)
             if not np.isfinite(value) or value < 0:
                 raise ValueError(f"keeper {name} must be a finite number >= 0, got {value!r}")
@@ -225,6 +231,8 @@ class FormationKeeper:
     _segments: list = field(default_factory=list)  # _segments of each path, once used
     _last_t: float | None = None
     _standing_aside: bool = False
+    # (now, group speed, each UAV's lead over the last) of the last time_lead_window_s
+    _leads: deque = field(default_factory=deque)
     log: KeeperLog | None = None
     # when a list: one row per measurement, (now, progress less what pauses still owe
     # (N,), lead over the mean (N,)), for looking back at what the keeper saw
@@ -319,6 +327,9 @@ class FormationKeeper:
         # leaders would each lose only a third of the gap a round, and the formation stay
         # out for rounds: SITL in 5 m/s wind, a copter 0.5 m behind for 8 s)
         ahead = s - s.min()
+        self._leads.append((now, group_speed, ahead))
+        while self._leads and self._leads[0][0] < now - o.time_lead_window_s:
+            self._leads.popleft()
         if self.trace is not None:
             self.trace.append((now, s.tolist(), lead.tolist()))
         flying = group_speed >= o.min_speed_m_s
@@ -338,7 +349,8 @@ class FormationKeeper:
             elif (flying and not late and not rough and now >= self._rest_until[i]
                   and (ahead[i] > o.engage_m
                        or (ahead[i] > o.floor_m and ahead_s[i] > o.engage_s))
-                  and self._start_pause(i, float(ahead[i]), group_speed, now)):
+                  and self._start_pause(i, float(ahead[i]), group_speed, now,
+                                        self._time_lead_s(i, group_speed))):
                 out[i] = True
             elif self._resend[i] and now >= self._resend[i][0]:
                 while self._resend[i] and now >= self._resend[i][0]:
@@ -346,12 +358,38 @@ class FormationKeeper:
                 out[i] = False
         return out
 
-    def _start_pause(self, i: int, lead_m: float, group_speed: float, now: float) -> bool:
+    def _time_lead_s(self, i: int, group_speed: float) -> float:
+        """Seconds of track vehicle i is ahead of the last by a lead shown to be one in
+        time: while the group sped up by ``time_lead_min_dv_m_s`` or more over the last
+        ``time_lead_window_s``, the slope of its lead against the group's speed (a lead in
+        time grows with the speed, one in space does not), at most its lead over the
+        group's speed now (a lead still growing is not answered ahead of time). 0 when
+        the group did not speed up enough to tell."""
+        o = self.options
+        if len(self._leads) < 5 or group_speed < o.min_speed_m_s:
+            return 0.0
+        v = np.array([x[1] for x in self._leads])
+        if float(v.max() - v.min()) < o.time_lead_min_dv_m_s:
+            return 0.0
+        lead = np.array([x[2][i] for x in self._leads])
+        dv = v - v.mean()
+        slope = float(np.dot(dv, lead - lead.mean()) / np.dot(dv, dv))
+        return max(0.0, min(slope, float(lead[-1]) / group_speed))
+
+    def _start_pause(self, i: int, lead_m: float, group_speed: float, now: float,
+                     time_lead_s: float = 0.0) -> bool:
         """Pause vehicle i for a lead of ``lead_m``, sized as a lead in metres at the
         cruise speed: never more than the lead needs, whichever kind it is (see
-        :class:`KeeperOptions`). False when no pause of 10 ms or more would do."""
+        :class:`KeeperOptions`), or for ``time_lead_s`` seconds of track where more
+        (:meth:`_time_lead_s`: a lead that grew with the group's speed is one in time,
+        and sized in metres at cruise while the group is still slow it was answered a
+        fifth at a time: SITL in 5 m/s wind, a copter whose track clock stalled at the
+        start fell 0.69 m behind over 2.5 s with the others paused ten times). False when
+        no pause of 10 ms or more would do."""
         o = self.options
-        d = o.pause_for(lead_m, max(group_speed, self.cruise_speed_m_s), self.cruise_speed_m_s)
+        cruise = self.cruise_speed_m_s
+        lead_m = max(lead_m, time_lead_s * cruise)
+        d = o.pause_for(lead_m, max(group_speed, cruise), cruise)
         if d <= 0:
             return False
         # the continues still to repeat were sent before: they arrive first

@@ -260,3 +260,35 @@ def test_no_pause_while_the_link_has_lately_gone_silent():
     assert keeper.log.rough_s == pytest.approx(1.0) and keeper.log.worst_gap_s == 1.0
     # short silences only (a frame or two lost): the lead is answered
     assert keeper.update(positions_at([6.1, 5.5, 5.5]), speeds, 1.1, gap_s=0.3) == {0: True}
+
+
+def _speeding_up(lead_of, options):
+    """The group speeding up from 0.4 to 1.4 m/s over 1 s, uav1 ``lead_of(speed)`` metres
+    ahead; the pause uav1 gets, in seconds (None: none)."""
+    keeper = FormationKeeper(PATHS, CRUISE, options=options)
+    for k in range(21):
+        t = 0.05 * k
+        v = 0.4 + t
+        s = 1.0 + 0.4 * t + 0.5 * t * t  # where the others are along their paths
+        if keeper.update(positions_at([s + lead_of(v), s, s]), np.full(3, v), t):
+            return keeper._pause[0][1]
+    return None
+
+
+def test_a_lead_that_grows_with_the_groups_speed_is_paused_for_as_one_in_time():
+    """0.25 s behind the others (a track clock stalled at the start): its lead grows with
+    the group's speed, and once past 0.3 m (at 1.2 m/s) the leader is paused for 0.25 s
+    of track, where sized in metres at cruise it got a pause for 0.06 s of it."""
+    late = replace(ON, engage_m=0.3, engage_s=1.0)
+    pause = _speeding_up(lambda v: 0.25 * v, late)
+    assert pause == ON.pause_for(0.25 * CRUISE, CRUISE, CRUISE)
+    assert ON.navigation.pause_cost_s(pause, CRUISE) >= 0.25 - 0.01
+    assert pause > ON.pause_for(0.31, CRUISE, CRUISE) + 0.1
+
+
+def test_a_lead_that_does_not_grow_with_the_speed_is_still_paused_for_in_metres_at_cruise():
+    """0.31 m ahead in space (its estimate moved by its GPS) while the group speeds up:
+    no growth with speed, so sized at cruise as before; never more than the lead."""
+    late = replace(ON, engage_m=0.3, engage_s=1.0)
+    pause = _speeding_up(lambda _v: 0.31, late)
+    assert pause == ON.pause_for(0.31, CRUISE, CRUISE)
