@@ -28,6 +28,7 @@ comes). :func:`link_findings` is pure: :class:`LinkSeen` values in, lines out.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -125,7 +126,8 @@ def link_findings(links: Sequence[LinkSeen], *, keeper: KeeperOptions | None,
 
 
 def _ms(seconds: float) -> str:
-    return f"{1000 * seconds:.0f} ms"
+    """Milliseconds, rounded up: a delay just over a bound does not read as the bound."""
+    return f"{math.ceil(1000 * seconds - 1e-9):.0f} ms"
 
 
 __all__ = ["LOOK_REPORTS", "LOOK_S", "LOST_SHARE", "LinkSeen", "SLOW_SHARE", "link_findings",

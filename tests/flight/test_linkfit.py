@@ -81,3 +81,8 @@ def test_what_a_status_saw_judges_its_quiet_moment_and_every_silence():
     assert link.longest_gap_s == pytest.approx(1.3)
     assert link.rate_hz == pytest.approx((len(arrivals) - 1) / 20.0)
     assert seen("uav1", s, now=20.0, since=19.5).jitter_s is None  # 5 reports: unknown
+
+
+def test_a_delay_just_over_the_bound_does_not_read_as_the_bound():
+    lines = findings(links()[:2] + [LinkSeen("uav3", 0.1404, 0.2, 10.0, 20.0)])
+    assert "vary by 141 ms (it pauses through at most 140 ms)" in lines[0]
