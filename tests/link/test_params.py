@@ -148,6 +148,24 @@ def test_a_lost_answer_is_asked_again_after_a_few_round_trips_not_the_whole_time
     assert ch.clock() - t0 >= 3.0
 
 
+def _lose_first_request_for(ch, lost: str) -> list[float]:
+    """Make ``ch`` lose the first request for parameter ``lost``; the times every request
+    for it was sent, filled as they are."""
+    sent: list[float] = []
+    send = ch.send
+
+    def lossy(msg) -> None:
+        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+        if name.rstrip("\x00") == lost:
+            sent.append(ch.clock())
+            if len(sent) == 1:
+                return  # lost
+        send(msg)
+
+    ch.send = lossy
+    return sent
+
+
 def test_a_request_an_answer_overtook_is_asked_again_at_once():
     """ArduPilot answers reads in the order they come and the link keeps the order: the
     answer to the second request, come before the first's, says the first was lost. It
@@ -156,18 +174,7 @@ def test_a_request_an_answer_overtook_is_asked_again_at_once():
     from ftlbo_mav.link.params import read_params
 
     ch = channel(faults=Faults(latency_s=0.1))
-    first, sent = PLANNED[0] if isinstance(PLANNED, list) else next(iter(PLANNED)), []
-    send = ch.send
-
-    def lossy(msg) -> None:
-        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
-        if name.rstrip("\x00") == first:
-            sent.append(ch.clock())
-            if len(sent) == 1:
-                return  # the first request for it is lost
-        send(msg)
-
-    ch.send = lossy
+    sent = _lose_first_request_for(ch, next(iter(PLANNED)))
     t0 = ch.clock()
     got = read_params(ch, PLANNED, timing=TIMING)
     assert all(v is not None for v in got.values())
@@ -183,19 +190,7 @@ def test_the_last_request_lost_is_asked_again_after_a_round_trip_and_a_half():
     from ftlbo_mav.link.transfer import RESEND_RTTS, TAIL_RTTS
 
     ch = channel(faults=Faults(latency_s=0.1))
-    names = list(PLANNED)
-    last, sent = names[-1], []
-    send = ch.send
-
-    def lossy(msg) -> None:
-        name = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
-        if name.rstrip("\x00") == last:
-            sent.append(ch.clock())
-            if len(sent) == 1:
-                return  # the last request is lost
-        send(msg)
-
-    ch.send = lossy
+    sent = _lose_first_request_for(ch, list(PLANNED)[-1])
     got = read_params(ch, PLANNED, timing=TIMING)
     assert all(v is not None for v in got.values())
     assert len(sent) == 2
