@@ -58,12 +58,12 @@ class KeeperOptions:
     there shows again as the group speeds up and is answered then. A lead that grew with
     the group's speed over the last ``time_lead_window_s`` (the group sped up by at least
     ``time_lead_min_dv_m_s``) is one in time, and is paused for in seconds of track, as
-    much as it is at the group's speed now (:meth:`FormationKeeper._time_lead_s`). What a pause is still
-    to take (its copter's track clock slows to zero and comes back to pace over seconds)
-    counts as taken: each vehicle's
-    progress is measured less what its pauses have still to cost it, so a lead that keeps
-    growing is answered again ``rest_s`` after the last continue (once the measurement
-    shows that pause), without pausing twice for the same lead.
+    much as it is at the group's speed now (:meth:`FormationKeeper._time_lead_s`). What
+    a pause is still to take (its copter's track clock slows to zero and comes back to
+    pace over seconds) counts as taken: each vehicle's progress is measured less what its
+    pauses have still to cost it, so a lead that keeps growing is answered again
+    ``rest_s`` after the last continue (once the measurement shows that pause), without
+    pausing twice for the same lead.
     Nothing happens while the group flies slower than ``min_speed_m_s``. A report older
     than ``late_s`` (positions come at 10 Hz) is not measured on: no new pause while one
     is that late, though a pause under way still ends on time (on SITL with the ground
