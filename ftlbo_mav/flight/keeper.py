@@ -205,6 +205,9 @@ def progress_along(path: np.ndarray, point: np.ndarray, *, start_segment: int = 
     return float(along[k]), lo + k
 
 
+TIME_LEAD_UNTIL = 0.9
+"""Leads are judged as time (:meth:`FormationKeeper._time_lead_s`) until the group first
+flies at this share of the cruise speed."""
 MAX_AHEAD_M = 3.0  # a progress measured further on than the last one by more is doubted
 MAX_BACK_M = 1.0  # ... or further back (a copter overshooting a stop comes back)
 
@@ -231,8 +234,10 @@ class FormationKeeper:
     _segments: list = field(default_factory=list)  # _segments of each path, once used
     _last_t: float | None = None
     _standing_aside: bool = False
-    # (now, group speed, each UAV's lead over the last) of the last time_lead_window_s
+    # (now, group speed, each UAV's lead over the last) of the last time_lead_window_s,
+    # until the group first cruises (at TIME_LEAD_UNTIL of the cruise speed)
     _leads: deque = field(default_factory=deque)
+    _cruised: bool = False
     log: KeeperLog | None = None
     # when a list: one row per measurement, (now, progress less what pauses still owe
     # (N,), lead over the mean (N,)), for looking back at what the keeper saw
@@ -327,9 +332,11 @@ class FormationKeeper:
         # leaders would each lose only a third of the gap a round, and the formation stay
         # out for rounds: SITL in 5 m/s wind, a copter 0.5 m behind for 8 s)
         ahead = s - s.min()
-        self._leads.append((now, group_speed, ahead))
-        while self._leads and self._leads[0][0] < now - o.time_lead_window_s:
-            self._leads.popleft()
+        self._cruised |= group_speed >= TIME_LEAD_UNTIL * self.cruise_speed_m_s
+        if not self._cruised:
+            self._leads.append((now, group_speed, ahead))
+            while self._leads and self._leads[0][0] < now - o.time_lead_window_s:
+                self._leads.popleft()
         if self.trace is not None:
             self.trace.append((now, s.tolist(), lead.tolist()))
         flying = group_speed >= o.min_speed_m_s
@@ -364,9 +371,13 @@ class FormationKeeper:
         ``time_lead_window_s``, the slope of its lead against the group's speed (a lead in
         time grows with the speed, one in space does not), at most its lead over the
         group's speed now (a lead still growing is not answered ahead of time). 0 when
-        the group did not speed up enough to tell."""
+        the group did not speed up enough to tell, and once it has first cruised: the
+        legs' first speed-up, from a hover, is where a track clock stalls (a target
+        speed of centimetres a second against a copter's hover residual); at a corner
+        the leads measured along paths that cut it differently grow and shrink with the
+        speed too, and are not answered as time."""
         o = self.options
-        if len(self._leads) < 5 or group_speed < o.min_speed_m_s:
+        if self._cruised or len(self._leads) < 5 or group_speed < o.min_speed_m_s:
             return 0.0
         v = np.array([x[1] for x in self._leads])
         if float(v.max() - v.min()) < o.time_lead_min_dv_m_s:

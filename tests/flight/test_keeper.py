@@ -292,3 +292,21 @@ def test_a_lead_that_does_not_grow_with_the_speed_is_still_paused_for_in_metres_
     late = replace(ON, engage_m=0.3, engage_s=1.0)
     pause = _speeding_up(lambda _v: 0.31, late)
     assert pause == ON.pause_for(0.31, CRUISE, CRUISE)
+
+
+def test_once_the_group_has_cruised_a_lead_growing_with_speed_is_sized_at_cruise():
+    """After a corner the group speeds up again, and leads measured along paths that cut
+    it differently grow with the speed too: only the legs' first speed-up, from a hover,
+    judges a lead as time."""
+    late = replace(ON, engage_m=0.3, engage_s=1.0)
+    keeper = FormationKeeper(PATHS, CRUISE, options=late)
+    keeper.update(positions_at([1.0, 1.0, 1.0]), np.full(3, 0.95 * CRUISE), 0.0)  # cruising
+    pause = None
+    for k in range(1, 22):
+        t = 0.05 * k
+        v = 0.4 + t
+        s = 1.0 + 0.4 * t + 0.5 * t * t
+        if keeper.update(positions_at([s + 0.25 * v, s, s]), np.full(3, v), t):
+            pause = keeper._pause[0][1]
+            break
+    assert pause is not None and pause < ON.pause_for(0.25 * CRUISE, CRUISE, CRUISE)
