@@ -49,6 +49,14 @@ seed = 0
 """
 
 
+@pytest.fixture(scope="module")
+def planned():
+    """The shipped example's plan as ``fly`` loads it (its shipped folder), once a module."""
+    from ftlbo_mav.flight.planned import load_planned_flight
+
+    return load_planned_flight(EXAMPLE.with_suffix(""))
+
+
 @pytest.fixture
 def example_path() -> Path:
     return EXAMPLE

@@ -7,18 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.report import leg_range
 from sitl.truth import formation_truth
 
-from .conftest import EXAMPLE
-
 SPEED = 5.0
-
-
-@pytest.fixture(scope="module")
-def planned():
-    return load_planned_flight(EXAMPLE.with_suffix(""))
 
 
 def _tracks(planned, late_s: tuple[float, ...]):

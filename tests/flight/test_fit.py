@@ -5,18 +5,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import pytest
-
 from ftlbo_mav.ardupilot.copters import resolve_copter
 from ftlbo_mav.flight.fit import fit_fleet
-from ftlbo_mav.flight.planned import load_planned_flight
-
-from ..conftest import EXAMPLE
-
-
-@pytest.fixture(scope="module")
-def planned():
-    return load_planned_flight(EXAMPLE.with_suffix(""))
 
 
 def _with(copter, **values):

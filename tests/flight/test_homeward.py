@@ -16,7 +16,6 @@ from ftlbo_mav.flight.homeward import (
     landing_out_of_reach,
     return_world,
 )
-from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.mission.items import (
     CMD_DO_CHANGE_SPEED,
     CMD_DO_SET_CAM_TRIGG_DIST,
@@ -24,13 +23,6 @@ from ftlbo_mav.mission.items import (
     CMD_NAV_WAYPOINT,
     build_return,
 )
-
-from ..conftest import EXAMPLE
-
-
-@pytest.fixture(scope="module")
-def planned():
-    return load_planned_flight(EXAMPLE.with_suffix(""))
 
 
 @dataclass

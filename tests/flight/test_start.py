@@ -12,7 +12,6 @@ import pytest
 
 from ftlbo_mav import clock
 from ftlbo_mav.clock import VirtualClock
-from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.flight.start import (
     MIN_TRIM_S,
     TimedStart,
@@ -25,13 +24,6 @@ from ftlbo_mav.flight.start import (
 )
 from ftlbo_mav.flight.status import Status
 from ftlbo_mav.mission.items import CMD_NAV_DELAY, CMD_NAV_WAYPOINT
-
-from ..conftest import EXAMPLE
-
-
-@pytest.fixture(scope="module")
-def planned():
-    return load_planned_flight(EXAMPLE.with_suffix(""))
 
 
 def _vehicle(name: str, utc_behind_s: float, *, delays_s=(0.0, 0.02)) -> SimpleNamespace:

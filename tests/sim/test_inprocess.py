@@ -9,20 +9,12 @@ import pytest
 from ftlbo_mav import clock
 from ftlbo_mav.clock import VirtualClock
 from ftlbo_mav.errors import BadInput
-from ftlbo_mav.flight.planned import load_planned_flight
 from ftlbo_mav.link.addresses import check_url
 from ftlbo_mav.link.discovery import discover
 from ftlbo_mav.link.endpoints import Link, LinkError
 from ftlbo_mav.link.swarm import upload_swarm
 from ftlbo_mav.sim.inprocess import InProcessSimulator
 from ftlbo_mav.sim.radio import RadioOptions
-
-from ..conftest import EXAMPLE
-
-
-@pytest.fixture(scope="module")
-def planned():
-    return load_planned_flight(EXAMPLE.with_suffix(""))
 
 
 def _homes(planned):
